@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs, with apt-get, the Debian 12 packages polyexplore needs that are not
+# there yet. Sourced by demo.sh, test.sh and bench.sh; safe to run again.
+set -euo pipefail
+PEX_DEBS=(
+  build-essential cmake pkg-config
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  libeigen3-dev libboost-dev libspdlog-dev libfmt-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libtomlplusplus-dev libcli11-dev libsystemd-dev
+  iproute2 util-linux procps
+)
+missing=()
+for p in "${PEX_DEBS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "deps: installing ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
