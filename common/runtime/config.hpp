@@ -1,0 +1,85 @@
+#pragma once
+// Typed, validated configuration from TOML (toml++).
+//
+// Contract: every key has a default in code; a key in the file must be read by
+// the daemon (ConfigReader::finish() rejects unknown keys, as Cartographer's
+// parameter dictionary does); a value of the wrong type or outside its
+// constraint throws ConfigError whose message names the file, the key and the
+// bad value, in one line. Keys carry their unit in the name (`timeout_ms`).
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pex::runtime {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A constraint returns an error text for a bad value, nothing for a good one.
+template <class T>
+using Constraint = std::function<std::optional<std::string>(const T&)>;
+
+template <class T>
+Constraint<T> positive() {
+  return [](const T& v) -> std::optional<std::string> {
+    if (v > T{}) return std::nullopt;
+    return "must be > 0";
+  };
+}
+template <class T>
+Constraint<T> non_negative() {
+  return [](const T& v) -> std::optional<std::string> {
+    if (v >= T{}) return std::nullopt;
+    return "must be >= 0";
+  };
+}
+template <class T>
+Constraint<T> in_range(T lo, T hi) {
+  return [lo, hi](const T& v) -> std::optional<std::string> {
+    if (v >= lo && v <= hi) return std::nullopt;
+    return "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  };
+}
+Constraint<std::string> one_of(std::vector<std::string> allowed);
+
+class ConfigReader {
+ public:
+  // An empty configuration: every get() returns its default (no file given).
+  ConfigReader();
+  // Throws ConfigError if the file cannot be read or is not valid TOML.
+  static ConfigReader from_file(const std::string& path);
+  static ConfigReader from_string(std::string_view toml_text, std::string origin);
+
+  // Value at `key` (in this reader's table) or `default_value` if absent.
+  // Supported T: bool, int, int64_t, double, std::string, std::vector<double>,
+  // std::vector<std::string>. Integers are accepted where a double is asked.
+  template <class T>
+  T get(std::string_view key, T default_value, Constraint<T> check = {});
+
+  // A nested table `[name]`; absent tables read as empty (all defaults).
+  ConfigReader section(std::string_view name) const;
+  bool has(std::string_view key) const;
+
+  // Throws ConfigError naming every key of the file that nobody read.
+  void finish() const;
+
+  // The file name (or "<defaults>") that errors name.
+  const std::string& origin() const;
+
+ private:
+  struct State;  // the parsed toml++ table and the keys read so far
+  ConfigReader(std::shared_ptr<State> state, std::string prefix);
+  [[noreturn]] void fail(std::string_view key, const std::string& what) const;
+  std::string path_of(std::string_view key) const;
+
+  std::shared_ptr<State> state_;
+  std::string prefix_;  // "" or "section." for nested readers
+};
+
+}  // namespace pex::runtime

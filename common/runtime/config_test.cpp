@@ -1,0 +1,101 @@
+#include "runtime/config.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+using pex::runtime::ConfigError;
+using pex::runtime::ConfigReader;
+using testing::AllOf;
+using testing::HasSubstr;
+
+namespace {
+
+// Runs `fn` and returns the ConfigError text it throws ("" if none).
+template <class Fn>
+std::string error_of(Fn fn) {
+  try {
+    fn();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(ConfigReader, ReturnsDefaultsForAbsentKeys) {
+  ConfigReader c = ConfigReader::from_string("", "x.toml");
+  EXPECT_EQ(c.get<double>("max_range_m", 20.0), 20.0);
+  EXPECT_EQ(c.get<int>("beams_count", 541), 541);
+  EXPECT_EQ(c.get<std::string>("mode", "sim"), "sim");
+  EXPECT_NO_THROW(c.finish());
+}
+
+TEST(ConfigReader, ReadsValuesOfEachType) {
+  ConfigReader c = ConfigReader::from_string(
+      "max_range_m = 8\nrate_hz = 2.5\non = true\nname = \"a\"\nxs_m = [1, 2.5]\n"
+      "[can]\nnode_ids = [\"1\", \"2\"]\ntimeout_ms = 250\n",
+      "x.toml");
+  EXPECT_EQ(c.get<double>("max_range_m", 1.0), 8.0);  // integer accepted as double
+  EXPECT_EQ(c.get<double>("rate_hz", 1.0), 2.5);
+  EXPECT_TRUE(c.get<bool>("on", false));
+  EXPECT_EQ(c.get<std::string>("name", ""), "a");
+  EXPECT_EQ(c.get<std::vector<double>>("xs_m", {}), (std::vector<double>{1.0, 2.5}));
+  ConfigReader can = c.section("can");
+  EXPECT_EQ(can.get<std::vector<std::string>>("node_ids", {}), (std::vector<std::string>{"1", "2"}));
+  EXPECT_EQ(can.get<int64_t>("timeout_ms", 1), 250);
+  EXPECT_NO_THROW(c.finish());
+}
+
+TEST(ConfigReader, UnknownKeyNamesFileAndKey) {
+  ConfigReader c = ConfigReader::from_string("max_range_m = 8\nmax_rnage_m = 9\n[can]\nbitrate = 1\n",
+                                             "lidar.toml");
+  c.get<double>("max_range_m", 1.0);
+  const std::string err = error_of([&] { c.finish(); });
+  EXPECT_THAT(err, AllOf(HasSubstr("lidar.toml"), HasSubstr("'max_rnage_m'"), HasSubstr("'can.bitrate'")));
+  EXPECT_THAT(err, testing::Not(HasSubstr("'max_range_m'")));
+}
+
+TEST(ConfigReader, WrongTypeNamesKeyAndValue) {
+  ConfigReader c = ConfigReader::from_string("timeout_ms = \"soon\"\n", "base.toml");
+  const std::string err = error_of([&] { c.get<int>("timeout_ms", 250); });
+  EXPECT_THAT(err, AllOf(HasSubstr("base.toml"), HasSubstr("'timeout_ms'"), HasSubstr("\"soon\""),
+                         HasSubstr("integer")));
+}
+
+TEST(ConfigReader, ConstraintViolationNamesKeyAndValue) {
+  ConfigReader c = ConfigReader::from_string("timeout_ms = -5\nmode = \"fast\"\n[a]\nx_m = 3\n",
+                                             "base.toml");
+  EXPECT_THAT(error_of([&] { c.get<int>("timeout_ms", 250, pex::runtime::positive<int>()); }),
+              AllOf(HasSubstr("base.toml"), HasSubstr("'timeout_ms'"), HasSubstr("-5"),
+                    HasSubstr("> 0")));
+  EXPECT_THAT(error_of([&] {
+                c.get<std::string>("mode", "sim", pex::runtime::one_of({"sim", "robot"}));
+              }),
+              AllOf(HasSubstr("'mode'"), HasSubstr("\"fast\""), HasSubstr("\"robot\"")));
+  EXPECT_THAT(error_of([&] {
+                c.section("a").get<double>("x_m", 0.0, pex::runtime::in_range(0.0, 1.0));
+              }),
+              AllOf(HasSubstr("'a.x_m'"), HasSubstr("3")));
+}
+
+TEST(ConfigReader, RejectsNonFiniteNumbers) {
+  ConfigReader c = ConfigReader::from_string("x_m = nan\n", "n.toml");
+  EXPECT_THAT(error_of([&] { c.get<double>("x_m", 0.0); }), HasSubstr("finite"));
+}
+
+TEST(ConfigReader, SyntaxErrorNamesFileAndLine) {
+  const std::string err =
+      error_of([] { ConfigReader::from_string("a = 1\nb = = 2\n", "broken.toml"); });
+  EXPECT_THAT(err, AllOf(HasSubstr("broken.toml"), HasSubstr(":2")));
+}
+
+TEST(ConfigReader, MissingFileIsAConfigError) {
+  EXPECT_THAT(error_of([] { ConfigReader::from_file("/nonexistent/x.toml"); }),
+              HasSubstr("/nonexistent/x.toml"));
+}
+
+TEST(ConfigReader, SectionThatIsNotATableIsAnError) {
+  ConfigReader c = ConfigReader::from_string("can = 3\n", "s.toml");
+  EXPECT_THAT(error_of([&] { c.section("can"); }), HasSubstr("'can'"));
+}

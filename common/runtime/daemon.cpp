@@ -1,0 +1,92 @@
+#include "runtime/daemon.hpp"
+
+#include <signal.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+
+namespace pex::runtime {
+
+namespace {
+CommonArgs g_args;
+
+// Blocks SIGINT/SIGTERM for normal delivery and returns a signalfd for them, so
+// the poll loop sees a stop request as an ordinary readable fd (no handler races).
+int make_signal_fd() {
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGINT);
+  sigaddset(&mask, SIGTERM);
+  sigprocmask(SIG_BLOCK, &mask, nullptr);
+  return signalfd(-1, &mask, SFD_CLOEXEC | SFD_NONBLOCK);
+}
+}  // namespace
+
+const CommonArgs& common_args() { return g_args; }
+
+int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup& setup) {
+  CLI::App app{info.description, "pex-" + info.name};
+  app.add_option("--config", g_args.config_path, "TOML configuration file (default: built-in defaults)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--lcm-url", g_args.lcm_url,
+                 "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0 (default: $LCM_DEFAULT_URL or LCM's)");
+  app.add_option("--log-level", g_args.log_level, "trace, debug, info, warn, error, critical, off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+  if (info.supports_replay) {
+    app.add_option("--log", g_args.replay_log,
+                   "replay this LCM log through the same handlers, as fast as possible, then exit")
+        ->check(CLI::ExistingFile);
+    app.add_option("--out", g_args.replay_out, "with --log: write what is published to this LCM log");
+  }
+  if (info.add_options) info.add_options(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return exit_code::kUsage;
+  }
+
+  auto logger = spdlog::stderr_color_mt(info.name);
+  logger->set_pattern("%Y-%m-%dT%H:%M:%S.%e %n[%P] %^%l%$: %v");
+  spdlog::set_default_logger(logger);
+  spdlog::set_level(spdlog::level::from_str(g_args.log_level));
+
+  const bool offline = !g_args.replay_log.empty();
+  const int signal_fd = make_signal_fd();
+  try {
+    ConfigReader config =
+        g_args.config_path.empty() ? ConfigReader() : ConfigReader::from_file(g_args.config_path);
+    Node node(NodeOptions{info.name, g_args.lcm_url, offline, g_args.replay_out, 1.0});
+    node.set_signal_fd(signal_fd);
+    setup(node, config);
+    config.finish();
+    spdlog::info("started ({}; config {})", offline ? "replay of " + g_args.replay_log : "live",
+                 config.origin());
+    if (offline) {
+      const int64_t events = node.replay_log(g_args.replay_log);
+      spdlog::info("replayed {} events, {} rejected, {} errors", events, node.msgs_rejected(),
+                   node.errors());
+    } else {
+      node.run();
+      spdlog::info("stopped");
+    }
+  } catch (const ConfigError& e) {
+    spdlog::critical("config error: {}", e.what());
+    return exit_code::kConfig;
+  } catch (const Unavailable& e) {
+    spdlog::critical("unavailable: {}", e.what());
+    return exit_code::kUnavailable;
+  } catch (const std::exception& e) {
+    spdlog::critical("fatal: {}", e.what());
+    return exit_code::kFatal;
+  }
+  spdlog::default_logger()->flush();
+  return exit_code::kOk;
+}
+
+}  // namespace pex::runtime

@@ -1,0 +1,63 @@
+#pragma once
+// run_daemon(): the whole life of a daemon around its own setup function.
+//
+//   args (CLI11) -> logging (spdlog) -> config (TOML) -> Node -> setup(node, config)
+//   -> unknown config keys rejected -> READY=1 -> poll loop until SIGTERM -> flush.
+//
+// Exit codes, documented for systemd (RestartPreventExitStatus=64 78):
+//   0   clean stop (SIGINT/SIGTERM, or the end of a replayed log)
+//   1   fatal error at run time, or at start for a reason not listed below
+//   64  bad command line (EX_USAGE)
+//   69  a device or service is not there (EX_UNAVAILABLE), e.g. no CAN interface
+//   78  bad configuration (EX_CONFIG): unknown key, wrong type, value out of range
+#include <functional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "runtime/config.hpp"
+#include "runtime/node.hpp"
+
+namespace pex::runtime {
+
+namespace exit_code {
+inline constexpr int kOk = 0;
+inline constexpr int kFatal = 1;
+inline constexpr int kUsage = 64;
+inline constexpr int kUnavailable = 69;
+inline constexpr int kConfig = 78;
+}  // namespace exit_code
+
+// Thrown from setup when a device the daemon needs is missing (exit 69).
+class Unavailable : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct DaemonInfo {
+  std::string name;         // "lidar_reader": status name, log prefix
+  std::string description;  // one line for --help
+  // Adds `--log IN.lcm` (replay a log through the same handlers, as fast as
+  // possible, then exit) and `--out OUT.lcm` (write what it publishes).
+  bool supports_replay = false;
+  // Daemon-specific command-line options, registered before parsing.
+  std::function<void(CLI::App&)> add_options = {};
+};
+
+// setup() reads its typed options from `config` and wires handlers into `node`.
+// It may throw ConfigError (exit 78), Unavailable (exit 69) or anything else (exit 1).
+using DaemonSetup = std::function<void(Node& node, ConfigReader& config)>;
+
+int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup& setup);
+
+// The options every daemon gets, after parsing (for daemons that need them in setup).
+struct CommonArgs {
+  std::string config_path;
+  std::string lcm_url;
+  std::string log_level = "info";
+  std::string replay_log;
+  std::string replay_out;
+};
+const CommonArgs& common_args();
+
+}  // namespace pex::runtime

@@ -1,0 +1,298 @@
+#include "runtime/node.hpp"
+
+#include <poll.h>
+#include <sys/signalfd.h>
+#include <systemd/sd-daemon.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <lcm/lcm-cpp.hpp>
+#include <stdexcept>
+
+#include <pex/daemon_status_t.hpp>
+
+#include "runtime/channels.hpp"
+
+namespace pex::runtime {
+
+void RateLimitedLog::log(spdlog::level::level_enum level, const std::string& key,
+                         const std::string& text) {
+  auto& e = entries_[key];
+  const auto now = std::chrono::steady_clock::now();
+  if (e.last.time_since_epoch().count() != 0 && now - e.last < period_) {
+    ++e.suppressed;
+    return;
+  }
+  if (e.suppressed > 0)
+    spdlog::log(level, "{} ({} more like it in the last {} ms)", text, e.suppressed,
+                period_.count());
+  else
+    spdlog::log(level, "{}", text);
+  e.last = now;
+  e.suppressed = 0;
+}
+
+namespace {
+
+void on_lcm_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Node* node) {
+  node->dispatch(channel, rbuf->data, static_cast<int>(rbuf->data_size), rbuf->recv_utime);
+}
+
+int64_t wall_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+Node::Node(NodeOptions options) : options_(std::move(options)) {
+  start_mono_us_ = monotonic_us();
+  if (!options_.offline) {
+    lcm_ = options_.lcm_url.empty() ? std::make_unique<lcm::LCM>()
+                                    : std::make_unique<lcm::LCM>(options_.lcm_url);
+    if (!lcm_->good())
+      throw std::runtime_error("cannot open LCM at '" +
+                               (options_.lcm_url.empty() ? std::string("<default>")
+                                                         : options_.lcm_url) +
+                               "'");
+  } else if (!options_.offline_output_log.empty()) {
+    out_log_ = std::make_unique<lcm::LogFile>(options_.offline_output_log, "w");
+    if (!out_log_->good())
+      throw std::runtime_error("cannot write log '" + options_.offline_output_log + "'");
+  }
+  every(std::chrono::microseconds(static_cast<int64_t>(options_.heartbeat_period_s * 1e6)),
+        [this](int64_t) { publish_status(); });
+}
+
+Node::~Node() = default;
+
+int64_t Node::monotonic_us() const {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+int64_t Node::now_utime() const { return options_.offline ? offline_now_us_ : wall_utime(); }
+
+void Node::subscribe_raw(std::string_view channel, RawHandler handler) {
+  auto it = handlers_.find(channel);
+  if (it == handlers_.end()) {
+    it = handlers_.emplace(std::string(channel), std::vector<RawHandler>{}).first;
+    if (lcm_) lcm_->subscribeFunction(std::string(channel), &on_lcm_message, this);
+  }
+  it->second.push_back(std::move(handler));
+}
+
+void Node::publish_raw(std::string_view channel, const void* data, int size) {
+  ++msgs_out_;
+  if (lcm_) {
+    if (lcm_->publish(std::string(channel), data, static_cast<unsigned>(size)) != 0)
+      error("publish", "cannot publish on " + std::string(channel));
+  } else if (out_log_) {
+    lcm::LogEvent ev{};
+    ev.eventnum = msgs_out_;
+    ev.timestamp = now_utime();
+    ev.channel = std::string(channel);
+    ev.datalen = size;
+    ev.data = const_cast<void*>(data);
+    out_log_->writeEvent(&ev);
+  }
+}
+
+void Node::dispatch(std::string_view channel, const void* data, int size, int64_t recv_utime) {
+  if (options_.offline) {
+    offline_now_us_ = recv_utime;
+    fire_due_timers(recv_utime);
+  }
+  auto it = handlers_.find(channel);
+  if (it == handlers_.end()) return;
+  const int64_t rejected_before = msgs_rejected_;
+  const int64_t errors_before = errors_;
+  for (auto& h : it->second) {
+    try {
+      h(data, size, recv_utime);
+    } catch (const BadInput& e) {
+      reject(channel, std::string(channel) + ": " + e.what());
+    } catch (const std::exception& e) {
+      error(channel, std::string(channel) + ": handler failed: " + e.what());
+    }
+  }
+  if (msgs_rejected_ == rejected_before && errors_ == errors_before) ++msgs_in_;
+}
+
+void Node::every(std::chrono::microseconds period, std::function<void(int64_t)> fn) {
+  const int64_t p = std::max<int64_t>(1, period.count());
+  // Offline timers start at the first event (next_us == 0 means "not yet").
+  timers_.push_back({p, options_.offline ? 0 : monotonic_us() + p, std::move(fn)});
+}
+
+int Node::watch_fd(int fd, std::function<void()> fn) {
+  const int id = next_watch_id_++;
+  watches_.push_back({id, fd, std::move(fn)});
+  return id;
+}
+
+void Node::unwatch_fd(int id) {
+  std::erase_if(watches_, [id](const Watch& w) { return w.id == id; });
+}
+
+void Node::fire_due_timers(int64_t now_us) {
+  for (size_t i = 0; i < timers_.size(); ++i) {
+    Timer& t = timers_[i];
+    if (t.next_us == 0) t.next_us = now_us + t.period_us;
+    if (now_us < t.next_us) continue;
+    // Skip missed periods instead of bursting to catch up.
+    t.next_us += t.period_us * std::max<int64_t>(1, (now_us - t.next_us) / t.period_us + 1);
+    try {
+      t.fn(options_.offline ? now_us : wall_utime());
+    } catch (const std::exception& e) {
+      error("timer", std::string("timer failed: ") + e.what());
+    }
+  }
+}
+
+void Node::reject(std::string_view what_key, const std::string& text) {
+  ++msgs_rejected_;
+  ++errors_;
+  last_error_ = text;
+  rate_limited_.log(spdlog::level::warn, "reject:" + std::string(what_key), "rejected: " + text);
+}
+
+void Node::error(std::string_view what_key, const std::string& text) {
+  ++errors_;
+  last_error_ = text;
+  rate_limited_.log(spdlog::level::err, "error:" + std::string(what_key), text);
+}
+
+void Node::set_state(int8_t state, std::string reason) {
+  if (state != state_ || reason != state_reason_) {
+    if (state == pex::daemon_status_t::STATE_OK)
+      spdlog::info("state OK{}{}", reason.empty() ? "" : ": ", reason);
+    else
+      spdlog::warn("state {}{}{}", static_cast<int>(state), reason.empty() ? "" : ": ", reason);
+  }
+  state_ = state;
+  state_reason_ = std::move(reason);
+}
+
+int64_t& Node::counter(const std::string& name) { return counters_[name]; }
+
+void Node::publish_status() {
+  pex::daemon_status_t s;
+  s.utime = now_utime();
+  s.name = options_.name;
+  s.pid = static_cast<int32_t>(getpid());
+  s.state = state_;
+  s.uptime_s = options_.offline ? 0.0 : (monotonic_us() - start_mono_us_) * 1e-6;
+  s.msgs_in = msgs_in_;
+  s.msgs_out = msgs_out_ + 1;  // counts this status message too
+  s.msgs_rejected = msgs_rejected_;
+  s.errors = errors_;
+  s.last_error = last_error_;
+  for (const auto& [k, v] : counters_) {
+    s.counter_names.push_back(k);
+    s.counter_values.push_back(v);
+  }
+  s.ncounters = static_cast<int32_t>(s.counter_names.size());
+  publish(channels::kDaemonStatus, s);
+  if (!options_.offline && state_ != pex::daemon_status_t::STATE_STOPPING) {
+    const std::string text = "STATUS=state " + std::to_string(state_) + ", in " +
+                             std::to_string(msgs_in_) + ", out " + std::to_string(msgs_out_) +
+                             ", rejected " + std::to_string(msgs_rejected_);
+    sd_notify(0, text.c_str());
+  }
+}
+
+void Node::run() {
+  if (state_ == pex::daemon_status_t::STATE_STARTING) set_state(pex::daemon_status_t::STATE_OK);
+  uint64_t watchdog_usec = 0;
+  if (sd_watchdog_enabled(0, &watchdog_usec) > 0 && watchdog_usec > 0)
+    every(std::chrono::microseconds(watchdog_usec / 2), [](int64_t) { sd_notify(0, "WATCHDOG=1"); });
+  sd_notify(0, "READY=1");
+  publish_status();
+
+  std::vector<pollfd> fds;
+  while (!stop_) {
+    const int64_t now = monotonic_us();
+    int64_t next = now + 100'000;
+    for (const auto& t : timers_) next = std::min(next, t.next_us);
+    const int timeout_ms = static_cast<int>(std::max<int64_t>(0, (next - now + 999) / 1000));
+
+    fds.clear();
+    fds.push_back({lcm_->getFileno(), POLLIN, 0});
+    fds.push_back({signal_fd_, POLLIN, 0});
+    const size_t first_watch = fds.size();
+    // Copy: a handler may unwatch or watch fds while we iterate.
+    const std::vector<Watch> watches = watches_;
+    for (const auto& w : watches) fds.push_back({w.fd, POLLIN, 0});
+
+    const int n = ::poll(fds.data(), fds.size(), timeout_ms);
+    if (n < 0 && errno != EINTR) {
+      error("poll", std::string("poll failed: ") + std::strerror(errno));
+      break;
+    }
+    if (n > 0) {
+      if (fds[1].revents & POLLIN) {
+        signalfd_siginfo si{};
+        if (::read(signal_fd_, &si, sizeof si) > 0)
+          spdlog::info("signal {} received, stopping", si.ssi_signo);
+        stop_ = true;
+        break;
+      }
+      if (fds[0].revents & POLLIN) lcm_->handleTimeout(0);
+      for (size_t i = 0; i < watches.size(); ++i) {
+        if (!(fds[first_watch + i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+        // Still watched? An earlier callback may have removed it.
+        const bool live = std::any_of(watches_.begin(), watches_.end(),
+                                      [&](const Watch& w) { return w.id == watches[i].id; });
+        if (!live) continue;
+        try {
+          watches[i].fn();
+        } catch (const std::exception& e) {
+          error("fd", std::string("fd handler failed: ") + e.what());
+        }
+      }
+    }
+    fire_due_timers(monotonic_us());
+  }
+  shutdown();
+}
+
+int64_t Node::replay_log(const std::string& path) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw std::runtime_error("cannot read LCM log '" + path + "'");
+  if (state_ == pex::daemon_status_t::STATE_STARTING) set_state(pex::daemon_status_t::STATE_OK);
+  int64_t events = 0;
+  while (!stop_) {
+    const lcm::LogEvent* ev = log.readNextEvent();
+    if (!ev) break;
+    dispatch(ev->channel, ev->data, ev->datalen, ev->timestamp);
+    ++events;
+    if (signal_fd_ >= 0 && events % 4096 == 0) {
+      pollfd p{signal_fd_, POLLIN, 0};
+      if (::poll(&p, 1, 0) > 0) stop_ = true;
+    }
+  }
+  shutdown();
+  return events;
+}
+
+void Node::shutdown() {
+  if (shut_down_) return;
+  shut_down_ = true;
+  stop_ = true;
+  for (auto& hook : shutdown_hooks_) {
+    try {
+      hook();
+    } catch (const std::exception& e) {
+      error("shutdown", std::string("shutdown hook failed: ") + e.what());
+    }
+  }
+  state_ = pex::daemon_status_t::STATE_STOPPING;
+  publish_status();
+  if (!options_.offline) sd_notify(0, "STOPPING=1");
+}
+
+}  // namespace pex::runtime

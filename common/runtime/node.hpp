@@ -1,0 +1,175 @@
+#pragma once
+// Node: one daemon's connection to the LCM bus, its poll loop, timers and health.
+//
+// Live and replay share one code path: live, LCM delivers raw bytes to
+// dispatch(); offline, a log reader calls dispatch() with the logged bytes and
+// the node's clock follows the log, so timers fire in log time.
+//
+// Every subscription decodes defensively: a message that fails to decode, or
+// whose handler throws (bad content), is counted as rejected, logged at most
+// once a second per channel, and dropped; the daemon keeps its state and goes on.
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <spdlog/spdlog.h>
+
+namespace lcm {
+class LCM;
+class LogFile;
+}  // namespace lcm
+
+namespace pex::runtime {
+
+// Thrown by handlers for input they refuse (NaN ranges, oversize arrays, ...).
+// The node counts it as a rejected message; any other std::exception counts
+// as an error of the daemon, and is also survived.
+class BadInput : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Logs at most one line per `period` for each key, and says how many it held back.
+class RateLimitedLog {
+ public:
+  explicit RateLimitedLog(std::chrono::milliseconds period = std::chrono::seconds(1))
+      : period_(period) {}
+  void log(spdlog::level::level_enum level, const std::string& key, const std::string& text);
+
+ private:
+  struct Entry {
+    std::chrono::steady_clock::time_point last{};
+    int64_t suppressed = 0;
+  };
+  std::chrono::milliseconds period_;
+  std::map<std::string, Entry> entries_;
+};
+
+struct NodeOptions {
+  std::string name;                 // daemon name, as in DAEMON_STATUS
+  std::string lcm_url;              // "" = LCM's default (LCM_DEFAULT_URL)
+  bool offline = false;             // replay: no LCM; clock follows dispatched events
+  std::string offline_output_log;   // offline: publish() writes here ("" = discard)
+  double heartbeat_period_s = 1.0;
+};
+
+class Node {
+ public:
+  using RawHandler = std::function<void(const void* data, int size, int64_t recv_utime)>;
+  using Clock = std::chrono::microseconds;
+
+  // Throws std::runtime_error if LCM cannot be created for the URL.
+  explicit Node(NodeOptions options);
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  const std::string& name() const { return options_.name; }
+  bool offline() const { return options_.offline; }
+
+  // Decodes each message on `channel` as Msg and calls `handler(msg)`.
+  template <class Msg, class Handler>
+  void subscribe(std::string_view channel, Handler handler) {
+    subscribe_raw(channel, [this, ch = std::string(channel), handler](
+                               const void* data, int size, int64_t) {
+      Msg msg{};  // value-initialised: lcm-gen types have no member initialisers
+      const int used = msg.decode(data, 0, size);
+      if (used < 0 || used != size) {
+        reject(ch, "cannot decode " + std::to_string(size) + " bytes as " +
+                       std::string(Msg::getTypeName()));
+        return;
+      }
+      handler(msg);
+    });
+  }
+  void subscribe_raw(std::string_view channel, RawHandler handler);
+
+  // Encodes and sends `msg` (offline: writes to the output log if any).
+  template <class Msg>
+  void publish(std::string_view channel, const Msg& msg) {
+    std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
+    msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    publish_raw(channel, buf.data(), static_cast<int>(buf.size()));
+  }
+  void publish_raw(std::string_view channel, const void* data, int size);
+
+  // The shared path for live and replay: runs the handlers of `channel` on the
+  // bytes, counting and surviving bad input. `recv_utime` is the receive time
+  // (offline: the log event's time, which becomes the node's clock).
+  void dispatch(std::string_view channel, const void* data, int size, int64_t recv_utime);
+
+  // Calls `fn(now_utime)` every `period` (live: steady wall clock; offline: log time).
+  void every(std::chrono::microseconds period, std::function<void(int64_t now_utime)> fn);
+  // Calls `fn()` whenever `fd` is readable (live only). Returns an id for unwatch().
+  int watch_fd(int fd, std::function<void()> fn);
+  void unwatch_fd(int id);
+  // Runs once when the node stops (live: SIGTERM; offline: end of log).
+  void on_shutdown(std::function<void()> fn) { shutdown_hooks_.push_back(std::move(fn)); }
+
+  // Time in microseconds since the epoch (offline: time of the last event).
+  int64_t now_utime() const;
+
+  // Health bookkeeping, published in DAEMON_STATUS.
+  void reject(std::string_view what_key, const std::string& text);  // bad input
+  void error(std::string_view what_key, const std::string& text);   // own error
+  void set_state(int8_t state, std::string reason = {});            // daemon_status_t::STATE_*
+  int64_t& counter(const std::string& name);                        // daemon-specific counter
+  int64_t msgs_rejected() const { return msgs_rejected_; }
+  int64_t errors() const { return errors_; }
+
+  // Live loop: polls LCM, fds and timers until request_stop() or a signal.
+  void run();
+  void request_stop() { stop_ = true; }
+  bool stopping() const { return stop_; }
+  // Offline: dispatches every event of an LCM log in order, then stops.
+  // Returns the number of events read. Throws std::runtime_error if unreadable.
+  int64_t replay_log(const std::string& path);
+  // Runs shutdown hooks (once) and publishes a last STATE_STOPPING status.
+  void shutdown();
+
+  // Sets the signal fd (SIGINT/SIGTERM) the live loop also watches.
+  void set_signal_fd(int fd) { signal_fd_ = fd; }
+
+ private:
+  void fire_due_timers(int64_t now_us);
+  void publish_status();
+  int64_t monotonic_us() const;
+
+  struct Timer {
+    int64_t period_us;
+    int64_t next_us;
+    std::function<void(int64_t)> fn;
+  };
+  struct Watch {
+    int id;
+    int fd;
+    std::function<void()> fn;
+  };
+
+  NodeOptions options_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<lcm::LogFile> out_log_;
+  std::map<std::string, std::vector<RawHandler>, std::less<>> handlers_;
+  std::vector<Timer> timers_;
+  std::vector<Watch> watches_;
+  std::vector<std::function<void()>> shutdown_hooks_;
+  std::map<std::string, int64_t> counters_;
+  RateLimitedLog rate_limited_;
+  int next_watch_id_ = 1;
+  int signal_fd_ = -1;
+  bool stop_ = false;
+  bool shut_down_ = false;
+  int64_t offline_now_us_ = 0;
+  int64_t start_mono_us_ = 0;
+  int64_t msgs_in_ = 0, msgs_out_ = 0, msgs_rejected_ = 0, errors_ = 0;
+  std::string last_error_;
+  int8_t state_ = 0;
+  std::string state_reason_;
+};
+
+}  // namespace pex::runtime
