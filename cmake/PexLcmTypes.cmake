@@ -31,7 +31,8 @@ function(pex_lcm_types target)
   add_custom_target(${target}_gen DEPENDS ${headers})
   add_library(${target} INTERFACE)
   add_dependencies(${target} ${target}_gen)
-  target_include_directories(${target} INTERFACE ${cpp_dir})
+  # SYSTEM: lcm-gen's code is not ours to warn about (it trips -Wpedantic).
+  target_include_directories(${target} SYSTEM INTERFACE ${cpp_dir})
   target_link_libraries(${target} INTERFACE PkgConfig::LCM)
 
   if(Java_JAVAC_EXECUTABLE AND LCM_JAR)

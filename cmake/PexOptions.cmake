@@ -18,16 +18,22 @@ function(pex_add_library name)
   pex_target_options(${name})
 endfunction()
 
-# pex_add_gtest(name SOURCES ... LIBS ... [LABELS ...])
-# A GoogleTest executable registered test by test with ctest.
+# pex_add_gtest(name SOURCES ... LIBS ... [LABELS ...] [TIMEOUT s] [NETNS])
+# A GoogleTest executable registered test by test with ctest. NETNS: each test
+# runs in its own private network namespace (scripts/netns-run), for tests that
+# start daemons or touch LCM.
 function(pex_add_gtest name)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "NETNS" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main GTest::gmock)
   target_compile_definitions(${name} PRIVATE
     PEX_SOURCE_DIR="${PROJECT_SOURCE_DIR}" PEX_SHARED_DIR="${PEX_SHARED_DIR}"
     PEX_BINARY_DIR="${PROJECT_BINARY_DIR}")
   pex_target_options(${name})
+  if(ARG_NETNS)
+    # ctest (and test discovery) prefix the command with the "emulator".
+    set_target_properties(${name} PROPERTIES CROSSCOMPILING_EMULATOR ${PROJECT_SOURCE_DIR}/scripts/netns-run)
+  endif()
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
@@ -35,7 +41,7 @@ function(pex_add_gtest name)
     PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
 endfunction()
 
-# pex_add_daemon(name SOURCES ... LIBS ...): a daemon executable named pex-<name>.
+# pex_add_executable(name SOURCES ... LIBS ...): a program in build/bin (daemons, tools, benchmarks).
 function(pex_add_executable name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})

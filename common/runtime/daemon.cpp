@@ -61,7 +61,11 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   try {
     ConfigReader config =
         g_args.config_path.empty() ? ConfigReader() : ConfigReader::from_file(g_args.config_path);
-    Node node(NodeOptions{info.name, g_args.lcm_url, offline, g_args.replay_out, 1.0});
+    // The one key every daemon has: how often it publishes DAEMON_STATUS.
+    const int heartbeat_period_ms =
+        config.get<int>("heartbeat_period_ms", 1000, in_range(10, 60'000));
+    Node node(NodeOptions{info.name, g_args.lcm_url, offline, g_args.replay_out,
+                          heartbeat_period_ms * 1e-3});
     node.set_signal_fd(signal_fd);
     setup(node, config);
     config.finish();

@@ -173,8 +173,11 @@ void Node::set_state(int8_t state, std::string reason) {
     else
       spdlog::warn("state {}{}{}", static_cast<int>(state), reason.empty() ? "" : ": ", reason);
   }
+  const bool changed = state != state_;
   state_ = state;
   state_reason_ = std::move(reason);
+  // A change of health is news: publish it now rather than at the next heartbeat.
+  if (changed && !shut_down_) publish_status();
 }
 
 int64_t& Node::counter(const std::string& name) { return counters_[name]; }
