@@ -37,8 +37,13 @@ function(pex_add_gtest name)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
-    PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
+  set(props TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
+  if(ARG_NETNS)
+    # Tests that run daemons in real time get the machine to themselves under
+    # `ctest -j`, so a CPU-heavy unit test beside them cannot starve them.
+    list(APPEND props PROCESSORS 2)
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES ${props})
 endfunction()
 
 # pex_add_executable(name SOURCES ... LIBS ...): a program in build/bin (daemons, tools, benchmarks).
