@@ -1,12 +1,16 @@
-// pex-base-driver: skeleton until its issue lands. It starts, loads its config,
-// publishes DAEMON_STATUS, and does nothing else (and says so at start).
-#include <spdlog/spdlog.h>
+// pex-base-driver: BASE_CMD -> CiA 402 wheel drives on CAN; encoders -> ODOMETRY.
+// Stops the wheels on stale commands, node faults, lost heartbeats and CAN
+// error frames, and reports why in DAEMON_STATUS.
+#include <memory>
 
+#include "driver.hpp"
 #include "runtime/daemon.hpp"
 
 int main(int argc, char** argv) {
-  return pex::runtime::run_daemon(argc, argv, {"base_driver", "base_driver (skeleton: not implemented yet)"},
-                                  [](pex::runtime::Node&, pex::runtime::ConfigReader&) {
-                                    spdlog::warn("base_driver is a skeleton: it only reports its health");
+  std::unique_ptr<pex::base_driver::Driver> driver;
+  return pex::runtime::run_daemon(argc, argv, {"base_driver", "differential base over CANopen CiA 402 -> ODOMETRY"},
+                                  [&driver](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
+                                    driver = std::make_unique<pex::base_driver::Driver>(
+                                        node, pex::base_driver::load_options(config));
                                   });
 }

@@ -1,12 +1,16 @@
-// pex-lidar-reader: skeleton until its issue lands. It starts, loads its config,
-// publishes DAEMON_STATUS, and does nothing else (and says so at start).
-#include <spdlog/spdlog.h>
+// pex-lidar-reader: SICK LMS1xx over CoLa-A/TCP -> LIDAR_SCAN. Connects with a
+// timeout, logs in and configures as the telegram listing says, streams
+// sSN LMDscandata, and reconnects with exponential back-off.
+#include <memory>
 
+#include "reader.hpp"
 #include "runtime/daemon.hpp"
 
 int main(int argc, char** argv) {
-  return pex::runtime::run_daemon(argc, argv, {"lidar_reader", "lidar_reader (skeleton: not implemented yet)"},
-                                  [](pex::runtime::Node&, pex::runtime::ConfigReader&) {
-                                    spdlog::warn("lidar_reader is a skeleton: it only reports its health");
+  std::unique_ptr<pex::lidar_reader::Reader> reader;
+  return pex::runtime::run_daemon(argc, argv, {"lidar_reader", "SICK LMS1xx (CoLa-A over TCP) -> LIDAR_SCAN"},
+                                  [&reader](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
+                                    reader = std::make_unique<pex::lidar_reader::Reader>(
+                                        node, pex::lidar_reader::load_options(config));
                                   });
 }

@@ -1,12 +1,26 @@
-// pex-sim: skeleton until its issue lands. It starts, loads its config,
-// publishes DAEMON_STATUS, and does nothing else (and says so at start).
-#include <spdlog/spdlog.h>
+// pex-sim: the world, the robot and its devices. Serves the LMS111's CoLa-A
+// protocol on a loopback TCP port, plays the CiA 402 wheel drives on the CAN
+// transport, and publishes the ground truth on SIM_TRUTH (for evaluation only).
+#include <memory>
+#include <optional>
 
 #include "runtime/daemon.hpp"
+#include "simulator.hpp"
 
 int main(int argc, char** argv) {
-  return pex::runtime::run_daemon(argc, argv, {"sim", "sim (skeleton: not implemented yet)"},
-                                  [](pex::runtime::Node&, pex::runtime::ConfigReader&) {
-                                    spdlog::warn("sim is a skeleton: it only reports its health");
+  std::optional<double> speed;
+  std::unique_ptr<pex::simd::Simulator> simulator;  // outlives the node's handlers' use of it
+  pex::runtime::DaemonInfo info{"sim", "simulated world, LMS111 (CoLa-A/TCP) and CiA 402 wheel drives (CAN)"};
+  info.add_options = [&speed](CLI::App& app) {
+    app.add_option_function<double>(
+           "--speed", [&speed](double factor) { speed = factor; },
+           "simulated seconds per wall-clock second (overrides speed_factor)")
+        ->check(CLI::Range(0.01, 100.0));
+  };
+  return pex::runtime::run_daemon(argc, argv, info,
+                                  [&](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
+                                    auto options = pex::simd::load_options(config);
+                                    if (speed) options.speed_factor = *speed;
+                                    simulator = std::make_unique<pex::simd::Simulator>(node, std::move(options));
                                   });
 }

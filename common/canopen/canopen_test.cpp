@@ -1,0 +1,229 @@
+#include "canopen/canopen.hpp"
+
+#include <gtest/gtest.h>
+
+#include <linux/can/error.h>
+
+namespace pex::canopen {
+namespace {
+
+TEST(CanopenFrames, LayoutIsLittleEndianWithTheDocumentedIds) {
+  Frame r = rpdo1_frame(2, kCwEnableOperation, -1000);
+  EXPECT_EQ(r.can_id, 0x202u);
+  EXPECT_EQ(r.can_dlc, 6);
+  EXPECT_EQ(r.data[0], 0x0F);
+  EXPECT_EQ(r.data[1], 0x00);
+  EXPECT_EQ(r.data[2], 0x18);  // -1000 = 0xFFFFFC18
+  EXPECT_EQ(r.data[3], 0xFC);
+  EXPECT_EQ(r.data[5], 0xFF);
+  auto back = read_rpdo1(r);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->target_velocity, -1000);
+  Frame t = tpdo1_frame(1, 0x0627, 0x12345678);
+  EXPECT_EQ(t.can_id, 0x181u);
+  EXPECT_EQ(read_tpdo1(t)->position_actual, 0x12345678);
+  Frame s = sdo_write_frame(1, kObjModesOfOperation, 0, 3, 1);
+  EXPECT_EQ(s.can_id, 0x601u);
+  EXPECT_EQ(s.data[0], 0x2F);
+  EXPECT_EQ(s.data[1], 0x60);
+  EXPECT_EQ(s.data[2], 0x60);
+  EXPECT_EQ(s.data[4], 3);
+  Frame n = nmt_frame(NmtCommand::kStart, 5);
+  EXPECT_EQ(n.can_id, 0u);
+  EXPECT_EQ(n.data[0], 1);
+  EXPECT_EQ(n.data[1], 5);
+  EXPECT_EQ(heartbeat_frame(3, NmtState::kPreOperational).can_id, 0x703u);
+}
+
+TEST(CanopenFrames, MalformedFramesAreRejected) {
+  Frame short_pdo = tpdo1_frame(1, 0x27, 5);
+  short_pdo.can_dlc = 5;
+  EXPECT_FALSE(read_tpdo1(short_pdo));
+  Frame rtr = tpdo1_frame(1, 0x27, 5);
+  rtr.can_id |= CAN_RTR_FLAG;
+  EXPECT_FALSE(read_tpdo1(rtr));
+  Frame ext = heartbeat_frame(1, NmtState::kOperational);
+  ext.can_id |= CAN_EFF_FLAG;
+  EXPECT_FALSE(read_heartbeat(ext));
+  Frame bad_state = make_frame(0x701, {0x33});
+  EXPECT_FALSE(read_heartbeat(bad_state));
+  Frame bad_dlc = make_frame(0x701, {0x05, 0x00});
+  EXPECT_FALSE(read_heartbeat(bad_dlc));
+  Frame wrong_function = rpdo1_frame(1, 0, 0);
+  EXPECT_FALSE(read_tpdo1(wrong_function));
+  Frame huge_dlc = tpdo1_frame(1, 0, 0);
+  huge_dlc.can_dlc = 15;
+  EXPECT_FALSE(read_tpdo1(huge_dlc));
+}
+
+TEST(CanopenStatusword, DecodesEveryState) {
+  EXPECT_EQ(decode_statusword(0x0000), DriveState::kNotReadyToSwitchOn);
+  EXPECT_EQ(decode_statusword(0x0250), DriveState::kSwitchOnDisabled);
+  EXPECT_EQ(decode_statusword(0x0231), DriveState::kReadyToSwitchOn);
+  EXPECT_EQ(decode_statusword(0x0233), DriveState::kSwitchedOn);
+  EXPECT_EQ(decode_statusword(0x0237), DriveState::kOperationEnabled);
+  EXPECT_EQ(decode_statusword(0x0217), DriveState::kQuickStopActive);
+  EXPECT_EQ(decode_statusword(0x021F), DriveState::kFaultReactionActive);
+  EXPECT_EQ(decode_statusword(0x0218), DriveState::kFault);
+}
+
+// A bus with a master and two drive nodes: frames sent in one step are
+// delivered before the next, time advances 10 ms per step.
+class Bus {
+ public:
+  Bus() : master_(Cia402Master::Options{}) {
+    nodes_.emplace_back(DriveNode::Options{1, 100'000, 200'000.0});
+    nodes_.emplace_back(DriveNode::Options{2, 100'000, 200'000.0});
+  }
+  void run(int steps, std::vector<std::int32_t> target) {
+    for (int s = 0; s < steps; ++s) {
+      now_us_ += 10'000;
+      std::vector<Frame> to_master;
+      for (auto& node : nodes_) {
+        for (auto& f : node.step(now_us_)) to_master.push_back(f);
+      }
+      for (auto& f : master_.step(now_us_, target)) {
+        ++frames_from_master_;
+        for (auto& node : nodes_) {
+          for (auto& answer : node.handle(f)) to_master.push_back(answer);
+        }
+      }
+      for (auto& f : to_master) master_.handle(f, now_us_);
+    }
+  }
+  Cia402Master master_;
+  std::vector<DriveNode> nodes_;
+  std::int64_t now_us_ = 1'000'000;
+  int frames_from_master_ = 0;
+};
+
+TEST(Cia402, MasterBringsNodesToOperationEnabledAndDrives) {
+  Bus bus;
+  EXPECT_FALSE(bus.master_.all_ready());
+  bus.run(30, {1000, -2000});
+  ASSERT_TRUE(bus.master_.all_ready());
+  for (auto& node : bus.nodes_) {
+    EXPECT_EQ(node.state(), DriveState::kOperationEnabled);
+    EXPECT_EQ(node.nmt_state(), NmtState::kOperational);
+    EXPECT_EQ(node.mode(), kModeProfileVelocity);
+  }
+  bus.run(100, {1000, -2000});  // 1 s at speed
+  EXPECT_DOUBLE_EQ(bus.nodes_[0].velocity_actual(), 1000.0);
+  EXPECT_DOUBLE_EQ(bus.nodes_[1].velocity_actual(), -2000.0);
+  // The master sees the positions the nodes report (one step of lag at most).
+  EXPECT_NEAR(bus.master_.nodes()[0].position_actual, bus.nodes_[0].position_actual(), 11.0);
+  EXPECT_NEAR(bus.master_.nodes()[1].position_actual, bus.nodes_[1].position_actual(), 21.0);
+  EXPECT_GT(bus.master_.nodes()[0].position_actual, 900);
+}
+
+TEST(Cia402, FaultIsResetAndTheNodeComesBack) {
+  Bus bus;
+  bus.run(30, {500, 500});
+  ASSERT_TRUE(bus.master_.all_ready());
+  Frame emcy = bus.nodes_[1].inject_fault(0x2310);  // over-current
+  bus.master_.handle(emcy, bus.now_us_);
+  bus.run(1, {500, 500});
+  EXPECT_FALSE(bus.master_.all_ready());
+  EXPECT_EQ(bus.master_.nodes()[1].drive_state, DriveState::kFault);
+  EXPECT_EQ(bus.master_.nodes()[1].faults, 1u);
+  EXPECT_EQ(bus.master_.nodes()[1].last_emcy_code, 0x2310);
+  bus.run(60, {500, 500});
+  EXPECT_TRUE(bus.master_.all_ready());
+  EXPECT_EQ(bus.nodes_[1].state(), DriveState::kOperationEnabled);
+}
+
+TEST(Cia402, MissedHeartbeatIsDetectedAndRecovered) {
+  Bus bus;
+  bus.run(30, {0, 0});
+  ASSERT_TRUE(bus.master_.all_ready());
+  bus.nodes_[0].set_silent(true);
+  bus.run(15, {0, 0});  // last heartbeat at most 100 + 150 ms ago: within the 300 ms timeout
+  EXPECT_FALSE(bus.master_.nodes()[0].heartbeat_lost);
+  bus.run(20, {0, 0});
+  EXPECT_TRUE(bus.master_.nodes()[0].heartbeat_lost);
+  EXPECT_EQ(bus.master_.nodes()[0].heartbeat_losses, 1u);
+  EXPECT_FALSE(bus.master_.all_ready());
+  bus.nodes_[0].set_silent(false);
+  bus.run(40, {0, 0});
+  EXPECT_FALSE(bus.master_.nodes()[0].heartbeat_lost);
+  EXPECT_TRUE(bus.master_.all_ready());
+}
+
+TEST(Cia402, PowerCycledNodeIsReconfigured) {
+  Bus bus;
+  bus.run(30, {100, 100});
+  ASSERT_TRUE(bus.master_.all_ready());
+  bus.nodes_[0].power_cycle();
+  bus.run(1, {100, 100});
+  EXPECT_EQ(bus.master_.nodes()[0].restarts, 1u);
+  EXPECT_FALSE(bus.master_.all_ready());
+  bus.run(40, {100, 100});
+  EXPECT_TRUE(bus.master_.all_ready());
+  EXPECT_EQ(bus.nodes_[0].mode(), kModeProfileVelocity);
+}
+
+TEST(Cia402, NodeIgnoresMalformedAndForeignFrames) {
+  DriveNode node(DriveNode::Options{});
+  node.step(0);  // boot-up
+  EXPECT_TRUE(node.handle(sdo_write_frame(1, kObjModesOfOperation, 0, 3, 1)).size() == 1);
+  EXPECT_TRUE(node.handle(nmt_frame(NmtCommand::kStart, 1)).empty());
+  Frame short_rpdo = rpdo1_frame(1, kCwShutdown, 0);
+  short_rpdo.can_dlc = 2;
+  node.handle(short_rpdo);
+  EXPECT_EQ(node.state(), DriveState::kSwitchOnDisabled);
+  node.handle(rpdo1_frame(2, kCwShutdown, 0));  // other node
+  EXPECT_EQ(node.state(), DriveState::kSwitchOnDisabled);
+  node.handle(rpdo1_frame(1, kCwShutdown, 0));
+  EXPECT_EQ(node.state(), DriveState::kReadyToSwitchOn);
+  // Unsupported mode and unknown object are aborted, not applied.
+  auto abort = node.handle(sdo_write_frame(1, kObjModesOfOperation, 0, 1, 1));
+  ASSERT_EQ(abort.size(), 1u);
+  EXPECT_TRUE(read_sdo_response(abort[0])->abort);
+  EXPECT_EQ(node.mode(), kModeProfileVelocity);
+  abort = node.handle(sdo_write_frame(1, 0x1234, 0, 1, 1));
+  EXPECT_EQ(read_sdo_response(abort[0])->abort_code, 0x06020000u);
+}
+
+TEST(Cia402, MasterCountsMalformedFramesAndKeepsState) {
+  Bus bus;
+  bus.run(30, {0, 0});
+  ASSERT_TRUE(bus.master_.all_ready());
+  Frame bad = tpdo1_frame(1, 0x0008, 0);  // would say Fault ...
+  bad.can_dlc = 3;                         // ... but is too short
+  bus.master_.handle(bad, bus.now_us_);
+  Frame bad_hb = make_frame(0x702, {0x42});
+  bus.master_.handle(bad_hb, bus.now_us_);
+  Frame error_frame = make_frame(CAN_ERR_FLAG | CAN_ERR_BUSOFF, {0, 0, 0, 0, 0, 0, 0, 0});
+  bus.master_.handle(error_frame, bus.now_us_);
+  EXPECT_EQ(bus.master_.counters().frames_malformed, 2u);
+  EXPECT_TRUE(bus.master_.all_ready());
+  EXPECT_EQ(bus.master_.nodes()[0].faults, 0u);
+}
+
+TEST(Cia402, QuickStopAndDisableTransitions) {
+  DriveNode node(DriveNode::Options{});
+  node.step(0);
+  node.handle(sdo_write_frame(1, kObjModesOfOperation, 0, 3, 1));
+  node.handle(nmt_frame(NmtCommand::kStart, 0));  // broadcast start
+  EXPECT_EQ(node.nmt_state(), NmtState::kOperational);
+  node.handle(rpdo1_frame(1, kCwSwitchOn, 0));  // not allowed from Switch On Disabled
+  EXPECT_EQ(node.state(), DriveState::kSwitchOnDisabled);
+  node.handle(rpdo1_frame(1, kCwShutdown, 0));
+  node.handle(rpdo1_frame(1, kCwSwitchOn, 0));
+  node.handle(rpdo1_frame(1, kCwEnableOperation, 0));
+  EXPECT_EQ(node.state(), DriveState::kOperationEnabled);
+  node.handle(rpdo1_frame(1, kCwQuickStop, 0));
+  EXPECT_EQ(node.state(), DriveState::kQuickStopActive);
+  node.handle(rpdo1_frame(1, kCwDisableVoltage, 0));
+  EXPECT_EQ(node.state(), DriveState::kSwitchOnDisabled);
+  // The motor ramps within its acceleration limit only when enabled.
+  node.handle(rpdo1_frame(1, kCwShutdown, 0));
+  node.handle(rpdo1_frame(1, kCwSwitchOn, 0));
+  node.handle(rpdo1_frame(1, kCwEnableOperation, 100'000));
+  node.step(100'000);  // 0.1 s at 200000 counts/s^2 -> 20000 counts/s
+  EXPECT_DOUBLE_EQ(node.velocity_actual(), 20'000.0);
+  EXPECT_DOUBLE_EQ(node.position_actual(), 1'000.0);
+}
+
+}  // namespace
+}  // namespace pex::canopen

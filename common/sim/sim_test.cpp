@@ -1,0 +1,182 @@
+#include "sim/sim.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+namespace pex::sim {
+namespace {
+
+World parse_ok(const std::string& text) {
+  auto result = parse_world(text, "test.wkt");
+  if (auto* e = std::get_if<WorldError>(&result)) ADD_FAILURE() << e->message;
+  return std::get<World>(result);
+}
+
+std::string parse_error(const std::string& text) {
+  auto result = parse_world(text, "test.wkt");
+  if (auto* e = std::get_if<WorldError>(&result)) return e->message;
+  return "";
+}
+
+// A 10 x 6 m box with a pillar.
+const char* kBox =
+    "# a box\n"
+    "START 2 3 0\n"
+    "LINESTRING(0 0, 10 0, 10 6, 0 6, 0 0)\n"
+    "POLYGON((6 2.5, 7 2.5, 7 3.5, 6 3.5, 6 2.5))\n";
+
+TEST(World, ParsesGeometriesAndStart) {
+  World w = parse_ok(kBox);
+  EXPECT_EQ(w.walls.size(), 8u);
+  EXPECT_DOUBLE_EQ(w.start.x_m, 2.0);
+  EXPECT_DOUBLE_EQ(w.start.y_m, 3.0);
+  EXPECT_DOUBLE_EQ(w.max_x, 10.0);
+  EXPECT_DOUBLE_EQ(w.max_y, 6.0);
+  // Multi-line geometry, MULTI*, a polygon with a hole, zero-length edge dropped.
+  World m = parse_ok(
+      "MULTILINESTRING((0 0, 1 0, 1 0), (5 5, 6 6))\n"
+      "POLYGON((0 0, 4 0, 4 4, 0 4, 0 0),\n"
+      "        (1 1, 1 2, 2 2, 2 1, 1 1))\n"
+      "MULTIPOLYGON(((10 10, 11 10, 11 11, 10 10)))\n");
+  EXPECT_EQ(m.walls.size(), 2u + 4u + 4u + 3u);
+}
+
+TEST(World, ErrorsNameTheLine) {
+  EXPECT_NE(parse_error("# nothing\n").find("no walls"), std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 1 1)\nPOINT(1 2)\n").find("test.wkt:2: unsupported"), std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 1 1)\n\nLINESTRING(0 0, x 1)\n").find("test.wkt:3: bad WKT"),
+            std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 1 1\n").find("not closed"), std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 1 1))\n").find("unbalanced"), std::string::npos);
+  EXPECT_NE(parse_error("START 1 2\nLINESTRING(0 0, 1 1)\n").find("test.wkt:1: START"), std::string::npos);
+  EXPECT_NE(parse_error("START 1 2 nan\nLINESTRING(0 0, 1 1)\n").find("START"), std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 1e9 1)\n").find("beyond"), std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, inf 1)\n"), "");
+}
+
+TEST(RayCaster, HitsTheRightWallAtTheRightDistance) {
+  World w = parse_ok(kBox);
+  RayCaster caster(w);
+  EXPECT_EQ(caster.wall_count(), 8u);
+  // From (2, 3): east hits the pillar's west face at x = 6, west the wall at x = 0.
+  EXPECT_NEAR(caster.cast(2, 3, 0.0, 20.0), 4.0, 1e-12);
+  EXPECT_NEAR(caster.cast(2, 3, std::numbers::pi, 20.0), 2.0, 1e-12);
+  EXPECT_NEAR(caster.cast(2, 3, std::numbers::pi / 2, 20.0), 3.0, 1e-12);
+  // 45 deg down-left from (2, 3): hits y = 0 at (-1, 0)? no: x = 0 first at (0, 1): 2 sqrt 2.
+  EXPECT_NEAR(caster.cast(2, 3, -3.0 * std::numbers::pi / 4, 20.0), 2.0 * std::sqrt(2.0), 1e-12);
+  // Above the pillar (y = 5), east: the outer wall at x = 10.
+  EXPECT_NEAR(caster.cast(2, 5, 0.0, 20.0), 8.0, 1e-12);
+  // Out of range: max range.
+  EXPECT_DOUBLE_EQ(caster.cast(2, 5, 0.0, 5.0), 5.0);
+  // Outside the box looking away: nothing.
+  EXPECT_DOUBLE_EQ(caster.cast(-5, 3, std::numbers::pi, 20.0), 20.0);
+}
+
+TEST(Laser, Lms111DefaultsNoiseAndDeterminism) {
+  LaserOptions o;
+  EXPECT_EQ(o.beam_count(), 541);
+  EXPECT_EQ(o.validate(), "");
+  World w = parse_ok(kBox);
+  RayCaster caster(w);
+  Laser a(o, 99), b(o, 99), c(o, 100);
+  auto ra = a.scan(caster, w.start);
+  auto rb = b.scan(caster, w.start);
+  auto rc = c.scan(caster, w.start);
+  ASSERT_EQ(ra.size(), 541u);
+  EXPECT_EQ(ra, rb);   // same seed, same scan, bit for bit
+  EXPECT_NE(ra, rc);
+  // Beam 270 looks straight ahead: 4 m to the pillar, noise ~12 mm.
+  EXPECT_NEAR(ra[270], 4.0, 0.06);
+  // The noise statistics over many scans of the same beam.
+  double sum = 0, sum2 = 0;
+  const int n = 2000;
+  for (int i = 0; i < n; ++i) {
+    const double e = a.scan(caster, w.start)[270] - 4.0;
+    sum += e;
+    sum2 += e * e;
+  }
+  const double mean = sum / n, sigma = std::sqrt(sum2 / n - mean * mean);
+  EXPECT_NEAR(mean, 0.0, 0.002);
+  EXPECT_NEAR(sigma, 0.012, 0.001);
+  // A world with no wall behind: beams there read max range exactly.
+  World open = parse_ok("LINESTRING(5 -100, 5 100)\n");
+  RayCaster open_caster(open);
+  auto r = a.scan(open_caster, Pose2{0, 0, 0});
+  EXPECT_FLOAT_EQ(r.front(), 20.0f);  // -135 deg: nothing
+  EXPECT_NEAR(r[270], 5.0, 0.06);
+}
+
+TEST(Plant, StraightTurnBiasAndSlip) {
+  DiffDrivePlant::Options o;
+  DiffDrivePlant exact(o, Pose2{}, 1);
+  // 1 m at 0.5 m/s: wheel rate 5 rad/s, 200 steps of 10 ms.
+  for (int i = 0; i < 200; ++i) exact.step(0.01, 5.0, 5.0);
+  EXPECT_NEAR(exact.pose().x_m, 1.0, 1e-9);
+  EXPECT_NEAR(exact.pose().y_m, 0.0, 1e-12);
+  // Turn in place by pi/2: wheels +-, arc of each = base/2 * pi/2.
+  DiffDrivePlant turn(o, Pose2{}, 1);
+  const double wheel_rad = 0.25 * std::numbers::pi / 2 / 0.1;
+  for (int i = 0; i < 100; ++i) turn.step(0.01, -wheel_rad, wheel_rad);
+  EXPECT_NEAR(turn.pose().theta_rad, std::numbers::pi / 2, 1e-9);
+  EXPECT_NEAR(turn.pose().x_m, 0.0, 1e-12);
+  // A larger right wheel curves the path to the left.
+  o.right_radius_bias = 0.01;
+  DiffDrivePlant biased(o, Pose2{}, 1);
+  for (int i = 0; i < 200; ++i) biased.step(0.01, 5.0, 5.0);
+  EXPECT_GT(biased.pose().y_m, 0.0);
+  EXPECT_GT(biased.pose().theta_rad, 0.0);
+  // Slip: the same seed gives the same path, another seed another one.
+  o.right_radius_bias = 0.0;
+  o.slip_sigma = 0.02;
+  DiffDrivePlant s1(o, Pose2{}, 5), s2(o, Pose2{}, 5), s3(o, Pose2{}, 6);
+  for (int i = 0; i < 200; ++i) {
+    s1.step(0.01, 5.0, 5.0);
+    s2.step(0.01, 5.0, 5.0);
+    s3.step(0.01, 5.0, 5.0);
+  }
+  EXPECT_EQ(s1.pose().x_m, s2.pose().x_m);
+  EXPECT_EQ(s1.pose().theta_rad, s2.pose().theta_rad);
+  EXPECT_NE(s1.pose().x_m, s3.pose().x_m);
+  EXPECT_NEAR(s1.pose().x_m, 1.0, 0.02);
+}
+
+TEST(Plant, StopsAtWalls) {
+  World w = parse_ok(kBox);
+  RayCaster caster(w);
+  DiffDrivePlant::Options o;
+  DiffDrivePlant plant(o, w.start, 1);
+  for (int i = 0; i < 1000; ++i) plant.step(0.01, 10.0, 10.0, &caster);  // 1 m/s for 10 s towards the pillar at x = 6
+  EXPECT_LT(plant.pose().x_m, 6.0 - o.robot_radius_m + 1e-9);
+  EXPECT_GT(plant.pose().x_m, 5.0);
+  EXPECT_GT(plant.collisions(), 0u);
+}
+
+TEST(World, ShippedWorldsLoadAndHaveTheirSize) {
+  struct Expect {
+    const char* name;
+    double min_w, min_h;
+  };
+  for (auto [name, min_w, min_h] : {Expect{"office", 38, 18}, Expect{"lab", 28, 28}, Expect{"loop", 60, 40},
+                                    Expect{"campus", 150, 150}}) {
+    const std::string path = std::string(PEX_SOURCE_DIR) + "/worlds/" + name + ".wkt";
+    std::ifstream in(path);
+    ASSERT_TRUE(in) << path;
+    std::stringstream text;
+    text << in.rdbuf();
+    World w = parse_ok(text.str());
+    EXPECT_GE(w.max_x - w.min_x, min_w) << name;
+    EXPECT_GE(w.max_y - w.min_y, min_h) << name;
+    // The start pose is in free space: no wall within the robot radius.
+    RayCaster caster(w);
+    for (int k = 0; k < 36; ++k) {
+      EXPECT_GT(caster.cast(w.start.x_m, w.start.y_m, k * std::numbers::pi / 18, 20.0), 0.4) << name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pex::sim
