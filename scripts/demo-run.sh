@@ -8,7 +8,6 @@ DURATION_S=${DURATION_S:-30}
 OUT=${OUT:-out}
 BIN=build/bin
 mkdir -p "$OUT"
-cfg() { if [ -f "config/sim/$1.toml" ]; then echo "config/sim/$1.toml"; else echo "config/$1.toml"; fi; }
 
 pids=()
 cleanup() {
@@ -20,7 +19,7 @@ trap cleanup EXIT
 lcm-logger -f -q "$OUT/demo.lcm" & pids+=($!)
 sleep 0.3
 for d in sim lidar_reader base_driver slam polygon_mapper explorer; do
-  "$BIN/pex-${d//_/-}" --config "$(cfg $d)" 2>"$OUT/$d.log" & pids+=($!)
+  "$BIN/pex-${d//_/-}" --config "config/$d.toml" 2>"$OUT/$d.log" & pids+=($!)
   [ "$d" = sim ] && sleep 0.5
 done
 echo "demo: the set is running on the simulator for ${DURATION_S} s (logs in $OUT/, record in $OUT/demo.lcm)"

@@ -196,8 +196,7 @@ std::string program_of(const std::string& daemon_name) {
 }
 
 std::string sim_config_of(const std::string& daemon_name) {
-  const std::string sim = source_path("config/sim/" + daemon_name + ".toml");
-  return fs::exists(sim) ? sim : source_path("config/" + daemon_name + ".toml");
+  return source_path("config/" + daemon_name + ".toml");
 }
 
 std::unique_ptr<Process> start_daemon(const std::string& name, const std::string& log_dir,

@@ -102,8 +102,9 @@ class Bus {
   std::map<std::string, std::vector<std::function<void(const lcm::ReceiveBuffer*)>>> typed_;
 };
 
-// The shipped config of a daemon for the simulator deployment:
-// config/sim/<name>.toml where the sim needs other settings, else config/<name>.toml.
+// The shipped config of a daemon for the simulator deployment, config/<name>.toml
+// (config/robot/<name>.toml holds the robot's where it differs: never started
+// by tests, since it names real devices and addresses).
 std::string sim_config_of(const std::string& daemon_name);
 
 // A daemon of the set on the test bus, started with `config_path` (default:

@@ -44,10 +44,15 @@ void leaf_keys(const toml::table& t, const std::string& prefix, std::vector<std:
   }
 }
 
-// Keys of the robot config and of the simulator deployment's config together.
+std::string robot_config_of(const std::string& daemon) {
+  const std::string robot = source_path("config/robot/" + daemon + ".toml");
+  return std::filesystem::exists(robot) ? robot : sim_config_of(daemon);
+}
+
+// Keys of the robot's config and of the simulator deployment's config together.
 std::vector<std::string> shipped_keys(const std::string& daemon) {
   std::vector<std::string> keys;
-  leaf_keys(toml::parse_file(source_path("config/" + daemon + ".toml")), "", keys);
+  leaf_keys(toml::parse_file(robot_config_of(daemon)), "", keys);
   leaf_keys(toml::parse_file(sim_config_of(daemon)), "", keys);
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
@@ -56,7 +61,7 @@ std::vector<std::string> shipped_keys(const std::string& daemon) {
 
 // The value a shipped config gives `key` (robot config first).
 toml::table value_source(const std::string& daemon, const std::string& key) {
-  toml::table robot = toml::parse_file(source_path("config/" + daemon + ".toml"));
+  toml::table robot = toml::parse_file(robot_config_of(daemon));
   if (robot.at_path(key).node()) return robot;
   return toml::parse_file(sim_config_of(daemon));
 }
@@ -87,8 +92,8 @@ class BadConfig : public testing::TestWithParam<std::string> {
 
 }  // namespace
 
-// The robot configs name devices this machine does not have (SocketCAN, the
-// real laser); the simulator deployment's config must start here.
+// The robot's configs name devices this machine does not have (SocketCAN, the
+// real laser's address); the simulator deployment's config must start here.
 TEST_P(BadConfig, SimulatorDeploymentConfigStarts) {
   {
     const std::string cfg = sim_config_of(GetParam());
@@ -166,3 +171,13 @@ TEST_P(BadConfig, HelpDescribesTheCommonOptions) {
 
 INSTANTIATE_TEST_SUITE_P(EveryDaemon, BadConfig, testing::ValuesIn(kAllDaemons),
                          [](const auto& info) { return info.param; });
+
+// The robot's base driver config names SocketCAN interface can0, which this
+// machine cannot have: the driver must refuse to start with EX_UNAVAILABLE (69)
+// and say which interface and what to load, not crash.
+TEST(RobotConfig, BaseDriverWithoutSocketCanExits69NamingTheInterface) {
+  const auto r = run_to_completion({bin_path("pex-base-driver"), "--config",
+                                    source_path("config/robot/base_driver.toml"), "--lcm-url", kTestLcmUrl});
+  EXPECT_EQ(r.exit_code, 69) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("can0"));
+}
