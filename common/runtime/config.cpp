@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <functional>
 #include <set>
 #include <sstream>
@@ -173,6 +174,17 @@ template std::vector<double> ConfigReader::get<std::vector<double>>(
     std::string_view, std::vector<double>, Constraint<std::vector<double>>);
 template std::vector<std::string> ConfigReader::get<std::vector<std::string>>(
     std::string_view, std::vector<std::string>, Constraint<std::vector<std::string>>);
+
+std::string ConfigReader::get_path(std::string_view key, std::string default_value, bool must_exist) {
+  std::string path = get<std::string>(key, std::move(default_value));
+  const std::string& file = state_->origin;
+  const auto slash = file.rfind('/');
+  if (!path.empty() && path.front() != '/' && file.front() != '<')
+    path = (slash == std::string::npos ? std::string() : file.substr(0, slash + 1)) + path;
+  if (must_exist && !path.empty() && !std::ifstream(path).good())
+    fail(key, "cannot read '" + path + "'");
+  return path;
+}
 
 ConfigReader ConfigReader::section(std::string_view name) const {
   const std::string path = path_of(name);

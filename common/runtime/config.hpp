@@ -62,6 +62,14 @@ class ConfigReader {
   template <class T>
   T get(std::string_view key, T default_value, Constraint<T> check = {});
 
+  // A file path: relative paths are taken relative to the config file's folder,
+  // so a shipped config finds shipped data from any working directory. With
+  // `must_exist`, a path that cannot be opened for reading is a ConfigError.
+  std::string get_path(std::string_view key, std::string default_value, bool must_exist = true);
+
+  // Throws ConfigError naming the file and `key` (for checks done after get()).
+  [[noreturn]] void fail(std::string_view key, const std::string& what) const;
+
   // A nested table `[name]`; absent tables read as empty (all defaults).
   ConfigReader section(std::string_view name) const;
   bool has(std::string_view key) const;
@@ -75,7 +83,6 @@ class ConfigReader {
  private:
   struct State;  // the parsed toml++ table and the keys read so far
   ConfigReader(std::shared_ptr<State> state, std::string prefix);
-  [[noreturn]] void fail(std::string_view key, const std::string& what) const;
   std::string path_of(std::string_view key) const;
 
   std::shared_ptr<State> state_;

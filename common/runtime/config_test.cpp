@@ -99,3 +99,13 @@ TEST(ConfigReader, SectionThatIsNotATableIsAnError) {
   ConfigReader c = ConfigReader::from_string("can = 3\n", "s.toml");
   EXPECT_THAT(error_of([&] { c.section("can"); }), HasSubstr("'can'"));
 }
+
+TEST(ConfigReader, PathsAreRelativeToTheConfigFile) {
+  ConfigReader c = ConfigReader::from_string("world_file = \"../worlds/x.wkt\"\nabs = \"/etc/hostname\"\n",
+                                             "/opt/pex/config/sim.toml");
+  EXPECT_EQ(c.get_path("world_file", "", /*must_exist=*/false), "/opt/pex/config/../worlds/x.wkt");
+  EXPECT_EQ(c.get_path("abs", "", false), "/etc/hostname");
+  EXPECT_THAT(error_of([&] { c.get_path("world_file", ""); }),
+              AllOf(HasSubstr("/opt/pex/config/sim.toml"), HasSubstr("'world_file'"),
+                    HasSubstr("cannot read '/opt/pex/config/../worlds/x.wkt'")));
+}

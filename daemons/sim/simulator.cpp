@@ -12,13 +12,7 @@ using runtime::positive;
 
 SimOptions load_options(runtime::ConfigReader& config) {
   SimOptions o;
-  o.world_file = config.get<std::string>("world_file", o.world_file);
-  // A relative world path is relative to the config file's folder, so the
-  // shipped config finds the shipped worlds from any working directory.
-  if (!o.world_file.empty() && o.world_file[0] != '/' && config.origin().find('/') != std::string::npos &&
-      config.origin().front() != '<') {
-    o.world_file = config.origin().substr(0, config.origin().rfind('/') + 1) + o.world_file;
-  }
+  o.world_file = config.get_path("world_file", o.world_file);
   o.seed = static_cast<std::uint64_t>(config.get<std::int64_t>("seed", 1, runtime::non_negative<std::int64_t>()));
   o.speed_factor = config.get<double>("speed_factor", o.speed_factor, in_range(0.01, 100.0));
   o.physics_rate_hz = config.get<double>("physics_rate_hz", o.physics_rate_hz, in_range(100.0, 2000.0));

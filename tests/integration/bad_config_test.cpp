@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <thread>
 #include <sstream>
 #include <toml++/toml.h>
@@ -66,11 +67,30 @@ toml::table value_source(const std::string& daemon, const std::string& key) {
   return toml::parse_file(sim_config_of(daemon));
 }
 
+// The config file at `path` with relative `*_file` paths made absolute, so a
+// copy in a temporary folder still finds the shipped data.
+toml::table parse_with_absolute_paths(const std::string& path) {
+  toml::table t = toml::parse_file(path);
+  const std::string dir = path.substr(0, path.rfind('/') + 1);
+  std::function<void(toml::table&)> fix = [&](toml::table& tbl) {
+    for (auto&& [k, v] : tbl) {
+      if (auto* sub = v.as_table()) {
+        fix(*sub);
+      } else if (auto* str = v.as_string(); str && k.str().ends_with("_file")) {
+        const std::string value = str->get();
+        if (!value.empty() && value.front() != '/') *str = dir + value;
+      }
+    }
+  };
+  fix(t);
+  return t;
+}
+
 // The simulator deployment's config (the one every daemon can start with on
 // this machine) with `key` set to `value`, creating its [section] if needed.
 template <class V>
 toml::table sim_config_with(const std::string& daemon, const std::string& key, V value) {
-  toml::table t = toml::parse_file(sim_config_of(daemon));
+  toml::table t = parse_with_absolute_paths(sim_config_of(daemon));
   toml::table* parent = &t;
   std::string rest = key;
   for (auto dot = rest.find('.'); dot != std::string::npos; dot = rest.find('.')) {
@@ -109,8 +129,9 @@ TEST_P(BadConfig, SimulatorDeploymentConfigStarts) {
 
 TEST_P(BadConfig, UnknownKeyExits78NamingFileAndKey) {
   const std::string path = dir_ + "/unknown.toml";
-  const auto r = run_with_config(GetParam(), read_file(sim_config_of(GetParam())) + "\nmax_sped_mps = 1.0\n",
-                                 path);
+  toml::table t = parse_with_absolute_paths(sim_config_of(GetParam()));
+  t.insert("max_sped_mps", 1.0);  // misspelt max_speed_mps
+  const auto r = run_with_config(GetParam(), serialise(t), path);
   EXPECT_EQ(r.exit_code, kExitConfig) << r.output;
   EXPECT_THAT(r.output, HasSubstr(path));
   EXPECT_THAT(r.output, HasSubstr("max_sped_mps"));
