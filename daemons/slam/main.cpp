@@ -1,12 +1,63 @@
-// pex-slam: skeleton until its issue lands. It starts, loads its config,
-// publishes DAEMON_STATUS, and does nothing else (and says so at start).
+// pex-slam: Rao-Blackwellized particle filter SLAM (GMapping's scheme).
+// LIDAR_SCAN + ODOMETRY in; SLAM_UPDATE after every filter update, SLAM_POSE at
+// odometry rate. Offline: `pex-slam --log IN.lcm --poses OUT.txt` feeds the log
+// through the same handlers and writes one `timestamp_s x y theta` per scan.
+#include <cstdio>
+#include <fstream>
+#include <memory>
+
 #include <spdlog/spdlog.h>
 
+#include "runtime/channels.hpp"
 #include "runtime/daemon.hpp"
+#include "slam_options.hpp"
+
+namespace ch = pex::runtime::channels;
+using pex::slam_daemon::SlamNode;
 
 int main(int argc, char** argv) {
-  return pex::runtime::run_daemon(argc, argv, {"slam", "slam (skeleton: not implemented yet)"},
-                                  [](pex::runtime::Node&, pex::runtime::ConfigReader&) {
-                                    spdlog::warn("slam is a skeleton: it only reports its health");
-                                  });
+  std::string poses_path;
+  pex::runtime::DaemonInfo info{"slam", "Rao-Blackwellized particle filter SLAM"};
+  info.supports_replay = true;
+  info.add_options = [&](CLI::App& app) {
+    app.add_option("--poses", poses_path, "offline: write the best trajectory, one `t x y theta` per scan");
+  };
+  return pex::runtime::run_daemon(argc, argv, info, [&](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
+    const auto options = pex::slam_daemon::load_options(config);
+    pex::slam_daemon::SlamOutputs outputs;
+    outputs.publish_update = [&node](const pex::slam_update_t& msg) {
+      pex::slam_update_t stamped = msg;  // publication time: wall clock live, log time in replay
+      stamped.utime = node.now_utime();
+      node.publish(ch::kSlamUpdate, stamped);
+    };
+    outputs.publish_pose = [&node](const pex::pose_t& msg) { node.publish(ch::kSlamPose, msg); };
+    auto slam = std::make_shared<SlamNode>(options, outputs);
+    // Content the node refuses becomes BadInput: counted, logged, dropped.
+    node.subscribe<pex::odometry_t>(ch::kOdometry, [slam](const pex::odometry_t& msg) {
+      try {
+        slam->on_odometry(msg);
+      } catch (const std::invalid_argument& e) {
+        throw pex::runtime::BadInput(e.what());
+      }
+    });
+    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [slam, &node](const pex::laser_scan_t& msg) {
+      try {
+        slam->on_scan(msg);
+      } catch (const std::invalid_argument& e) {
+        throw pex::runtime::BadInput(e.what());
+      }
+      node.counter("scans_processed") = slam->scans_processed();
+      node.counter("filter_updates") = slam->filter().generation() + 1;
+    });
+    node.on_shutdown([slam, &node, &poses_path] {
+      slam->flush();
+      node.counter("scans_processed") = slam->scans_processed();
+      node.counter("filter_updates") = slam->filter().generation() + 1;
+      if (poses_path.empty()) return;
+      std::ofstream out(poses_path);
+      out << slam->trajectory_text();
+      if (!out) spdlog::error("cannot write {}", poses_path);
+      else spdlog::info("wrote {} poses to {}", slam->scans_processed(), poses_path);
+    });
+  });
 }

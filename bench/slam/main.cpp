@@ -1,0 +1,187 @@
+// pex-bench-slam: the filter alone on a CARMEN log (default: the full Intel
+// log) — accuracy by the relations metric, real-time factor, and micro
+// benchmarks of the matcher. Figures are reported in docs/slam.md, never asserted.
+//
+//   pex-bench-slam                        Google Benchmark run (full log once + micro)
+//   pex-bench-slam --run CLF RELATIONS [POSES_OUT] [PARTICLES] [SEED]
+//                                         one run, one JSON line
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "carmen_run.hpp"
+
+namespace {
+
+std::string shared_data(const char* file) { return std::string(PEX_SHARED_DIR) + "/data/" + file; }
+
+pex::evaluation::CarmenLog load_log(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open " + path);
+  return pex::evaluation::parse_carmen_log(in);
+}
+
+std::vector<pex::evaluation::Relation> load_relations(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open " + path);
+  return pex::evaluation::read_relations(in).relations;
+}
+
+int run_once(int argc, char** argv) {
+  const auto log = load_log(argv[2]);
+  const auto relations = load_relations(argv[3]);
+  pex::slam::ParticleFilterOptions options;
+  if (argc > 5) options.particle_count = std::stoi(argv[5]);
+  if (argc > 6) options.seed = std::stoull(argv[6]);
+  bool odometry_from_laser = true;
+  // Experiments: key=value overrides of the defaults.
+  for (int i = 7; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto eq = arg.find('=');
+    if (eq == std::string::npos) throw std::runtime_error("expected key=value: " + arg);
+    const std::string key = arg.substr(0, eq);
+    const double v = std::stod(arg.substr(eq + 1));
+    if (key == "linear_update_m") options.linear_update_m = v;
+    else if (key == "angular_update_rad") options.angular_update_rad = v;
+    else if (key == "score_sigma_m2") options.grid.score_sigma_m2 = v;
+    else if (key == "likelihood_sigma_m2") options.grid.likelihood_sigma_m2 = v;
+    else if (key == "kernel_radius_cells") options.grid.kernel_radius_cells = static_cast<int>(v);
+    else if (key == "beam_step") options.grid.beam_step = static_cast<int>(v);
+    else if (key == "resolution_m") options.grid.resolution_m = v;
+    else if (key == "usable_range_m") options.scan.usable_range_m = v;
+    else if (key == "refinements") options.matcher.refinements = static_cast<int>(v);
+    else if (key == "linear_step_m") options.matcher.linear_step_m = v;
+    else if (key == "angular_step_rad") options.matcher.angular_step_rad = v;
+    else if (key == "use_motion_prior") options.proposal.use_motion_prior = v != 0.0;
+    else if (key == "min_linear_std_m") options.proposal.min_linear_std_m = v;
+    else if (key == "min_angular_std_rad") options.proposal.min_angular_std_rad = v;
+    else if (key == "along_line_weight") options.grid.along_line_weight = v;
+    else if (key == "line_flatness") options.grid.line_flatness = v;
+    else if (key == "check_free") options.grid.check_free_before_hit = v != 0.0;
+    else if (key == "match_beam_step") options.matcher.beam_step = static_cast<int>(v);
+    else if (key == "threads") options.threads = static_cast<int>(v);
+    else if (key == "sample_scale") options.proposal.sample_scale = v;
+    else if (key == "linear_offset_m") options.proposal.linear_offset_m = v;
+    else if (key == "angular_offset_rad") options.proposal.angular_offset_rad = v;
+    else if (key == "likelihood_gain") options.likelihood_gain = v;
+    else if (key == "srr") options.motion.srr = v;
+    else if (key == "srt") options.motion.srt = v;
+    else if (key == "str") options.motion.str = v;
+    else if (key == "stt") options.motion.stt = v;
+    else if (key == "odometry_from_laser") odometry_from_laser = v != 0.0;
+    else throw std::runtime_error("unknown key " + key);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  auto run = pex::bench::run_filter_on_carmen(log, options, odometry_from_laser);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::stable_sort(run.poses.begin(), run.poses.end(),
+                   [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
+  const auto metric = pex::evaluation::evaluate_relations(run.poses, relations);
+  if (argc > 4 && std::strcmp(argv[4], "-") != 0) {
+    std::ofstream out(argv[4]);
+    out.precision(17);
+    for (const auto& p : run.poses)
+      out << p.timestamp_s << ' ' << p.pose.x_m << ' ' << p.pose.y_m << ' ' << p.pose.theta_rad << '\n';
+  }
+  std::string json = pex::evaluation::to_json_line(metric);
+  json.pop_back();
+  std::printf("%s,\"updates\":%lld,\"resamplings\":%lld,\"evaluations\":%lld,\"seconds\":%.3f,\"realtime_factor\":%.1f}\n",
+              json.c_str(), static_cast<long long>(run.updates), static_cast<long long>(run.resamplings),
+              static_cast<long long>(run.matcher_evaluations), seconds, run.log_duration_s / seconds);
+  return 0;
+}
+
+void BM_IntelFullLog(benchmark::State& state) {
+  const auto log = load_log(shared_data("intel.clf"));
+  const auto relations = load_relations(shared_data("intel.relations"));
+  pex::slam::ParticleFilterOptions options;
+  options.particle_count = static_cast<int>(state.range(0));
+  options.threads = static_cast<int>(state.range(1));
+  pex::bench::CarmenRunResult run;
+  double seconds = 0.0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    run = pex::bench::run_filter_on_carmen(log, options);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  std::stable_sort(run.poses.begin(), run.poses.end(),
+                   [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
+  const auto metric = pex::evaluation::evaluate_relations(run.poses, relations);
+  state.counters["trans_mean_m"] = metric.trans_mean_m;
+  state.counters["trans_std_m"] = metric.trans_std_m;
+  state.counters["rot_mean_deg"] = metric.rot_mean_deg;
+  state.counters["rot_std_deg"] = metric.rot_std_deg;
+  state.counters["relations"] = static_cast<double>(metric.relations);
+  state.counters["realtime_factor"] = run.log_duration_s / seconds;
+  state.counters["updates"] = static_cast<double>(run.updates);
+}
+// Args: particles, threads. One iteration: the full log takes tens of seconds.
+BENCHMARK(BM_IntelFullLog)->Args({30, 1})->Args({30, 2})->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+// A map of the first 300 Intel scans at their odometry poses, and a scan to score.
+struct IntelMapFixture {
+  pex::slam::CowGridMap map{pex::slam::CowGridMapOptions{}};
+  pex::slam::ScanPoints scan;
+  pex::slam::Pose2 pose;
+  IntelMapFixture() {
+    const auto log = load_log(shared_data("intel.clf"));
+    for (std::size_t i = 0; i < 300 && i < log.lasers.size(); ++i) {
+      pex::slam::RangeScan range;
+      range.angle_min_rad = log.lasers[i].angle_min_rad;
+      range.angle_increment_rad = log.lasers[i].angle_increment_rad;
+      range.range_max_m = log.lasers[i].max_range_m;
+      range.ranges_m = log.lasers[i].ranges_m;
+      scan = pex::slam::to_scan_points(range, {});
+      pose = log.lasers[i].odometry;
+      map.insert(pose, scan);
+    }
+  }
+};
+
+// One evaluate(): the matcher's inner loop (score and likelihood of every beam).
+void BM_CowGridMapEvaluate(benchmark::State& state) {
+  static const IntelMapFixture fixture;
+  double sink = 0.0;
+  for (auto _ : state) {
+    sink += fixture.map.evaluate(fixture.pose, fixture.scan).score;
+    benchmark::DoNotOptimize(sink);
+  }
+  state.counters["beams"] = static_cast<double>(fixture.scan.beams.size());
+}
+BENCHMARK(BM_CowGridMapEvaluate);
+
+// Resampling's copy and the first write after it (copy-on-write of touched tiles).
+void BM_CowGridMapCloneAndInsert(benchmark::State& state) {
+  static const IntelMapFixture fixture;
+  for (auto _ : state) {
+    auto copy = fixture.map.clone();
+    copy->insert(fixture.pose, fixture.scan);
+    benchmark::DoNotOptimize(copy.get());
+  }
+  state.counters["tiles"] = static_cast<double>(fixture.map.tile_count());
+}
+BENCHMARK(BM_CowGridMapCloneAndInsert);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 4 && std::strcmp(argv[1], "--run") == 0) {
+    try {
+      return run_once(argc, argv);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "pex-bench-slam: %s\n", e.what());
+      return 2;
+    }
+  }
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,213 @@
+#include "slam/cow_grid_map.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace pex::slam {
+namespace {
+
+// floor() for the cell index; std::floor is a library call on baseline x86-64.
+inline int floor_to_int(float v) {
+  const int i = static_cast<int>(v);
+  return i - (v < static_cast<float>(i));
+}
+
+}  // namespace
+
+CowGridMap::CowGridMap(const CowGridMapOptions& options)
+    : options_(options), inverse_resolution_(1.0 / options.resolution_m) {}
+
+std::unique_ptr<ParticleMap> CowGridMap::clone() const { return std::make_unique<CowGridMap>(*this); }
+
+std::size_t CowGridMap::tile_count() const {
+  std::size_t n = 0;
+  for (const auto& tile : tiles_) n += tile != nullptr;
+  return n;
+}
+
+std::size_t CowGridMap::referenced_bytes() const {
+  return tile_count() * sizeof(Tile) + tiles_.size() * sizeof(tiles_[0]);
+}
+
+const CowGridMap::Cell* CowGridMap::cell_at(double x_m, double y_m) const {
+  return cell(static_cast<int>(std::floor(x_m * inverse_resolution_)),
+              static_cast<int>(std::floor(y_m * inverse_resolution_)));
+}
+
+void CowGridMap::grow_to_include(int tx, int ty) {
+  if (tiles_w_ > 0 && tx >= tile_x0_ && tx < tile_x0_ + tiles_w_ && ty >= tile_y0_ &&
+      ty < tile_y0_ + tiles_h_)
+    return;
+  // Grow with a margin so a robot driving off the edge does not reallocate per scan.
+  constexpr int kMargin = 8;
+  int x0 = tiles_w_ > 0 ? std::min(tile_x0_, tx - kMargin) : tx - kMargin;
+  int y0 = tiles_h_ > 0 ? std::min(tile_y0_, ty - kMargin) : ty - kMargin;
+  int x1 = tiles_w_ > 0 ? std::max(tile_x0_ + tiles_w_, tx + 1 + kMargin) : tx + 1 + kMargin;
+  int y1 = tiles_h_ > 0 ? std::max(tile_y0_ + tiles_h_, ty + 1 + kMargin) : ty + 1 + kMargin;
+  std::vector<std::shared_ptr<Tile>> grown(static_cast<std::size_t>(x1 - x0) * (y1 - y0));
+  for (int y = 0; y < tiles_h_; ++y)
+    for (int x = 0; x < tiles_w_; ++x)
+      grown[static_cast<std::size_t>(y + tile_y0_ - y0) * (x1 - x0) + (x + tile_x0_ - x0)] =
+          std::move(tiles_[static_cast<std::size_t>(y) * tiles_w_ + x]);
+  tiles_ = std::move(grown);
+  tile_x0_ = x0;
+  tile_y0_ = y0;
+  tiles_w_ = x1 - x0;
+  tiles_h_ = y1 - y0;
+}
+
+CowGridMap::Cell& CowGridMap::mutable_cell(int ix, int iy) {
+  const int tx = ix >> kTileBits;
+  const int ty = iy >> kTileBits;
+  grow_to_include(tx, ty);
+  auto& slot = tiles_[static_cast<std::size_t>(ty - tile_y0_) * tiles_w_ + (tx - tile_x0_)];
+  if (!slot)
+    slot = std::make_shared<Tile>();
+  else if (slot.use_count() > 1)
+    slot = std::make_shared<Tile>(*slot);  // copy on write
+  return slot->cells[((iy & (kTileSize - 1)) << kTileBits) | (ix & (kTileSize - 1))];
+}
+
+void CowGridMap::update_normal(Cell& cell) const {
+  cell.normal_x = 0;
+  cell.normal_y = 0;
+  if (cell.hits < 3) return;
+  // Eigen decomposition of the 2x2 scatter [sxx sxy; sxy syy].
+  const double a = cell.sxx, b = cell.sxy, c = cell.syy;
+  const double half_trace = 0.5 * (a + c);
+  const double root = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  const double large = half_trace + root;
+  const double small = half_trace - root;
+  if (!(large > 1e-8) || small > options_.line_flatness * large) return;
+  // The normal is the eigenvector of the smaller eigenvalue.
+  double nx = b, ny = small - a;
+  if (std::abs(nx) + std::abs(ny) < 1e-12) {
+    nx = small - c;
+    ny = b;
+  }
+  const double norm = std::hypot(nx, ny);
+  if (!(norm > 0.0)) return;
+  cell.normal_x = static_cast<std::int8_t>(std::lround(127.0 * nx / norm));
+  cell.normal_y = static_cast<std::int8_t>(std::lround(127.0 * ny / norm));
+}
+
+void CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
+  const double c = std::cos(pose.theta_rad);
+  const double s = std::sin(pose.theta_rad);
+  for (const BeamPoint& beam : scan.beams) {
+    const double x = pose.x_m + c * beam.hit_x_m - s * beam.hit_y_m;
+    const double y = pose.y_m + s * beam.hit_x_m + c * beam.hit_y_m;
+    const double fx = x * inverse_resolution_;
+    const double fy = y * inverse_resolution_;
+    // Far outside any building: refuse rather than allocate a huge tile table.
+    if (!(std::abs(fx) < 1e8 && std::abs(fy) < 1e8)) continue;
+    Cell& cell = mutable_cell(static_cast<int>(std::floor(fx)), static_cast<int>(std::floor(fy)));
+    if (cell.hits < std::numeric_limits<std::uint16_t>::max()) ++cell.hits;
+    const float inv = 1.0f / static_cast<float>(cell.hits);
+    // Welford's update of the mean and the scatter.
+    const float dx = static_cast<float>(x) - cell.mean_x_m;
+    const float dy = static_cast<float>(y) - cell.mean_y_m;
+    cell.mean_x_m += dx * inv;
+    cell.mean_y_m += dy * inv;
+    const float dx2 = static_cast<float>(x) - cell.mean_x_m;
+    const float dy2 = static_cast<float>(y) - cell.mean_y_m;
+    cell.sxx += dx * dx2;
+    cell.sxy += dx * dy2;
+    cell.syy += dy * dy2;
+    update_normal(cell);
+  }
+}
+
+PoseEvaluation CowGridMap::evaluate(const Pose2& pose, const ScanPoints& scan) const {
+  const float c = static_cast<float>(std::cos(pose.theta_rad));
+  const float s = static_cast<float>(std::sin(pose.theta_rad));
+  const float px = static_cast<float>(pose.x_m);
+  const float py = static_cast<float>(pose.y_m);
+  const float inv_res = static_cast<float>(inverse_resolution_);
+  const float inv_score_sigma = static_cast<float>(1.0 / options_.score_sigma_m2);
+  const double inv_likelihood_sigma = 1.0 / options_.likelihood_sigma_m2;
+  const double no_hit = options_.null_log_likelihood * inv_likelihood_sigma;
+  const int k = options_.kernel_radius_cells;
+  const float along_weight = static_cast<float>(options_.along_line_weight);
+  const bool check_free = options_.check_free_before_hit;
+  const std::size_t step = static_cast<std::size_t>(std::max(1, options_.beam_step));
+  PoseEvaluation result;
+  double score = 0.0;
+  double log_likelihood = 0.0;
+  for (std::size_t i = 0; i < scan.beams.size(); i += step) {
+    const BeamPoint& beam = scan.beams[i];
+    const float hx = px + c * beam.hit_x_m - s * beam.hit_y_m;
+    const float hy = py + s * beam.hit_x_m + c * beam.hit_y_m;
+    // Guard the float -> int conversion against absurd poses.
+    if (!(std::abs(hx * inv_res) < 1e8f && std::abs(hy * inv_res) < 1e8f)) {
+      log_likelihood += no_hit;
+      continue;
+    }
+    const int hix = floor_to_int(hx * inv_res);
+    const int hiy = floor_to_int(hy * inv_res);
+    int fix = 0, fiy = 0;
+    if (check_free) {
+      const float fx = px + c * beam.free_x_m - s * beam.free_y_m;
+      const float fy = py + s * beam.free_x_m + c * beam.free_y_m;
+      if (!(std::abs(fx * inv_res) < 1e8f && std::abs(fy * inv_res) < 1e8f)) {
+        log_likelihood += no_hit;
+        continue;
+      }
+      fix = floor_to_int(fx * inv_res);
+      fiy = floor_to_int(fy * inv_res);
+    }
+    float best_d2 = std::numeric_limits<float>::max();
+    constexpr int kMask = kTileSize - 1;
+    const Tile* hit_tile = nullptr;
+    // Fast path: the whole window lies in one tile (most beams), one tile lookup.
+    if ((hix & kMask) >= k && (hix & kMask) < kTileSize - k && (hiy & kMask) >= k &&
+        (hiy & kMask) < kTileSize - k) {
+      const int tx = (hix >> kTileBits) - tile_x0_;
+      const int ty = (hiy >> kTileBits) - tile_y0_;
+      if (static_cast<unsigned>(tx) >= static_cast<unsigned>(tiles_w_) ||
+          static_cast<unsigned>(ty) >= static_cast<unsigned>(tiles_h_)) {
+        log_likelihood += no_hit;
+        continue;
+      }
+      hit_tile = tiles_[static_cast<std::size_t>(ty) * tiles_w_ + tx].get();
+      if (!hit_tile) {
+        log_likelihood += no_hit;
+        continue;
+      }
+    }
+    for (int dy = -k; dy <= k; ++dy) {
+      for (int dx = -k; dx <= k; ++dx) {
+        const Cell* hit =
+            hit_tile ? &hit_tile->cells[(((hiy + dy) & kMask) << kTileBits) | ((hix + dx) & kMask)]
+                     : cell(hix + dx, hiy + dy);
+        if (!hit || hit->hits == 0) continue;
+        // The cell just before the end point (same offset) must not be a wall:
+        // a beam cannot end behind an obstacle it would have hit first.
+        if (check_free) {
+          const Cell* before = cell(fix + dx, fiy + dy);
+          if (before && before->hits > 0) continue;
+        }
+        const float ex = hit->mean_x_m - hx;
+        const float ey = hit->mean_y_m - hy;
+        float d2 = ex * ex + ey * ey;
+        if (hit->normal_x != 0 || hit->normal_y != 0) {
+          const float across = (ex * hit->normal_x + ey * hit->normal_y) * (1.0f / 127.0f);
+          d2 = across * across + along_weight * (d2 - across * across);
+        }
+        if (d2 < best_d2) best_d2 = d2;
+      }
+    }
+    if (best_d2 < std::numeric_limits<float>::max()) {
+      score += std::exp(-best_d2 * inv_score_sigma);
+      log_likelihood += -static_cast<double>(best_d2) * inv_likelihood_sigma;
+      ++result.matched_beams;
+    } else {
+      log_likelihood += no_hit;
+    }
+  }
+  result.score = score;
+  result.log_likelihood = log_likelihood;
+  return result;
+}
+
+}  // namespace pex::slam

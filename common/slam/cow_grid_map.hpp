@@ -1,0 +1,101 @@
+#pragma once
+// GMapping's per-particle map: a grid whose cells accumulate the laser end
+// points that fell in them (hit count and their mean position, which gives the
+// matcher sub-cell precision). Cells live in square tiles held by shared
+// pointers; a copy shares every tile and a write clones only the tile it
+// touches while shared (copy-on-write), so 30 particles that descend from a
+// common ancestor cost one map plus the tiles where they differ.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "slam/particle_map.hpp"
+
+namespace pex::slam {
+
+struct CowGridMapOptions {
+  double resolution_m = 0.05;
+  // The matcher looks for the nearest occupied cell within this many cells of
+  // a beam's end point (1 = a 3x3 window).
+  int kernel_radius_cells = 1;
+  // Score per beam: exp(-d^2 / score_sigma_m2), d = distance from the end point
+  // to the nearest occupied cell's mean hit position (GMapping's `sigma`, whose
+  // usual 0.05 m^2 is nearly flat over a 3x3 window of 5 cm cells, so the climb
+  // wanders on plateaus). About the squared cell size keeps a slope everywhere
+  // in the window.
+  double score_sigma_m2 = 0.002;
+  // Log-likelihood per beam: -d^2 / likelihood_sigma_m2 when a cell matched,
+  // null_log_likelihood / likelihood_sigma_m2 when none did (GMapping's
+  // `lsigma` and `nullLikelihood`).
+  double likelihood_sigma_m2 = 0.075;
+  double null_log_likelihood = -0.5;
+  // Reject a candidate cell when the cell at the same offset from the point
+  // just before the end point is occupied too (a beam cannot end behind a
+  // wall). Grazing beams then lose their match on the very wall they hit, which
+  // biases the heading, so it is off by default.
+  bool check_free_before_hit = false;
+  // Only every beam_step-th beam is scored (1 = all).
+  int beam_step = 1;
+  // Where a cell's hits lie on a line (a wall), the distance of an end point to
+  // the cell counts its part along the line with this weight (point-to-line
+  // matching). A sparse map of end points otherwise pulls each new scan back
+  // towards the pose the map was seen from, most in corridors.
+  double along_line_weight = 0.1;
+  // Hits on a line: the smaller scatter eigenvalue at most this fraction of the larger.
+  double line_flatness = 0.1;
+};
+
+class CowGridMap final : public ParticleMap {
+ public:
+  static constexpr int kTileBits = 3;
+  static constexpr int kTileSize = 1 << kTileBits;
+
+  struct Cell {
+    float mean_x_m = 0.0f;
+    float mean_y_m = 0.0f;
+    // Scatter of the hits about their mean (sums of squared deviations, m^2).
+    float sxx = 0.0f, sxy = 0.0f, syy = 0.0f;
+    // Unit normal of the line the hits lie on, times 127; (0, 0) while they
+    // do not (yet) form a line. 8 bits are plenty for weighting distances.
+    std::int8_t normal_x = 0, normal_y = 0;
+    std::uint16_t hits = 0;  // saturates
+  };
+  struct Tile {
+    std::array<Cell, kTileSize * kTileSize> cells{};
+  };
+
+  explicit CowGridMap(const CowGridMapOptions& options);
+
+  std::unique_ptr<ParticleMap> clone() const override;
+  void insert(const Pose2& robot_pose, const ScanPoints& scan) override;
+  PoseEvaluation evaluate(const Pose2& robot_pose, const ScanPoints& scan) const override;
+  std::size_t referenced_bytes() const override;
+
+  // The cell containing world point (x, y), or nullptr when never written.
+  const Cell* cell_at(double x_m, double y_m) const;
+  std::size_t tile_count() const;
+  const CowGridMapOptions& options() const { return options_; }
+
+ private:
+  const Cell* cell(int ix, int iy) const {
+    const int tx = (ix >> kTileBits) - tile_x0_;
+    const int ty = (iy >> kTileBits) - tile_y0_;
+    if (static_cast<unsigned>(tx) >= static_cast<unsigned>(tiles_w_) ||
+        static_cast<unsigned>(ty) >= static_cast<unsigned>(tiles_h_))
+      return nullptr;
+    const Tile* tile = tiles_[static_cast<std::size_t>(ty) * tiles_w_ + tx].get();
+    if (!tile) return nullptr;
+    return &tile->cells[((iy & (kTileSize - 1)) << kTileBits) | (ix & (kTileSize - 1))];
+  }
+  Cell& mutable_cell(int ix, int iy);
+  void update_normal(Cell& cell) const;
+  void grow_to_include(int tx, int ty);
+
+  CowGridMapOptions options_;
+  double inverse_resolution_;
+  int tile_x0_ = 0, tile_y0_ = 0, tiles_w_ = 0, tiles_h_ = 0;
+  std::vector<std::shared_ptr<Tile>> tiles_;  // row-major, tiles_h_ x tiles_w_
+};
+
+}  // namespace pex::slam

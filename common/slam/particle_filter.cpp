@@ -1,0 +1,229 @@
+#include "slam/particle_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+namespace pex::slam {
+namespace {
+
+// SplitMix64 finaliser: decorrelates seeds that differ in few bits.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+TrajectoryNode::~TrajectoryNode() {
+  std::shared_ptr<const TrajectoryNode> next = std::move(parent);
+  while (next && next.use_count() == 1) {
+    // Detach the grandparent before `next` dies so its destructor finds no chain.
+    std::shared_ptr<const TrajectoryNode> after =
+        std::move(const_cast<TrajectoryNode&>(*next).parent);
+    next = std::move(after);
+  }
+}
+
+ParticleFilter::ParticleFilter(const ParticleFilterOptions& options, ParticleMapFactory map_factory)
+    : options_(options), map_factory_(std::move(map_factory)), rng_(options.seed) {
+  options_.particle_count = std::max(1, options_.particle_count);
+  if (!map_factory_) {
+    const CowGridMapOptions grid = options_.grid;
+    map_factory_ = [grid] { return std::make_unique<CowGridMap>(grid); };
+  }
+}
+
+bool ParticleFilter::process(const RangeScan& scan, const Pose2& odometry) {
+  if (!is_finite(odometry)) return false;
+  const ScanPoints points = to_scan_points(scan, options_.scan);
+  if (!initialized_) {
+    if (points.beams.empty()) return false;
+    initialize(points, odometry);
+    return true;
+  }
+  const Pose2 step = relative(last_odometry_, odometry);
+  last_odometry_ = odometry;
+  linear_since_update_m_ += std::hypot(step.x_m, step.y_m);
+  angular_since_update_rad_ += std::abs(step.theta_rad);
+  for (Particle& p : particles_) p.pose = sample_motion(p.pose, step, options_.motion, rng_);
+  if (points.beams.empty()) return false;
+  if (linear_since_update_m_ < options_.linear_update_m &&
+      angular_since_update_rad_ < options_.angular_update_rad)
+    return false;
+  update(points, odometry);
+  return true;
+}
+
+void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry) {
+  auto map = map_factory_();
+  map->insert(odometry, points);
+  auto root = std::make_shared<const TrajectoryNode>(odometry, 0, nullptr);
+  particles_.clear();
+  particles_.resize(static_cast<std::size_t>(options_.particle_count));
+  for (Particle& p : particles_) {
+    p.pose = odometry;
+    p.pose_at_update = odometry;
+    p.map = map->clone();  // all share the first scan's tiles
+    p.trajectory = root;
+    p.parent = -1;
+  }
+  initialized_ = true;
+  generation_ = 0;
+  last_odometry_ = odometry;
+  odometry_at_update_ = odometry;
+  linear_since_update_m_ = 0.0;
+  angular_since_update_rad_ = 0.0;
+  last_update_ = UpdateStats{};
+  last_update_.effective_sample_size = static_cast<double>(particles_.size());
+}
+
+void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
+  UpdateStats stats;
+  const Pose2 odometry_step = relative(odometry_at_update_, odometry);
+  const Pose2 step_std = motion_noise_std(odometry_step, options_.motion);
+  const std::size_t n = particles_.size();
+  const ScanPoints match_points = subsample(points, options_.matcher.beam_step);
+  std::vector<int> evaluations(n, 0);
+  std::vector<char> failed(n, 0);
+  const std::uint64_t generation_seed = mix(options_.seed ^ mix(static_cast<std::uint64_t>(generation_ + 1)));
+  auto match_particles = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Particle& p = particles_[i];
+      std::mt19937_64 rng(mix(generation_seed + i));
+      const Pose2 predicted = compose(p.pose_at_update, odometry_step);
+      const MatchResult match = match_scan(*p.map, match_points, p.pose, options_.matcher);
+      evaluations[i] = match.evaluations;
+      double increment = 0.0;
+      if (match.evaluation.score > options_.matcher.minimum_score) {
+        const ProposalResult proposal = sample_improved_proposal(
+            *p.map, points, match.pose, predicted, step_std, options_.proposal, rng);
+        p.pose = proposal.pose;
+        increment = proposal.log_weight_increment;
+      } else {
+        failed[i] = 1;
+        increment = p.map->evaluate(p.pose, points).log_likelihood;
+      }
+      p.log_weight += increment;
+      p.lineage_log_likelihood += increment;
+      p.parent = static_cast<int>(i);
+    }
+  };
+  const std::size_t threads = std::clamp<std::size_t>(static_cast<std::size_t>(std::max(1, options_.threads)), 1, n);
+  if (threads == 1) {
+    match_particles(0, n);
+  } else {
+    std::vector<std::thread> workers;
+    for (std::size_t t = 1; t < threads; ++t)
+      workers.emplace_back(match_particles, n * t / threads, n * (t + 1) / threads);
+    match_particles(0, n / threads);
+    for (auto& w : workers) w.join();
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    stats.matcher_evaluations += evaluations[i];
+    stats.failed_matches += failed[i];
+  }
+  ++generation_;
+  const std::vector<double> weights = normalized_weights();
+  double sum_sq = 0.0;
+  for (double w : weights) sum_sq += w * w;
+  stats.effective_sample_size = 1.0 / sum_sq;
+  if (stats.effective_sample_size < options_.resample_threshold * static_cast<double>(particles_.size())) {
+    resample(weights);
+    stats.resampled = true;
+  }
+  for (Particle& p : particles_) {
+    p.map->insert(p.pose, points);
+    p.pose_at_update = p.pose;
+    p.trajectory = std::make_shared<const TrajectoryNode>(p.pose, generation_, std::move(p.trajectory));
+  }
+  odometry_at_update_ = odometry;
+  linear_since_update_m_ = 0.0;
+  angular_since_update_rad_ = 0.0;
+  stats.generation = generation_;
+  last_update_ = stats;
+}
+
+std::vector<double> ParticleFilter::normalized_weights() const {
+  std::vector<double> weights(particles_.size());
+  if (particles_.empty()) return weights;
+  double max_lw = -std::numeric_limits<double>::infinity();
+  for (const Particle& p : particles_) max_lw = std::max(max_lw, p.log_weight);
+  const double gain = 1.0 / (options_.likelihood_gain * static_cast<double>(particles_.size()));
+  double sum = 0.0;
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    weights[i] = std::isfinite(particles_[i].log_weight)
+                     ? std::exp(gain * (particles_[i].log_weight - max_lw))
+                     : 0.0;
+    sum += weights[i];
+  }
+  if (!(sum > 0.0)) {
+    std::fill(weights.begin(), weights.end(), 1.0 / static_cast<double>(weights.size()));
+    return weights;
+  }
+  for (double& w : weights) w /= sum;
+  return weights;
+}
+
+std::vector<int> systematic_resample(const std::vector<double>& weights, double first_pointer) {
+  const std::size_t n = weights.size();
+  std::vector<int> parents(n);
+  if (n == 0) return parents;
+  const double spacing = 1.0 / static_cast<double>(n);
+  double target = first_pointer;
+  double cumulative = weights[0];
+  std::size_t source = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    while (target > cumulative && source + 1 < n) cumulative += weights[++source];
+    parents[i] = static_cast<int>(source);
+    target += spacing;
+  }
+  return parents;
+}
+
+void ParticleFilter::resample(const std::vector<double>& weights) {
+  const std::size_t n = particles_.size();
+  std::uniform_real_distribution<double> uniform(0.0, 1.0 / static_cast<double>(n));
+  const std::vector<int> parents = systematic_resample(weights, uniform(rng_));
+  std::vector<Particle> next(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Particle& parent = particles_[static_cast<std::size_t>(parents[i])];
+    Particle& child = next[i];
+    child.pose = parent.pose;
+    child.pose_at_update = parent.pose_at_update;
+    child.log_weight = 0.0;
+    child.lineage_log_likelihood = parent.lineage_log_likelihood;
+    child.parent = parents[i];
+    child.map = parent.map->clone();  // shares every tile until one side writes
+    child.trajectory = parent.trajectory;
+  }
+  particles_ = std::move(next);
+}
+
+std::size_t ParticleFilter::best_index() const {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < particles_.size(); ++i)
+    if (particles_[i].lineage_log_likelihood > particles_[best].lineage_log_likelihood) best = i;
+  return best;
+}
+
+Pose2 ParticleFilter::best_pose(const Pose2& odometry) const {
+  if (particles_.empty()) return odometry;
+  const Particle& best = particles_[best_index()];
+  return compose(best.pose_at_update, relative(odometry_at_update_, odometry));
+}
+
+std::vector<Pose2> ParticleFilter::best_trajectory() const {
+  if (particles_.empty()) return {};
+  std::vector<Pose2> poses(static_cast<std::size_t>(generation_ + 1));
+  for (const TrajectoryNode* node = particles_[best_index()].trajectory.get(); node;
+       node = node->parent.get())
+    if (node->generation >= 0 && node->generation <= generation_)
+      poses[static_cast<std::size_t>(node->generation)] = node->pose;
+  return poses;
+}
+
+}  // namespace pex::slam

@@ -1,0 +1,132 @@
+#pragma once
+// A Rao-Blackwellized particle filter for 2D SLAM as GMapping does it (Grisetti,
+// Stachniss, Burgard, "Improved techniques for grid mapping with Rao-Blackwellized
+// particle filters", IEEE T-RO 2007): every particle carries a pose, a map and
+// its trajectory; each filter update samples the motion model, scan-matches the
+// pose against the particle's map, draws the pose from the improved proposal,
+// weighs the particle by the scan likelihood, resamples when the effective sample
+// size falls below a threshold, and integrates the scan into every map.
+//
+// No clock and no I/O: scans and odometry come in, time is the scans' utime,
+// and the random generator is seeded from the options.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "slam/cow_grid_map.hpp"
+#include "slam/motion_model.hpp"
+#include "slam/particle_map.hpp"
+#include "slam/scan.hpp"
+#include "slam/scan_matcher.hpp"
+
+namespace pex::slam {
+
+struct ParticleFilterOptions {
+  int particle_count = 30;
+  // A filter update happens once the odometry has travelled this far (path
+  // length) or turned this much since the last update.
+  double linear_update_m = 0.5;
+  double angular_update_rad = 0.25;
+  // Resample when N_eff < resample_threshold * particle_count.
+  double resample_threshold = 0.5;
+  // Weights are exp(log_w / (likelihood_gain * particle_count)) before
+  // normalising (GMapping's `ogain`): the per-beam likelihood treats beams as
+  // independent, which overstates the evidence; the gain softens it.
+  double likelihood_gain = 3.0;
+  std::uint64_t seed = 1;
+  // Threads that match particles in parallel. Results do not depend on it:
+  // each particle's proposal draws come from its own generator, seeded from
+  // (seed, generation, particle index).
+  int threads = 1;
+  MotionModelOptions motion;
+  MatcherOptions matcher;
+  ProposalOptions proposal;
+  ScanConversionOptions scan;
+  CowGridMapOptions grid;
+};
+
+// Low-variance (systematic) resampling: parent index of each of the
+// weights.size() children, with pointers spaced 1/n apart starting at
+// first_pointer in [0, 1/n). Weights must be normalised.
+std::vector<int> systematic_resample(const std::vector<double>& weights, double first_pointer);
+
+// Makes the empty map of a particle; the filter's seam to the map representation.
+using ParticleMapFactory = std::function<std::unique_ptr<ParticleMap>()>;
+
+// A particle's pose after each update it took part in; nodes are shared by the
+// descendants of a particle (GMapping's trajectory tree).
+struct TrajectoryNode {
+  Pose2 pose;
+  std::int64_t generation = 0;
+  std::shared_ptr<const TrajectoryNode> parent;
+  TrajectoryNode(const Pose2& p, std::int64_t g, std::shared_ptr<const TrajectoryNode> up)
+      : pose(p), generation(g), parent(std::move(up)) {}
+  // Frees a long unshared chain iteratively (no deep recursion).
+  ~TrajectoryNode();
+};
+
+struct Particle {
+  Pose2 pose;                     // current pose (updated by odometry between updates)
+  double log_weight = 0.0;        // accumulated since the last resampling
+  double lineage_log_likelihood = 0.0;  // summed over the whole lineage; picks the best
+  int parent = -1;                // index in the previous generation, -1 at the first
+  std::unique_ptr<ParticleMap> map;
+  std::shared_ptr<const TrajectoryNode> trajectory;
+  Pose2 pose_at_update;           // pose after the last update (for the motion prior)
+};
+
+struct UpdateStats {
+  std::int64_t generation = 0;
+  bool resampled = false;
+  double effective_sample_size = 0.0;
+  int matcher_evaluations = 0;
+  int failed_matches = 0;
+};
+
+class ParticleFilter {
+ public:
+  explicit ParticleFilter(const ParticleFilterOptions& options, ParticleMapFactory map_factory = {});
+
+  // Feeds a scan with the odometry pose at the scan's time. Moves every particle
+  // by the odometry since the previous call and, if the robot moved enough since
+  // the last update (or this is the first scan), runs a filter update. Returns
+  // true when an update ran. A scan with no usable beam never triggers an update.
+  bool process(const RangeScan& scan, const Pose2& odometry);
+
+  bool initialized() const { return initialized_; }
+  const std::vector<Particle>& particles() const { return particles_; }
+  std::size_t best_index() const;
+  // Normalised weights (after the likelihood gain), in particle order.
+  std::vector<double> normalized_weights() const;
+  // Generation of the last update (0 for the first), -1 before any.
+  std::int64_t generation() const { return generation_; }
+  const UpdateStats& last_update() const { return last_update_; }
+  // Odometry pose at the last update: the best particle's pose plus the odometry
+  // since then is the current best estimate.
+  const Pose2& odometry_at_update() const { return odometry_at_update_; }
+  // The current best estimate for a robot whose odometry reads `odometry`.
+  Pose2 best_pose(const Pose2& odometry) const;
+  // The best particle's pose at every update generation so far (index = generation).
+  std::vector<Pose2> best_trajectory() const;
+
+ private:
+  void initialize(const ScanPoints& points, const Pose2& odometry);
+  void update(const ScanPoints& points, const Pose2& odometry);
+  void resample(const std::vector<double>& weights);
+
+  ParticleFilterOptions options_;
+  ParticleMapFactory map_factory_;
+  std::mt19937_64 rng_;
+  std::vector<Particle> particles_;
+  bool initialized_ = false;
+  std::int64_t generation_ = -1;
+  Pose2 last_odometry_;
+  Pose2 odometry_at_update_;
+  double linear_since_update_m_ = 0.0;
+  double angular_since_update_rad_ = 0.0;
+  UpdateStats last_update_;
+};
+
+}  // namespace pex::slam

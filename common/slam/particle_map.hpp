@@ -1,0 +1,35 @@
+#pragma once
+// The seam between the filter and what each particle matches its scans
+// against. The filter only needs: score a pose, insert a scan, copy the map for
+// a resampled child. CowGridMap (cow_grid_map.hpp) is GMapping's choice; a map
+// matching against the particle's own polygon map would implement the same.
+#include <cstddef>
+#include <memory>
+
+#include "slam/pose2.hpp"
+#include "slam/scan.hpp"
+
+namespace pex::slam {
+
+struct PoseEvaluation {
+  double score = 0.0;           // matching score: larger is better, >= 0
+  double log_likelihood = 0.0;  // log p(scan | pose, map), up to a constant
+  std::size_t matched_beams = 0;
+};
+
+class ParticleMap {
+ public:
+  virtual ~ParticleMap() = default;
+  // A copy whose later changes do not show in this map (nor the reverse);
+  // implementations share unchanged structure.
+  virtual std::unique_ptr<ParticleMap> clone() const = 0;
+  // Integrates a scan taken from `robot_pose`.
+  virtual void insert(const Pose2& robot_pose, const ScanPoints& scan) = 0;
+  // Score and likelihood of `scan` taken from `robot_pose`. Must be a pure
+  // function of the map, the pose and the scan.
+  virtual PoseEvaluation evaluate(const Pose2& robot_pose, const ScanPoints& scan) const = 0;
+  // Bytes of storage this map references (shared parts counted fully).
+  virtual std::size_t referenced_bytes() const = 0;
+};
+
+}  // namespace pex::slam

@@ -1,0 +1,94 @@
+#include "slam_node.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace pex::slam_daemon {
+
+SlamNode::SlamNode(const SlamNodeOptions& options, SlamOutputs outputs)
+    : options_(options), outputs_(std::move(outputs)), filter_(options.filter), sync_(options.sync) {}
+
+void SlamNode::on_odometry(const odometry_t& msg) {
+  const slam::Pose2 pose{msg.x, msg.y, msg.theta};
+  if (!slam::is_finite(pose)) throw std::invalid_argument("odometry pose is not finite");
+  sync_.add_odometry(msg.utime, pose);
+  process(sync_.take_ready());
+  if (filter_.initialized() && outputs_.publish_pose) {
+    const slam::Pose2 best = filter_.best_pose(pose);
+    pose_t out{};
+    out.utime = msg.utime;
+    out.x = best.x_m;
+    out.y = best.y_m;
+    out.theta = best.theta_rad;
+    outputs_.publish_pose(out);
+  }
+}
+
+void SlamNode::on_scan(const laser_scan_t& msg) {
+  if (msg.nranges < 0 || static_cast<std::size_t>(msg.nranges) != msg.ranges.size())
+    throw std::invalid_argument("nranges disagrees with the ranges array");
+  if (msg.ranges.size() > options_.max_beams)
+    throw std::invalid_argument("scan has " + std::to_string(msg.ranges.size()) + " beams, more than " +
+                                std::to_string(options_.max_beams));
+  if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) ||
+      !std::isfinite(msg.range_max) || !std::isfinite(msg.range_min) || !std::isfinite(msg.sensor_x) ||
+      !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
+    throw std::invalid_argument("scan geometry is not finite");
+  slam::RangeScan scan;
+  scan.utime = msg.utime;
+  scan.angle_min_rad = msg.angle_min;
+  scan.angle_increment_rad = msg.angle_increment;
+  scan.range_min_m = msg.range_min;
+  scan.range_max_m = msg.range_max;
+  scan.sensor_pose = {msg.sensor_x, msg.sensor_y, msg.sensor_theta};
+  scan.ranges_m = msg.ranges;  // NaN / out-of-range readings are "no return" in the filter
+  sync_.add_scan(std::move(scan));
+  process(sync_.take_ready());
+}
+
+void SlamNode::flush() { process(sync_.flush()); }
+
+void SlamNode::process(std::vector<slam::PairedScan> ready) {
+  for (const slam::PairedScan& paired : ready) {
+    const bool updated = filter_.process(paired.scan, paired.odometry);
+    recorder_.record(paired.scan.utime, filter_, paired.odometry);
+    ++scans_processed_;
+    if (updated && outputs_.publish_update) outputs_.publish_update(update_message(paired.scan.utime));
+  }
+}
+
+slam_update_t SlamNode::update_message(std::int64_t scan_utime) const {
+  slam_update_t msg{};
+  msg.utime = scan_utime;
+  msg.scan_utime = scan_utime;
+  msg.generation = filter_.generation();
+  msg.resampled = filter_.last_update().resampled;
+  msg.best = static_cast<std::int32_t>(filter_.best_index());
+  const auto& particles = filter_.particles();
+  const std::vector<double> weights = filter_.normalized_weights();
+  msg.nparticles = static_cast<std::int32_t>(particles.size());
+  msg.particles.resize(particles.size());
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    particle_t& p = msg.particles[i];
+    p.x = particles[i].pose.x_m;
+    p.y = particles[i].pose.y_m;
+    p.theta = particles[i].pose.theta_rad;
+    p.log_weight = weights[i] > 0.0 ? std::log(weights[i]) : -1e300;
+    p.parent = particles[i].parent;
+  }
+  return msg;
+}
+
+std::string SlamNode::trajectory_text() const {
+  std::string text;
+  char line[128];
+  for (const slam::TimedPose& p : recorder_.resolve(filter_)) {
+    const int n = std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f\n", static_cast<double>(p.utime) * 1e-6,
+                                p.pose.x_m, p.pose.y_m, p.pose.theta_rad);
+    text.append(line, static_cast<std::size_t>(n));
+  }
+  return text;
+}
+
+}  // namespace pex::slam_daemon

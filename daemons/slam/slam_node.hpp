@@ -1,0 +1,62 @@
+#pragma once
+// The slam daemon's handlers, shared by the live daemon and `pex-slam --log`:
+// LIDAR_SCAN and ODOMETRY in, SLAM_UPDATE and SLAM_POSE out (through `publish`
+// callbacks, so this class knows no transport), and the trajectory of every
+// scan for the offline pose file.
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include <pex/laser_scan_t.hpp>
+#include <pex/odometry_t.hpp>
+#include <pex/pose_t.hpp>
+#include <pex/slam_update_t.hpp>
+
+#include "slam/odometry_sync.hpp"
+#include "slam/particle_filter.hpp"
+#include "slam/trajectory_recorder.hpp"
+
+namespace pex::slam_daemon {
+
+struct SlamNodeOptions {
+  slam::ParticleFilterOptions filter;
+  slam::OdometrySyncOptions sync;
+  std::size_t max_beams = 8192;  // a scan with more is refused as bad input
+};
+
+struct SlamOutputs {
+  std::function<void(const slam_update_t&)> publish_update;
+  std::function<void(const pose_t&)> publish_pose;
+};
+
+class SlamNode {
+ public:
+  SlamNode(const SlamNodeOptions& options, SlamOutputs outputs);
+
+  // Throw std::invalid_argument for content they refuse (non-finite pose,
+  // array sizes that disagree, too many beams); the state is unchanged then.
+  void on_odometry(const odometry_t& msg);
+  void on_scan(const laser_scan_t& msg);
+  // Processes scans still waiting for odometry (end of a log).
+  void flush();
+
+  // `timestamp_s x y theta` for every scan processed so far, on the best
+  // particle's trajectory (scans between updates carried forward by odometry).
+  std::string trajectory_text() const;
+
+  const slam::ParticleFilter& filter() const { return filter_; }
+  std::int64_t scans_processed() const { return scans_processed_; }
+
+ private:
+  void process(std::vector<slam::PairedScan> ready);
+  slam_update_t update_message(std::int64_t scan_utime) const;
+
+  SlamNodeOptions options_;
+  SlamOutputs outputs_;
+  slam::ParticleFilter filter_;
+  slam::OdometrySync sync_;
+  slam::TrajectoryRecorder recorder_;
+  std::int64_t scans_processed_ = 0;
+};
+
+}  // namespace pex::slam_daemon

@@ -1,0 +1,73 @@
+#include "slam_options.hpp"
+
+#include <cstdint>
+
+namespace pex::slam_daemon {
+
+using runtime::in_range;
+using runtime::non_negative;
+using runtime::positive;
+
+SlamNodeOptions load_options(runtime::ConfigReader& config) {
+  SlamNodeOptions o;
+  auto& f = o.filter;
+  f.particle_count = config.get<int>("particles", f.particle_count, in_range(1, 1000));
+  f.linear_update_m = config.get<double>("linear_update_m", f.linear_update_m, non_negative<double>());
+  f.angular_update_rad = config.get<double>("angular_update_rad", f.angular_update_rad, non_negative<double>());
+  f.resample_threshold = config.get<double>("resample_threshold", f.resample_threshold, in_range(0.0, 1.0));
+  f.likelihood_gain = config.get<double>("likelihood_gain", f.likelihood_gain, positive<double>());
+  f.threads = config.get<int>("threads", f.threads, in_range(1, 64));
+  f.seed = static_cast<std::uint64_t>(
+      config.get<std::int64_t>("seed", static_cast<std::int64_t>(f.seed), non_negative<std::int64_t>()));
+
+  auto motion = config.section("motion");
+  f.motion.srr = motion.get<double>("srr", f.motion.srr, non_negative<double>());
+  f.motion.srt = motion.get<double>("srt", f.motion.srt, non_negative<double>());
+  f.motion.str = motion.get<double>("str", f.motion.str, non_negative<double>());
+  f.motion.stt = motion.get<double>("stt", f.motion.stt, non_negative<double>());
+
+  auto scan = config.section("scan");
+  f.scan.usable_range_m = scan.get<double>("usable_range_m", f.scan.usable_range_m, positive<double>());
+  f.scan.free_offset_m = scan.get<double>("free_offset_m", f.scan.free_offset_m, positive<double>());
+
+  auto grid = config.section("grid");
+  f.grid.resolution_m = grid.get<double>("resolution_m", f.grid.resolution_m, in_range(0.005, 1.0));
+  f.grid.kernel_radius_cells = grid.get<int>("kernel_radius_cells", f.grid.kernel_radius_cells, in_range(0, 5));
+  f.grid.score_sigma_m2 = grid.get<double>("score_sigma_m2", f.grid.score_sigma_m2, positive<double>());
+  f.grid.likelihood_sigma_m2 =
+      grid.get<double>("likelihood_sigma_m2", f.grid.likelihood_sigma_m2, positive<double>());
+  f.grid.null_log_likelihood = grid.get<double>("null_log_likelihood", f.grid.null_log_likelihood);
+  f.grid.beam_step = grid.get<int>("beam_step", f.grid.beam_step, in_range(1, 100));
+  f.grid.along_line_weight = grid.get<double>("along_line_weight", f.grid.along_line_weight, in_range(0.0, 1.0));
+  f.grid.line_flatness = grid.get<double>("line_flatness", f.grid.line_flatness, in_range(0.0, 1.0));
+  f.grid.check_free_before_hit = grid.get<bool>("check_free_before_hit", f.grid.check_free_before_hit);
+
+  auto matcher = config.section("matcher");
+  f.matcher.linear_step_m = matcher.get<double>("linear_step_m", f.matcher.linear_step_m, positive<double>());
+  f.matcher.angular_step_rad =
+      matcher.get<double>("angular_step_rad", f.matcher.angular_step_rad, positive<double>());
+  f.matcher.refinements = matcher.get<int>("refinements", f.matcher.refinements, in_range(0, 20));
+  f.matcher.minimum_score = matcher.get<double>("minimum_score", f.matcher.minimum_score, non_negative<double>());
+  f.matcher.beam_step = matcher.get<int>("beam_step", f.matcher.beam_step, in_range(1, 100));
+
+  auto proposal = config.section("proposal");
+  f.proposal.linear_offset_m =
+      proposal.get<double>("linear_offset_m", f.proposal.linear_offset_m, positive<double>());
+  f.proposal.angular_offset_rad =
+      proposal.get<double>("angular_offset_rad", f.proposal.angular_offset_rad, positive<double>());
+  f.proposal.min_linear_std_m =
+      proposal.get<double>("min_linear_std_m", f.proposal.min_linear_std_m, positive<double>());
+  f.proposal.min_angular_std_rad =
+      proposal.get<double>("min_angular_std_rad", f.proposal.min_angular_std_rad, positive<double>());
+  f.proposal.use_motion_prior = proposal.get<bool>("use_motion_prior", f.proposal.use_motion_prior);
+  f.proposal.sample_scale = proposal.get<double>("sample_scale", f.proposal.sample_scale, in_range(0.0, 1.0));
+
+  auto sync = config.section("sync");
+  o.sync.max_wait_us = 1000 * sync.get<std::int64_t>("max_odometry_wait_ms", o.sync.max_wait_us / 1000,
+                                                     non_negative<std::int64_t>());
+  o.max_beams = static_cast<std::size_t>(config.get<int>("max_beams", static_cast<int>(o.max_beams),
+                                                         in_range(1, 1 << 20)));
+  return o;
+}
+
+}  // namespace pex::slam_daemon

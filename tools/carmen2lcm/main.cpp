@@ -1,0 +1,183 @@
+// pex-carmen2lcm IN.clf OUT.lcm: a CARMEN log (FLASER, ROBOTLASER1, ODOM) as an
+// LCM log of our types, so lcm-logplayer replays real data into the daemon set
+// and `pex-slam --log` runs on it.
+//
+// Odometry: by default every laser line's own odometry pose becomes an ODOMETRY
+// message with the scan's time stamp, written just before its LIDAR_SCAN. Those
+// poses were taken by the robot for exactly that scan, while ODOM lines come at
+// their own rate with IPC time stamps that in the benchmark logs sometimes run
+// backwards (the Intel log's do, by up to 0.6 s). `--odometry odom` writes the
+// ODOM lines instead (a log without ODOM lines always uses the laser lines').
+//
+// Time: message utime fields are the lines' ipc_timestamp (µs); the log events'
+// time stamps are the same but never decrease (lcm-logplayer paces by them).
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <pex/laser_scan_t.hpp>
+#include <pex/odometry_t.hpp>
+
+#include "evaluation/carmen_log.hpp"
+#include "runtime/channels.hpp"
+
+namespace {
+
+namespace ch = pex::runtime::channels;
+namespace ev = pex::evaluation;
+
+std::int64_t to_utime(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e6)); }
+
+class LogWriter {
+ public:
+  explicit LogWriter(const std::string& path) : log_(path, "w") {}
+  bool good() { return log_.good(); }
+
+  template <class Msg>
+  bool write(std::string_view channel, std::int64_t utime, const Msg& msg) {
+    std::vector<std::uint8_t> buffer(static_cast<std::size_t>(msg.getEncodedSize()));
+    if (msg.encode(buffer.data(), 0, static_cast<int>(buffer.size())) < 0) return false;
+    lcm::LogEvent event{};
+    last_utime_ = std::max(last_utime_, utime);
+    event.timestamp = last_utime_;
+    event.channel = std::string(channel);
+    event.datalen = static_cast<std::int32_t>(buffer.size());
+    event.data = buffer.data();
+    ++events_;
+    return log_.writeEvent(&event) == 0;
+  }
+  std::int64_t events() const { return events_; }
+
+ private:
+  lcm::LogFile log_;
+  std::int64_t last_utime_ = 0;
+  std::int64_t events_ = 0;
+};
+
+pex::odometry_t odometry_message(std::int64_t utime, const pex::slam::Pose2& pose, double v, double omega) {
+  pex::odometry_t msg{};
+  msg.utime = utime;
+  msg.x = pose.x_m;
+  msg.y = pose.y_m;
+  msg.theta = pex::slam::normalize_angle(pose.theta_rad);
+  msg.v = v;
+  msg.omega = omega;
+  return msg;
+}
+
+// The laser's mounting in the robot frame. CARMEN writes a laser line's laser
+// pose as the robot's odometry pose composed with the mounting offset, so their
+// difference is the offset; where it is implausible for a front laser (some
+// logs write a corrected pose there) the PARAM robot_frontlaser_offset is used.
+pex::slam::Pose2 sensor_mounting(const ev::CarmenLaser& laser, double frontlaser_offset_m) {
+  const pex::slam::Pose2 offset = pex::slam::relative(laser.odometry, laser.laser_pose);
+  // (+ 0.0 turns the -0.0 of an exactly zero offset into +0.0.)
+  if (std::hypot(offset.x_m, offset.y_m) <= 1.0 && std::abs(offset.theta_rad) <= 0.2)
+    return {offset.x_m + 0.0, offset.y_m + 0.0, offset.theta_rad + 0.0};
+  return {frontlaser_offset_m, 0.0, 0.0};
+}
+
+pex::laser_scan_t scan_message(const ev::CarmenLaser& laser, std::int32_t counter, const pex::slam::Pose2& sensor) {
+  pex::laser_scan_t msg{};
+  msg.utime = to_utime(laser.timestamp_s);
+  msg.device_utime = 0;
+  msg.scan_counter = counter;
+  msg.angle_min = static_cast<float>(laser.angle_min_rad);
+  msg.angle_increment = static_cast<float>(laser.angle_increment_rad);
+  msg.range_min = 0.0f;
+  msg.range_max = static_cast<float>(laser.max_range_m);
+  msg.scan_time = 0.0f;
+  msg.sensor_x = static_cast<float>(sensor.x_m);
+  msg.sensor_y = static_cast<float>(sensor.y_m);
+  msg.sensor_theta = static_cast<float>(sensor.theta_rad);
+  msg.nranges = static_cast<std::int32_t>(laser.ranges_m.size());
+  msg.ranges = laser.ranges_m;
+  msg.nintensities = 0;
+  return msg;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"CARMEN log (FLASER, ROBOTLASER1, ODOM) -> LCM log (LIDAR_SCAN, ODOMETRY)"};
+  std::string in_path;
+  std::string out_path;
+  std::string odometry_source = "laser";
+  ev::CarmenParseOptions parse;
+  app.add_option("IN", in_path, "CARMEN log (.clf / .log)")->required();
+  app.add_option("OUT", out_path, "LCM log to write")->required();
+  app.add_option("--odometry", odometry_source, "odometry from the laser lines' poses or the ODOM lines")
+      ->check(CLI::IsMember({"laser", "odom"}))
+      ->capture_default_str();
+  app.add_option("--flaser-max-range-m", parse.flaser_max_range_m,
+                 "FLASER readings at or beyond this are no return")
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  std::ifstream in(in_path);
+  if (!in) {
+    std::fprintf(stderr, "pex-carmen2lcm: cannot open %s\n", in_path.c_str());
+    return 2;
+  }
+  // First pass: does the log have ODOM lines, and where is the front laser.
+  bool has_odom = false;
+  double frontlaser_offset_m = 0.0;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("ODOM ", 0) == 0) has_odom = true;
+    if (line.rfind("PARAM robot_frontlaser_offset ", 0) == 0) {
+      std::istringstream fields(line.substr(30));
+      double offset = 0.0;
+      if (fields >> offset && std::isfinite(offset)) frontlaser_offset_m = offset;
+    }
+  }
+  const bool odometry_from_laser = odometry_source == "laser" || !has_odom;
+  in.clear();
+  in.seekg(0);
+
+  LogWriter out(out_path);
+  if (!out.good()) {
+    std::fprintf(stderr, "pex-carmen2lcm: cannot write %s\n", out_path.c_str());
+    return 2;
+  }
+  std::size_t scans = 0, odometry = 0, malformed = 0, line_number = 0;
+  std::string error;
+  ev::CarmenMessage message;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const ev::LineKind kind = ev::parse_carmen_line(line, parse, message, error);
+    if (kind == ev::LineKind::kSkipped) continue;
+    if (kind == ev::LineKind::kMalformed) {
+      if (malformed++ < 5) std::fprintf(stderr, "pex-carmen2lcm: line %zu: %s\n", line_number, error.c_str());
+      continue;
+    }
+    bool ok = true;
+    if (const auto* laser = std::get_if<ev::CarmenLaser>(&message)) {
+      const std::int64_t utime = to_utime(laser->timestamp_s);
+      if (odometry_from_laser) {
+        ok = ok && out.write(ch::kOdometry, utime, odometry_message(utime, laser->odometry, 0.0, 0.0));
+        ++odometry;
+      }
+      ok = ok && out.write(ch::kLidarScan, utime, scan_message(*laser, static_cast<std::int32_t>(scans), sensor_mounting(*laser, frontlaser_offset_m)));
+      ++scans;
+    } else if (!odometry_from_laser) {
+      const auto& odom = std::get<ev::CarmenOdometry>(message);
+      const std::int64_t utime = to_utime(odom.timestamp_s);
+      ok = out.write(ch::kOdometry, utime, odometry_message(utime, odom.pose, odom.tv_mps, odom.rv_radps));
+      ++odometry;
+    }
+    if (!ok) {
+      std::fprintf(stderr, "pex-carmen2lcm: cannot write %s\n", out_path.c_str());
+      return 2;
+    }
+  }
+  std::fprintf(stderr, "pex-carmen2lcm: %zu scans, %zu odometry readings (%s), %zu malformed lines\n",
+               scans, odometry, odometry_from_laser ? "from laser lines" : "from ODOM lines", malformed);
+  return scans > 0 ? 0 : 1;
+}
