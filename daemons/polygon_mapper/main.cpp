@@ -1,12 +1,59 @@
-// pex-polygon-mapper: skeleton until its issue lands. It starts, loads its config,
-// publishes DAEMON_STATUS, and does nothing else (and says so at start).
-#include <spdlog/spdlog.h>
+// pex-polygon-mapper: LIDAR_SCAN + a pose source (ODOMETRY or SIM_TRUTH) ->
+// the typed polygonal map (MAP). All mapping is in common/mapping; this file
+// only wires messages to the Mapper (mapper.hpp).
+#include <chrono>
+#include <memory>
 
+#include <pex/laser_scan_t.hpp>
+#include <pex/odometry_t.hpp>
+#include <pex/pose_t.hpp>
+
+#include "mapper.hpp"
+#include "runtime/channels.hpp"
 #include "runtime/daemon.hpp"
 
+namespace ch = pex::runtime::channels;
+using pex::polygon_mapper::Mapper;
+
 int main(int argc, char** argv) {
-  return pex::runtime::run_daemon(argc, argv, {"polygon_mapper", "polygon_mapper (skeleton: not implemented yet)"},
-                                  [](pex::runtime::Node&, pex::runtime::ConfigReader&) {
-                                    spdlog::warn("polygon_mapper is a skeleton: it only reports its health");
-                                  });
+  pex::runtime::DaemonInfo info{"polygon_mapper", "typed polygonal map (MAP) from LIDAR_SCAN and a pose source"};
+  info.supports_replay = true;
+  return pex::runtime::run_daemon(argc, argv, info, [](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
+    auto mapper = std::make_shared<Mapper>(pex::polygon_mapper::load_options(config));
+    // Counters in DAEMON_STATUS mirror the mapper's after every event.
+    auto report = [&node, mapper] {
+      const auto& c = mapper->counters();
+      node.counter("scans_inserted") = c.scans_inserted;
+      node.counter("scans_skipped_no_motion") = c.scans_skipped_no_motion;
+      node.counter("scans_without_pose") = c.scans_without_pose;
+      node.counter("scan_polygon_errors") = c.scan_polygon_errors;
+      node.counter("failed_tile_updates") = c.failed_tile_updates;
+      node.counter("merge_failures") = c.merge_failures;
+      node.counter("map_vertices") = static_cast<std::int64_t>(mapper->map().planning_vertex_count());
+    };
+    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [mapper, report](const pex::laser_scan_t& scan) {
+      try {
+        mapper->on_scan(scan);
+      } catch (const std::invalid_argument& e) {
+        throw pex::runtime::BadInput(e.what());
+      }
+      report();
+    });
+    if (mapper->options().pose_source == "odometry") {
+      node.subscribe<pex::odometry_t>(ch::kOdometry, [mapper, report](const pex::odometry_t& odom) {
+        mapper->on_pose({odom.utime, {odom.x, odom.y, odom.theta}});
+        report();
+      });
+    } else {
+      node.subscribe<pex::pose_t>(ch::kSimTruth, [mapper, report](const pex::pose_t& pose) {
+        mapper->on_pose({pose.utime, {pose.x, pose.y, pose.theta}});
+        report();
+      });
+    }
+    const auto period = std::chrono::microseconds(static_cast<std::int64_t>(1e6 / mapper->options().publish_rate_hz));
+    node.every(period, [&node, mapper, report](std::int64_t now_utime) {
+      if (auto msg = mapper->map_message(now_utime)) node.publish(ch::kMap, *msg);
+      report();
+    });
+  });
 }

@@ -1,0 +1,442 @@
+// Boost.Geometry 1.74 buffer/rescale code trips -Wmaybe-uninitialized when
+// inlined into our code; the warning is in Boost, not here.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "mapping/polygon_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pex::mapping {
+
+namespace {
+
+namespace bs = bg::strategy::buffer;
+
+constexpr double kGridSnap = 1e-9;
+
+// The one expression for a grid line, so every caller gets the same bits.
+double grid_line(std::int64_t k, double cell, double origin) {
+  return origin + static_cast<double>(k) * cell;
+}
+std::int64_t grid_index(double v, double cell, double origin) {
+  return static_cast<std::int64_t>(std::floor((v - origin) / cell));
+}
+
+// Points where segment p-q crosses grid lines, ordered from p to q.
+void grid_crossings(const Point& p, const Point& q, double cell, double origin,
+                    std::vector<Point>& out) {
+  out.clear();
+  // Canonical order, so both traversal directions compute the same bits.
+  const bool swap = (q.x() < p.x()) || (q.x() == p.x() && q.y() < p.y());
+  const Point a = swap ? q : p, b = swap ? p : q;
+  std::vector<std::pair<double, Point>> hits;
+  auto snap = [&](double v) {
+    const auto k = static_cast<std::int64_t>(std::round((v - origin) / cell));
+    const double g = grid_line(k, cell, origin);
+    return std::abs(v - g) <= kGridSnap ? g : v;
+  };
+  if (a.x() != b.x()) {
+    const auto k0 = grid_index(a.x(), cell, origin);
+    for (auto k = k0; grid_line(k, cell, origin) < b.x(); ++k) {
+      const double x = grid_line(k, cell, origin);
+      if (x <= a.x()) continue;
+      const double t = (x - a.x()) / (b.x() - a.x());
+      hits.push_back({t, Point(x, snap(a.y() + t * (b.y() - a.y())))});
+    }
+  }
+  const double ylo = std::min(a.y(), b.y()), yhi = std::max(a.y(), b.y());
+  if (ylo != yhi) {
+    const auto k0 = grid_index(ylo, cell, origin);
+    for (auto k = k0; grid_line(k, cell, origin) < yhi; ++k) {
+      const double y = grid_line(k, cell, origin);
+      if (y <= ylo) continue;
+      const double t = (y - a.y()) / (b.y() - a.y());
+      hits.push_back({t, Point(snap(a.x() + t * (b.x() - a.x())), y)});
+    }
+  }
+  std::sort(hits.begin(), hits.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+  for (const auto& h : hits) {
+    if (!out.empty() && bg::distance(out.back(), h.second) < kGridSnap) continue;
+    if (bg::distance(h.second, a) < kGridSnap || bg::distance(h.second, b) < kGridSnap) continue;
+    out.push_back(h.second);
+  }
+  if (swap) std::reverse(out.begin(), out.end());
+}
+
+void split_ring(Ring& ring, double cell, double origin) {
+  if (ring.size() < 2) return;
+  Ring out;
+  out.reserve(ring.size());
+  std::vector<Point> crossings;
+  for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+    out.push_back(ring[i]);
+    grid_crossings(ring[i], ring[i + 1], cell, origin, crossings);
+    out.insert(out.end(), crossings.begin(), crossings.end());
+  }
+  out.push_back(ring.back());
+  ring = std::move(out);
+}
+
+bool valid_layer(const TypedMultiPolygon& layer, std::string& why) {
+  return bg::is_valid(geometry_of(layer), why);
+}
+
+// RDP then one validity check; if the simplified layer is invalid, the
+// unsimplified one is checked and kept. False if neither is valid.
+bool simplify_and_validate(TypedMultiPolygon& layer, double epsilon_m, std::string& why) {
+  if (epsilon_m > 0.0) {
+    TypedMultiPolygon simplified = simplify_typed(layer, epsilon_m);
+    if (valid_layer(simplified, why)) {
+      layer = std::move(simplified);
+      return true;
+    }
+  }
+  return valid_layer(layer, why);
+}
+
+
+}  // namespace
+
+void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m) {
+  for (auto& polygon : geometry) {
+    split_ring(polygon.outer(), cell_m, origin_m);
+    for (auto& inner : polygon.inners()) split_ring(inner, cell_m, origin_m);
+  }
+}
+
+MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m) {
+  bg::model::multi_linestring<bg::model::linestring<Point>> chains;
+  auto add_ring_chains = [&](const Ring& ring, const std::vector<EdgeType>& types) {
+    const std::size_t n = types.size();
+    if (n == 0) return;
+    // Start right after a non-obstacle edge so no chain wraps around.
+    std::size_t start = 0;
+    while (start < n && types[start] == EdgeType::kObstacle) ++start;
+    if (start == n) {  // a ring of obstacle edges only
+      chains.emplace_back(ring.begin(), ring.end());
+      return;
+    }
+    bg::model::linestring<Point> chain;
+    for (std::size_t j = 1; j <= n; ++j) {
+      const std::size_t i = (start + j) % n;
+      if (types[i] == EdgeType::kObstacle) {
+        if (chain.empty()) chain.push_back(ring[i]);
+        chain.push_back(ring[i + 1]);
+      } else if (!chain.empty()) {
+        chains.push_back(std::move(chain));
+        chain.clear();
+      }
+    }
+    if (!chain.empty()) chains.push_back(std::move(chain));
+  };
+  add_ring_chains(scan.geometry.outer(), scan.edge_types[0]);
+  for (std::size_t k = 0; k < scan.geometry.inners().size(); ++k)
+    add_ring_chains(scan.geometry.inners()[k], scan.edge_types[1 + k]);
+  MultiPolygon band;
+  if (chains.empty()) return band;
+  bg::buffer(chains, band, bs::distance_asymmetric<double>(inner_m, outer_m), bs::side_straight(),
+             bs::join_round(8), bs::end_flat(), bs::point_circle(8));
+  return band;
+}
+
+PolygonMap::PolygonMap(PolygonMapOptions options) : options_(options) {}
+
+Box PolygonMap::tile_box(const TileKey& key) const {
+  const double s = options_.tile_size_m, o = options_.tile_origin_m;
+  return Box(Point(grid_line(key.first, s, o), grid_line(key.second, s, o)),
+             Point(grid_line(key.first + 1, s, o), grid_line(key.second + 1, s, o)));
+}
+
+InsertResult PolygonMap::insert(const TypedPolygon& scan) {
+  InsertResult result;
+  result.ok = true;
+  auto fail_tile = [&](const std::string& why) {
+    ++result.tiles_failed;
+    ++failed_tile_updates_;
+    if (result.ok) result.error = why;
+    result.ok = false;
+  };
+  std::string why;
+  if (!is_valid(scan, &why)) {
+    result.ok = false;
+    result.error = "scan polygon invalid: " + why;
+    return result;
+  }
+  const double s = options_.tile_size_m;
+  MultiPolygon scan_geometry{scan.geometry};
+  split_at_grid(scan_geometry, s, options_.tile_origin_m);
+  MultiPolygon band;
+  try {
+    band = obstacle_band(scan, options_.obstacle_inner_m, options_.obstacle_outer_m);
+  } catch (const std::exception& e) {
+    band.clear();
+    fail_tile(std::string("obstacle band failed: ") + e.what());
+  }
+  if (!bg::is_valid(band, why)) {
+    fail_tile("obstacle band invalid: " + why);
+    band.clear();
+  }
+  split_at_grid(band, s, options_.tile_origin_m);
+  // The scan's own edges type the clipped pieces: the split points lie on them.
+  TypedOpOptions typed;
+  typed.assign_edge_types = options_.assign_edge_types;
+  typed.validate = false;  // each tile is validated once, at the end
+  EdgeTypeIndex scan_index;
+  if (options_.assign_edge_types) {
+    scan_index.add(scan);
+    scan_index.build();
+  }
+  const TypedMultiPolygon scan_split = assign_types(scan_geometry, scan_index, 1e-6, typed, &result.reassign);
+  const TypedMultiPolygon band_typed = with_uniform_type(band, EdgeType::kObstacle);
+
+  Box envelope;
+  bg::envelope(scan.geometry, envelope);
+  if (!band.empty()) bg::expand(envelope, bg::return_envelope<Box>(band));
+  const double o = options_.tile_origin_m;
+  const auto i0 = static_cast<std::int32_t>(grid_index(envelope.min_corner().x(), s, o));
+  const auto i1 = static_cast<std::int32_t>(grid_index(envelope.max_corner().x(), s, o));
+  const auto j0 = static_cast<std::int32_t>(grid_index(envelope.min_corner().y(), s, o));
+  const auto j1 = static_cast<std::int32_t>(grid_index(envelope.max_corner().y(), s, o));
+
+  // Phase 1: clip the scan and its band to every tile it meets. The tiles
+  // partition the plane, so the pieces' areas must add up to the whole: this
+  // catches Boost overlay failures on degenerate contacts (a polygon touching
+  // a tile only at its corner has given the whole box back). A scan whose
+  // pieces do not add up is refused and the map stays as it was.
+  struct Piece {
+    TileKey key;
+    Box box;
+    TypedMultiPolygon free;
+    TypedMultiPolygon band;
+  };
+  std::vector<Piece> pieces;
+  double free_sum = 0.0, band_sum = 0.0;
+  for (auto i = i0; i <= i1; ++i) {
+    for (auto j = j0; j <= j1; ++j) {
+      const TileKey key{i, j};
+      const Box box = tile_box(key);
+      TypedOpOptions tile_options = typed;
+      tile_options.border_box = box;
+      auto clip_free = typed_clip(scan_split, box, tile_options);
+      TypedOpOptions band_options = tile_options;
+      band_options.uniform_type = EdgeType::kObstacle;
+      TypedOpResult clip_band{true, {}, {}, {}};
+      if (!band_typed.empty()) clip_band = typed_clip(band_typed, box, band_options);
+      if (!clip_free.ok || !clip_band.ok) {
+        result.ok = false;
+        result.error = !clip_free.ok ? clip_free.error : clip_band.error;
+        ++failed_tile_updates_;
+        ++result.tiles_failed;
+        return result;
+      }
+      if (clip_free.polygons.empty() && clip_band.polygons.empty()) continue;
+      free_sum += area(clip_free.polygons);
+      band_sum += area(clip_band.polygons);
+      pieces.push_back({key, box, std::move(clip_free.polygons), std::move(clip_band.polygons)});
+    }
+  }
+  const double scan_area = bg::area(scan.geometry), band_area = bg::area(band);
+  if (std::abs(free_sum - scan_area) > 1e-6 * std::max(1.0, scan_area) ||
+      std::abs(band_sum - band_area) > 1e-6 * std::max(1.0, band_area)) {
+    result.ok = false;
+    result.error = "clipping to tiles does not conserve area (scan " + std::to_string(scan_area) + " vs " +
+                   std::to_string(free_sum) + " m2, band " + std::to_string(band_area) + " vs " +
+                   std::to_string(band_sum) + " m2)";
+    ++failed_tile_updates_;
+    ++result.tiles_failed;
+    return result;
+  }
+
+  // Phase 2: update the tiles, each from its pieces.
+  for (auto& piece : pieces) {
+    {  // (one tile)
+      const TileKey& key = piece.key;
+      const Box& box = piece.box;
+      TypedOpOptions tile_options = typed;
+      tile_options.border_box = box;
+      TypedOpOptions band_options = tile_options;
+      band_options.uniform_type = EdgeType::kObstacle;
+      ++result.tiles_touched;
+
+      const auto found = tiles_.find(key);
+      const Tile* old = found == tiles_.end() ? nullptr : found->second.get();
+      auto next = std::make_shared<Tile>();
+      next->box = box;
+      if (old && !old->free.empty()) {
+        auto merged = typed_union(old->free, piece.free, tile_options);
+        if (!merged.ok) { fail_tile(merged.error); continue; }
+        // A union lies between the larger input and the sum of both.
+        const double a_old = area(old->free), a_new = area(piece.free), a_union = area(merged.polygons);
+        if (a_union < std::max(a_old, a_new) - 1e-6 || a_union > a_old + a_new + 1e-6) {
+          fail_tile("union area out of bounds");
+          continue;
+        }
+        result.reassign.edges += merged.reassign.edges;
+        result.reassign.candidates += merged.reassign.candidates;
+        next->free = std::move(merged.polygons);
+      } else {
+        next->free = std::move(piece.free);
+      }
+      if (old && !old->obstacles.empty() && !piece.band.empty()) {
+        auto merged = typed_union(old->obstacles, piece.band, band_options);
+        if (!merged.ok) { fail_tile(merged.error); continue; }
+        const double a_old = area(old->obstacles), a_new = area(piece.band), a_union = area(merged.polygons);
+        if (a_union < std::max(a_old, a_new) - 1e-6 || a_union > a_old + a_new + 1e-6) {
+          fail_tile("obstacle union area out of bounds");
+          continue;
+        }
+        next->obstacles = std::move(merged.polygons);
+      } else {
+        next->obstacles = old && piece.band.empty() ? old->obstacles : std::move(piece.band);
+      }
+      const double area_before = old ? area(old->free) : 0.0;
+      const double area_after_union = area(next->free);
+      if (!simplify_and_validate(next->free, options_.simplify_epsilon_m, why) ||
+          !simplify_and_validate(next->obstacles, options_.simplify_epsilon_m, why)) {
+        fail_tile("tile invalid after union: " + why);
+        continue;
+      }
+      if (next->obstacles.empty()) {
+        next->planning = next->free;
+        // Without obstacles every free edge is a frontier (borders stay).
+        for (auto& p : next->planning)
+          for (auto& ring : p.edge_types)
+            for (auto& t : ring)
+              if (t != EdgeType::kBorder) t = EdgeType::kFrontier;
+      } else {
+        auto planning = typed_difference(next->free, next->obstacles, EdgeType::kFrontier,
+                                         EdgeType::kObstacle, tile_options);
+        if (!planning.ok) { fail_tile(planning.error); continue; }
+        // A difference lies between (free - obstacles) and free.
+        const double a_free = area(next->free), a_diff = area(planning.polygons);
+        if (a_diff > a_free + 1e-6 || a_diff < a_free - area(next->obstacles) - 1e-6) {
+          fail_tile("difference area out of bounds");
+          continue;
+        }
+        result.reassign.edges += planning.reassign.edges;
+        result.reassign.candidates += planning.reassign.candidates;
+        next->planning = std::move(planning.polygons);
+        if (!simplify_and_validate(next->planning, options_.simplify_epsilon_m, why)) {
+          fail_tile("tile invalid after difference: " + why);
+          continue;
+        }
+      }
+      result.free_area_before_m2 += area_before;
+      result.free_area_after_union_m2 += area_after_union;
+      tiles_[key] = std::move(next);
+    }
+  }
+  ++scans_inserted_;
+  return result;
+}
+
+MergeResult PolygonMap::merge(TypedMultiPolygon Tile::*layer, double simplify_epsilon_m) const {
+  MergeResult result;
+  // Balanced cascade: each vertex takes part in O(log tiles) unions.
+  auto cascade = [](std::vector<MultiPolygon> work) {
+    while (work.size() > 1) {
+      std::vector<MultiPolygon> next;
+      next.reserve((work.size() + 1) / 2);
+      for (std::size_t k = 0; k + 1 < work.size(); k += 2) {
+        MultiPolygon u;
+        bg::union_(work[k], work[k + 1], u);
+        next.push_back(std::move(u));
+      }
+      if (work.size() % 2 == 1) next.push_back(std::move(work.back()));
+      work = std::move(next);
+    }
+    return work.empty() ? MultiPolygon{} : std::move(work.front());
+  };
+  // Attempt 0: only polygons with an edge on their tile's border are merged;
+  // the others lie inside their tile and pass through (fast, and keeps Boost
+  // away from most of the map). Boost 1.74's validity depends on the extent
+  // it rescales to, so two polygons valid at tile scale can be "invalid" at
+  // map scale: then attempt 1 merges everything, attempt 2 in reverse order.
+  std::string why;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    std::vector<MultiPolygon> parts;
+    TypedMultiPolygon inside;
+    EdgeTypeIndex index;
+    for (const auto& [key, tile] : tiles_) {
+      MultiPolygon touching;
+      for (const auto& polygon : (*tile).*layer) {
+        bool on_border = attempt > 0;
+        for (const auto& ring : polygon.edge_types)
+          on_border = on_border || std::find(ring.begin(), ring.end(), EdgeType::kBorder) != ring.end();
+        if (!on_border) {
+          inside.push_back(polygon);
+          continue;
+        }
+        touching.push_back(polygon.geometry);
+        index.add(polygon);
+      }
+      if (!touching.empty()) parts.push_back(std::move(touching));
+    }
+    index.build();
+    if (attempt == 2) std::reverse(parts.begin(), parts.end());
+    MultiPolygon geometry;
+    try {
+      geometry = cascade(std::move(parts));
+    } catch (const std::exception& e) {
+      why = e.what();
+      continue;
+    }
+    TypedOpOptions options;
+    options.assign_edge_types = options_.assign_edge_types;
+    TypedMultiPolygon merged = assign_types(geometry, index, 1e-6, options, nullptr);
+    for (auto& polygon : inside) merged.push_back(std::move(polygon));
+    std::int64_t strays = 0;
+    for (auto& p : merged)
+      for (auto& ring : p.edge_types)
+        for (auto& t : ring)
+          if (t == EdgeType::kBorder) {
+            t = EdgeType::kFrontier;
+            ++strays;
+          }
+    // One check of the whole result (after RDP, or without it if RDP broke it).
+    if (!simplify_and_validate(merged, simplify_epsilon_m, why)) continue;
+    result.polygons = std::move(merged);
+    result.stray_border_edges = strays;
+    result.ok = true;
+    return result;
+  }
+  result.error = "merged map invalid: " + why;
+  return result;
+}
+
+MergeResult PolygonMap::free_space(std::optional<double> simplify_epsilon_m) const {
+  return merge(&Tile::free, simplify_epsilon_m.value_or(options_.simplify_epsilon_m));
+}
+MergeResult PolygonMap::planning_map(std::optional<double> simplify_epsilon_m) const {
+  return merge(&Tile::planning, simplify_epsilon_m.value_or(options_.simplify_epsilon_m));
+}
+
+std::size_t PolygonMap::free_vertex_count() const {
+  std::size_t n = 0;
+  for (const auto& [key, tile] : tiles_) n += vertex_count(tile->free);
+  return n;
+}
+
+std::size_t PolygonMap::planning_vertex_count() const {
+  std::size_t n = 0;
+  for (const auto& [key, tile] : tiles_) n += vertex_count(tile->planning);
+  return n;
+}
+
+double PolygonMap::free_area_m2() const {
+  double a = 0.0;
+  for (const auto& [key, tile] : tiles_) a += area(tile->free);
+  return a;
+}
+
+std::size_t PolygonMap::memory_bytes() const {
+  std::size_t bytes = 0;
+  for (const auto& [key, tile] : tiles_) {
+    bytes += sizeof(Tile) + 64;  // tile, map node and control block
+    bytes += mapping::memory_bytes(tile->free) + mapping::memory_bytes(tile->obstacles) +
+             mapping::memory_bytes(tile->planning);
+  }
+  return bytes;
+}
+
+}  // namespace pex::mapping

@@ -1,0 +1,120 @@
+#pragma once
+// The polygonal map (paper, section 3.3 "Map representation"), kept in square
+// tiles so that inserting a scan touches only the part of the map it overlaps.
+//
+// - free space: the union of the scan polygons (edges obstacle / frontier);
+// - obstacles: the scans' obstacle edges widened into a band (obstacle_inner_m
+//   into the free side, obstacle_outer_m beyond the wall), unioned;
+// - planning map: free space minus obstacles; edges from the free map are
+//   frontiers, edges from the obstacle map are obstacles.
+// Each is stored per tile, clipped to the tile's box (box edges typed kBorder).
+// The merged maps (free_space(), planning_map()) are the union of the tiles
+// with the borders dissolved.
+//
+// Tiles are immutable and shared (std::shared_ptr<const Tile>): copying a
+// PolygonMap copies only the tile table, and an insert replaces the tiles it
+// touches, so maps copied for SLAM particles share every untouched tile.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "mapping/typed_ops.hpp"
+#include "mapping/typed_polygon.hpp"
+
+namespace pex::mapping {
+
+struct PolygonMapOptions {
+  double tile_size_m = 8.0;
+  // Tile lines are at tile_origin_m + k * tile_size_m. Not a round number, so
+  // walls of drawn worlds (at whole centimetres) do not run along tile lines.
+  double tile_origin_m = 0.0137;
+  // Obstacle band around each obstacle polyline of a scan (asymmetric: the
+  // free side loses little area, noise beyond the wall is cut).
+  double obstacle_inner_m = 0.02;
+  double obstacle_outer_m = 0.10;
+  // RDP tolerance after every operation (0 = off). Never merges edge types.
+  double simplify_epsilon_m = 0.01;
+  // false: plain geometry, all edges frontier (benchmark baseline).
+  bool assign_edge_types = true;
+};
+
+struct Tile {
+  Box box;
+  TypedMultiPolygon free;       // obstacle / frontier / border
+  TypedMultiPolygon obstacles;  // obstacle / border
+  TypedMultiPolygon planning;   // free minus obstacles: frontier / obstacle / border
+};
+
+struct InsertResult {
+  bool ok = false;          // false: at least one tile kept its old state
+  std::string error;        // the first failure's reason
+  int tiles_touched = 0;
+  int tiles_failed = 0;
+  // Free area of the updated tiles before the insert and right after the
+  // union (before simplification): a union never shrinks it.
+  double free_area_before_m2 = 0.0;
+  double free_area_after_union_m2 = 0.0;
+  ReassignStats reassign;
+};
+
+struct MergeResult {
+  bool ok = false;
+  std::string error;
+  TypedMultiPolygon polygons;
+  std::int64_t stray_border_edges = 0;  // tile-border edges left after merging (typed frontier)
+};
+
+// The obstacle band of a scan polygon: each maximal chain of obstacle edges
+// buffered `inner_m` to its left (free side of a counter-clockwise ring) and
+// `outer_m` to its right, with flat ends and round joins.
+MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m);
+
+class PolygonMap {
+ public:
+  explicit PolygonMap(PolygonMapOptions options = {});
+
+  // Inserts one scan polygon (map frame, valid, see scan_to_polygon). A tile
+  // whose update fails or yields an invalid polygon keeps its last good state;
+  // the failure is counted and the rest of the scan still goes in.
+  InsertResult insert(const TypedPolygon& scan);
+
+  // The merged maps (cost grows with the whole map: call at publication rate),
+  // simplified with options().simplify_epsilon_m unless another is given.
+  MergeResult free_space(std::optional<double> simplify_epsilon_m = std::nullopt) const;
+  MergeResult planning_map(std::optional<double> simplify_epsilon_m = std::nullopt) const;
+
+  // Sums over tiles (tile-border vertices included).
+  std::size_t free_vertex_count() const;
+  std::size_t planning_vertex_count() const;
+  double free_area_m2() const;
+  std::size_t tile_count() const { return tiles_.size(); }
+  // Heap bytes of the tiles' geometry, types and table.
+  std::size_t memory_bytes() const;
+  std::int64_t scans_inserted() const { return scans_inserted_; }
+  std::int64_t failed_tile_updates() const { return failed_tile_updates_; }
+  const PolygonMapOptions& options() const { return options_; }
+
+  using TileKey = std::pair<std::int32_t, std::int32_t>;
+  // Read access for tests and memory accounting (ordered: deterministic).
+  const std::map<TileKey, std::shared_ptr<const Tile>>& tiles() const { return tiles_; }
+
+ private:
+  Box tile_box(const TileKey& key) const;
+  MergeResult merge(TypedMultiPolygon Tile::*layer, double simplify_epsilon_m) const;
+
+  PolygonMapOptions options_;
+  std::map<TileKey, std::shared_ptr<const Tile>> tiles_;
+  std::int64_t scans_inserted_ = 0;
+  std::int64_t failed_tile_updates_ = 0;
+};
+
+// Splits every edge where it crosses a grid line x = origin_m + k * cell_m or
+// y = origin_m + k * cell_m, with crossing points computed from the edge alone (the same
+// bits in both neighbouring tiles), so clipping to tiles adds no new rounding.
+void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m = 0.0);
+
+}  // namespace pex::mapping

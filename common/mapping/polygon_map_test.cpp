@@ -1,0 +1,223 @@
+#include "mapping/polygon_map.hpp"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mapping/scan_polygon.hpp"
+#include "mapping/test_support.hpp"
+
+namespace pex::mapping {
+namespace {
+
+using E = EdgeType;
+using testing::ScanSpec;
+
+TypedPolygon scan_at(const std::vector<testing::Wall>& walls, const Pose2& pose, double noise_m,
+                     std::mt19937_64& rng, ScanPolygonOptions options = {}) {
+  const ScanSpec spec;
+  options.range_max_m = spec.range_max_m;
+  const auto scan = scan_to_polygon(testing::cast_scan(walls, pose, spec, noise_m, &rng),
+                                    spec.angle_min, spec.angle_increment, pose, options);
+  EXPECT_TRUE(scan.ok) << scan.error;
+  return scan.polygon;
+}
+
+TEST(ObstacleBand, CoversObstacleChainsAsymmetrically) {
+  TypedPolygon p;
+  p.geometry.outer() = {{0, 0}, {4, 0}, {4, 4}, {0, 4}, {0, 0}};
+  p.edge_types = {{E::kObstacle, E::kObstacle, E::kFrontier, E::kFrontier}};
+  const auto band = obstacle_band(p, 0.1, 0.3);
+  ASSERT_FALSE(band.empty());
+  EXPECT_TRUE(bg::is_valid(band));
+  // Two sides of 4 m, 0.4 m wide, flat ends, one round outer corner.
+  EXPECT_NEAR(bg::area(band), 2 * 4 * 0.4, 0.15);
+  EXPECT_TRUE(bg::within(Point(2, -0.25), band));   // beyond the wall: covered
+  EXPECT_FALSE(bg::within(Point(2, 0.2), band));    // inside the free side: beyond inner
+}
+
+TEST(SplitAtGrid, InsertsCrossingsExactlyOnGridLines) {
+  MultiPolygon m;
+  m.resize(1);
+  m[0].outer() = {{-1.3, -0.7}, {9.1, 0.2}, {3.3, 7.9}, {-1.3, -0.7}};
+  const double before = bg::area(m);
+  split_at_grid(m, 4.0);
+  EXPECT_NEAR(bg::area(m), before, 1e-9);
+  int on_lines = 0;
+  for (const auto& p : m[0].outer())
+    if (std::fmod(p.x(), 4.0) == 0.0 || std::fmod(p.y(), 4.0) == 0.0) ++on_lines;
+  EXPECT_GE(on_lines, 5);
+  EXPECT_TRUE(bg::is_valid(m));
+}
+
+TEST(PolygonMap, TwoScansOfARoomMakeOneRoomWithWallsAsObstacles) {
+  std::vector<testing::Wall> walls;
+  testing::add_box(walls, 0, 0, 12, 5);
+  std::mt19937_64 rng(1);
+  PolygonMap map;
+  for (double x : {2.0, 6.0, 10.0}) {
+    for (double theta : {0.0, 3.14}) {
+      const auto r = map.insert(scan_at(walls, {x, 2.5, theta}, 0.0, rng));
+      EXPECT_TRUE(r.ok) << r.error;
+    }
+  }
+  const auto free_space = map.free_space();
+  ASSERT_TRUE(free_space.ok) << free_space.error;
+  EXPECT_TRUE(is_valid(free_space.polygons));
+  EXPECT_EQ(free_space.polygons.size(), 1u);
+  EXPECT_NEAR(area(free_space.polygons), 60.0, 0.6);
+  EXPECT_EQ(free_space.stray_border_edges, 0);
+  // The whole room was seen: its boundary is (almost) all obstacle.
+  EXPECT_GT(edge_length(free_space.polygons, E::kObstacle), 0.97 * 34.0);
+  const auto planning = map.planning_map();
+  ASSERT_TRUE(planning.ok) << planning.error;
+  EXPECT_TRUE(is_valid(planning.polygons));
+  // Free minus the inner part of the obstacle band.
+  const double inner = map.options().obstacle_inner_m;
+  EXPECT_NEAR(area(planning.polygons), (12 - 2 * inner) * (5 - 2 * inner), 0.6);
+  EXPECT_GT(edge_length(planning.polygons, E::kObstacle), 0.97 * 33.0);
+  EXPECT_EQ(map.failed_tile_updates(), 0);
+}
+
+TEST(PolygonMap, CopiesShareUntouchedTiles) {
+  std::vector<testing::Wall> walls;
+  testing::add_box(walls, 0, 0, 40, 6);
+  std::mt19937_64 rng(5);
+  PolygonMap map;
+  for (double x = 2; x < 40; x += 3) map.insert(scan_at(walls, {x, 3, 0}, 0.0, rng));
+  PolygonMap copy = map;
+  ASSERT_EQ(copy.tiles().size(), map.tiles().size());
+  copy.insert(scan_at(walls, {38, 3, 3.1}, 0.0, rng));
+  std::size_t shared = 0;
+  for (const auto& [key, tile] : map.tiles()) {
+    const auto it = copy.tiles().find(key);
+    if (it != copy.tiles().end() && it->second == tile) ++shared;
+  }
+  EXPECT_GT(shared, 0u);
+  EXPECT_LT(shared, map.tiles().size());  // the insert replaced the tiles it touched
+  EXPECT_EQ(map.scans_inserted() + 1, copy.scans_inserted());
+}
+
+TEST(PolygonMap, InvalidScanPolygonIsRefusedAndTheMapKept) {
+  PolygonMap map;
+  TypedPolygon bowtie;
+  bowtie.geometry.outer() = {{0, 0}, {2, 2}, {2, 0}, {0, 2}, {0, 0}};
+  bowtie.edge_types = {{E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}};
+  const auto r = map.insert(bowtie);
+  EXPECT_FALSE(r.ok);
+  EXPECT_FALSE(r.error.empty());
+  EXPECT_EQ(map.tile_count(), 0u);
+}
+
+TEST(PolygonMap, SameScansGiveTheSameMapBitForBit) {
+  std::mt19937_64 world_rng(9);
+  const auto walls = testing::random_room(20, 15, 10, world_rng);
+  auto run = [&] {
+    std::mt19937_64 rng(77);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    PolygonMap map;
+    for (int k = 0; k < 30; ++k)
+      map.insert(scan_at(walls, {2 + 16 * u(rng), 2 + 11 * u(rng), 6.28 * u(rng)}, 0.02, rng));
+    return map.planning_map();
+  };
+  const auto a = run(), b = run();
+  ASSERT_TRUE(a.ok && b.ok);
+  ASSERT_EQ(a.polygons.size(), b.polygons.size());
+  for (std::size_t i = 0; i < a.polygons.size(); ++i) {
+    EXPECT_TRUE(bg::equals(a.polygons[i].geometry, b.polygons[i].geometry));
+    const auto& ra = a.polygons[i].geometry.outer();
+    const auto& rb = b.polygons[i].geometry.outer();
+    ASSERT_EQ(ra.size(), rb.size());
+    for (std::size_t j = 0; j < ra.size(); ++j) {
+      EXPECT_EQ(ra[j].x(), rb[j].x());
+      EXPECT_EQ(ra[j].y(), rb[j].y());
+    }
+    EXPECT_EQ(a.polygons[i].edge_types, b.polygons[i].edge_types);
+  }
+}
+
+// The property test: thousands of random scans (noisy, at random poses, with
+// random free ranges) into one map. Every insert: the union never shrinks the
+// free area of the tiles it updates (measured before simplification). Every
+// 25 scans: every tile is valid. Every 500 scans: the merged maps are valid
+// (or an explicit, rare error) and the merged free map's edge types agree
+// with a brute-force oracle over all the tiles' edges.
+TEST(PolygonMapProperty, RandomScansKeepEveryMapValid) {
+  std::mt19937_64 rng(31337);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto walls = testing::random_room(30, 20, 25, rng);
+  PolygonMap map;
+  const int kScans = 2000;
+  int inserted = 0;
+  int merge_failures = 0;
+  for (int k = 0; k < kScans; ++k) {
+    const Pose2 pose{1 + 28 * u(rng), 1 + 18 * u(rng), 6.28 * u(rng)};
+    ScanPolygonOptions scan_options;
+    scan_options.free_range_m = 1.0 + 4.0 * u(rng);
+    const auto scan = scan_at(walls, pose, 0.03 * u(rng), rng, scan_options);
+    if (scan.geometry.outer().empty()) continue;
+    ++inserted;
+    const auto result = map.insert(scan);
+    // 1 mm2 of slack: the areas of ~400 m2 are sums of many float products.
+    EXPECT_GE(result.free_area_after_union_m2, result.free_area_before_m2 - 1e-6) << "scan " << k;
+    if ((k + 1) % 25 != 0) continue;
+    for (const auto& [key, tile] : map.tiles()) {
+      std::string why;
+      ASSERT_TRUE(is_valid(tile->free, &why)) << "scan " << k << " free: " << why;
+      ASSERT_TRUE(is_valid(tile->obstacles, &why)) << "scan " << k << " obstacles: " << why;
+      ASSERT_TRUE(is_valid(tile->planning, &why)) << "scan " << k << " planning: " << why;
+    }
+    if ((k + 1) % 500 != 0) continue;
+    // A merge either gives a valid map or an explicit error (the daemon then
+    // keeps publishing its last good map); errors must stay rare.
+    const auto planning = map.planning_map();
+    if (planning.ok) {
+      std::string why;
+      ASSERT_TRUE(is_valid(planning.polygons, &why)) << why;
+    } else {
+      ++merge_failures;
+      std::printf("planning merge after scan %d: %s\n", k, planning.error.c_str());
+    }
+    const auto merged = map.free_space();
+    if (!merged.ok) {
+      ++merge_failures;
+      std::printf("free merge after scan %d: %s\n", k, merged.error.c_str());
+      continue;
+    }
+    std::string why;
+    ASSERT_TRUE(is_valid(merged.polygons, &why)) << why;
+    // Oracle: the merged free map (without the final RDP, whose longer edges
+    // no longer lie on input edges), typed by scoring every tile edge.
+    std::vector<EdgeTypeIndex::Edge> inputs;
+    for (const auto& [key, tile] : map.tiles())
+      for_each_edge(tile->free, [&](const Point& a, const Point& b, EdgeType t) { inputs.push_back({a, b, t}); });
+    const auto unsimplified = map.free_space(0.0);
+    ASSERT_TRUE(unsimplified.ok) << unsimplified.error;
+    std::int64_t mismatches = 0, edges = 0;
+    for_each_edge(unsimplified.polygons, [&](const Point& a, const Point& b, EdgeType t) {
+      EdgeType best_type = E::kFrontier;
+      double best = std::numeric_limits<double>::infinity();
+      bool any = false;
+      for (const auto& e : inputs) {
+        const double p = edge_match_penalty(a, b, e.a, e.b);
+        if (!any || better_match(p, e.type, best, best_type)) best = p, best_type = e.type, any = true;
+      }
+      if (best_type == E::kBorder) best_type = E::kFrontier;  // merge() turns strays into frontier
+      ++edges;
+      if (best_type != t) ++mismatches;
+    });
+    EXPECT_GT(edges, 100);
+    EXPECT_EQ(mismatches, 0) << "after scan " << k;
+  }
+  EXPECT_GT(inserted, kScans * 9 / 10);
+  EXPECT_LE(merge_failures, 2);
+  // Failed tile updates are survived (the tile keeps its last good state);
+  // they must stay rare.
+  EXPECT_LT(map.failed_tile_updates(), inserted / 50);
+  std::printf("failed tile updates %lld, merge failures %d, tiles %zu, planning vertices %zu\n",
+              static_cast<long long>(map.failed_tile_updates()), merge_failures, map.tile_count(),
+              map.planning_vertex_count());
+}
+
+}  // namespace
+}  // namespace pex::mapping

@@ -1,0 +1,217 @@
+#include "mapping/scan_polygon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace pex::mapping {
+
+namespace {
+
+struct Line {
+  double cx, cy;  // a point on the line (centroid)
+  double dx, dy;  // unit direction
+};
+
+// Orthogonal (total) least-squares line through points[first..last].
+Line fit_line(const std::vector<Point>& points, std::size_t first, std::size_t last) {
+  const double n = static_cast<double>(last - first + 1);
+  double cx = 0, cy = 0;
+  for (std::size_t i = first; i <= last; ++i) cx += points[i].x(), cy += points[i].y();
+  cx /= n, cy /= n;
+  double sxx = 0, syy = 0, sxy = 0;
+  for (std::size_t i = first; i <= last; ++i) {
+    const double x = points[i].x() - cx, y = points[i].y() - cy;
+    sxx += x * x, syy += y * y, sxy += x * y;
+  }
+  const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  Line line{cx, cy, std::cos(angle), std::sin(angle)};
+  // Degenerate spread (all points equal): take the chord direction.
+  if (sxx + syy <= 1e-24) {
+    const double ex = points[last].x() - points[first].x(), ey = points[last].y() - points[first].y();
+    const double len = std::hypot(ex, ey);
+    if (len > 0) line.dx = ex / len, line.dy = ey / len;
+  }
+  return line;
+}
+
+Point project(const Line& line, const Point& p) {
+  const double t = (p.x() - line.cx) * line.dx + (p.y() - line.cy) * line.dy;
+  return Point(line.cx + t * line.dx, line.cy + t * line.dy);
+}
+
+// Intersection of two lines; false if (nearly) parallel.
+bool intersect(const Line& a, const Line& b, Point& out) {
+  const double det = a.dx * b.dy - a.dy * b.dx;
+  if (std::abs(det) < 1e-9) return false;
+  const double t = ((b.cx - a.cx) * b.dy - (b.cy - a.cy) * b.dx) / det;
+  out = Point(a.cx + t * a.dx, a.cy + t * a.dy);
+  return true;
+}
+
+// The vertices of one cluster's polyline (sensor frame) at a given level.
+std::vector<Point> cluster_polyline(const std::vector<Point>& points, int level,
+                                    const ScanPolygonOptions& o) {
+  if (points.size() <= 2 || level >= 2) return points;
+  std::vector<bool> keep(points.size(), false);
+  keep.front() = keep.back() = true;
+  rdp_keep(points, 0, points.size() - 1, o.rdp_epsilon_m, keep);
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (keep[i]) kept.push_back(i);
+  std::vector<Point> out;
+  out.reserve(kept.size());
+  if (level == 1 || !o.least_squares_refit) {
+    for (auto i : kept) out.push_back(points[i]);
+    return out;
+  }
+  std::vector<Line> lines;
+  for (std::size_t j = 0; j + 1 < kept.size(); ++j) lines.push_back(fit_line(points, kept[j], kept[j + 1]));
+  auto bounded = [&](const Point& candidate, const Point& rdp_point) {
+    return bg::distance(candidate, rdp_point) <= o.refit_max_shift_m ? candidate : rdp_point;
+  };
+  out.push_back(bounded(project(lines.front(), points[kept.front()]), points[kept.front()]));
+  for (std::size_t j = 1; j + 1 < kept.size(); ++j) {
+    Point v;
+    if (!intersect(lines[j - 1], lines[j], v)) v = points[kept[j]];
+    out.push_back(bounded(v, points[kept[j]]));
+  }
+  out.push_back(bounded(project(lines.back(), points[kept.back()]), points[kept.back()]));
+  return out;
+}
+
+}  // namespace
+
+ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_min,
+                                  double angle_increment, const Pose2& pose,
+                                  const ScanPolygonOptions& o) {
+  ScanPolygonResult result;
+  auto fail = [&](std::string why) {
+    result.ok = false;
+    result.error = std::move(why);
+    return result;
+  };
+  if (ranges.size() < 2) return fail("fewer than 2 beams");
+  if (ranges.size() > static_cast<std::size_t>(o.max_beams)) return fail("too many beams");
+  if (!std::isfinite(angle_min) || !std::isfinite(angle_increment) || angle_increment == 0.0)
+    return fail("angle_min / angle_increment not finite or increment zero");
+  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta))
+    return fail("pose not finite");
+  if (!(o.free_range_m > 0.0) || !(o.range_max_m > o.range_min_m))
+    return fail("bad range options");
+
+  // Beams in counter-clockwise order; at most one turn (a 360-degree scanner
+  // repeats its first beam: the rest are dropped).
+  const double step = std::abs(angle_increment);
+  std::size_t n = ranges.size();
+  const double two_pi = 2.0 * std::numbers::pi;
+  if (static_cast<double>(n - 1) * step >= two_pi - 0.5 * step)
+    n = static_cast<std::size_t>(std::floor((two_pi - 0.5 * step) / step));
+  if (n < 2) return fail("angle_increment too large");
+  const bool reversed = angle_increment < 0.0;
+  const double first_angle = reversed ? angle_min + angle_increment * static_cast<double>(n - 1) : angle_min;
+  auto range_at = [&](std::size_t k) { return ranges[reversed ? n - 1 - k : k]; };
+  auto angle_at = [&](std::size_t k) { return first_angle + step * static_cast<double>(k); };
+
+  std::vector<bool> returned(n);
+  std::vector<Point> sensor_points(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double r = range_at(k);
+    returned[k] = std::isfinite(r) && r >= o.range_min_m && r < o.range_max_m;
+    if (returned[k]) {
+      sensor_points[k] = Point(r * std::cos(angle_at(k)), r * std::sin(angle_at(k)));
+      ++result.beams_returned;
+    } else {
+      ++result.beams_no_return;
+    }
+  }
+
+  // Pieces in angular order: clusters (obstacle polylines) and no-return runs.
+  struct Piece {
+    bool cluster;
+    std::size_t first, last;  // beam indices
+  };
+  std::vector<Piece> pieces;
+  const double sin_step = std::sin(step);
+  const double sin_gap = std::sin(std::max(o.break_lambda_rad - step, 1e-6));
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool continues =
+        !pieces.empty() && pieces.back().last + 1 == k && pieces.back().cluster == returned[k];
+    bool joins = continues;
+    if (continues && returned[k]) {
+      const double r_prev = range_at(k - 1);
+      const double break_m = r_prev * sin_step / sin_gap + 3.0 * o.break_sigma_m;
+      joins = bg::distance(sensor_points[k - 1], sensor_points[k]) <= break_m;
+    }
+    if (joins) {
+      pieces.back().last = k;
+    } else {
+      pieces.push_back({static_cast<bool>(returned[k]), k, k});
+    }
+  }
+  for (const auto& p : pieces) result.clusters += p.cluster ? 1 : 0;
+
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  auto to_map = [&](const Point& p) {
+    return Point(pose.x + c * p.x() - s * p.y(), pose.y + s * p.x() + c * p.y());
+  };
+
+  for (int level = 0; level <= 2; ++level) {
+    std::vector<Point> vertices{Point(0.0, 0.0)};
+    std::vector<EdgeType> types{EdgeType::kFrontier};  // type of the edge leaving each vertex
+    for (const auto& piece : pieces) {
+      std::vector<Point> chain;
+      EdgeType inner_type = EdgeType::kFrontier;
+      if (piece.cluster) {
+        std::vector<Point> points(sensor_points.begin() + piece.first,
+                                  sensor_points.begin() + piece.last + 1);
+        chain = cluster_polyline(points, level, o);
+        inner_type = EdgeType::kObstacle;
+      } else {
+        const double a0 = angle_at(piece.first), a1 = angle_at(piece.last);
+        const int steps = std::max(1, static_cast<int>(std::ceil((a1 - a0) / o.free_arc_step_rad)));
+        for (int j = 0; j <= steps; ++j) {
+          const double a = (piece.first == piece.last) ? a0 : a0 + (a1 - a0) * j / steps;
+          chain.emplace_back(o.free_range_m * std::cos(a), o.free_range_m * std::sin(a));
+          if (piece.first == piece.last) break;
+        }
+      }
+      for (std::size_t j = 0; j < chain.size(); ++j) {
+        vertices.push_back(chain[j]);
+        types.push_back(j + 1 < chain.size() ? inner_type : EdgeType::kFrontier);
+      }
+    }
+    // Drop consecutive duplicates (the edge leaving the dropped vertex goes).
+    std::vector<Point> ring_points;
+    std::vector<EdgeType> ring_types;
+    for (std::size_t j = 0; j < vertices.size(); ++j) {
+      const Point p = to_map(vertices[j]);
+      if (!ring_points.empty() && bg::distance(ring_points.back(), p) < 1e-9) {
+        ring_types.back() = types[j];  // the zero-length edge vanishes
+        continue;
+      }
+      ring_points.push_back(p);
+      ring_types.push_back(types[j]);
+    }
+    while (ring_points.size() > 1 && bg::distance(ring_points.back(), ring_points.front()) < 1e-9) {
+      ring_points.pop_back();
+      ring_types.pop_back();
+    }
+    if (ring_points.size() < 3) return fail("scan gives fewer than 3 distinct vertices");
+    TypedPolygon polygon;
+    polygon.geometry.outer().assign(ring_points.begin(), ring_points.end());
+    polygon.geometry.outer().push_back(ring_points.front());
+    polygon.edge_types.push_back(std::move(ring_types));
+    std::string why;
+    if (is_valid(polygon, &why) && bg::area(polygon.geometry) > 0.0) {
+      result.ok = true;
+      result.polygon = std::move(polygon);
+      result.fallback_level = level;
+      return result;
+    }
+    result.error = why;
+  }
+  return fail("no valid polygon at any level: " + result.error);
+}
+
+}  // namespace pex::mapping

@@ -1,0 +1,74 @@
+#pragma once
+// One laser scan -> the typed polygon of the free space it saw (paper,
+// section "Polygonal domain"): Successive Edge Following splits the returns
+// into clusters, Ramer-Douglas-Peucker reduces each cluster to a polyline, a
+// least-squares line fit refines every polyline segment from its points and
+// adjacent fitted lines are intersected for the vertices; the sensor origin is
+// added and the pieces are joined into one simple polygon.
+//
+// Edges along clusters are obstacle; every other edge (joins between
+// clusters, the two rays to the origin, arcs at the free range where beams had
+// no return) is frontier.
+#include <cstdint>
+#include <numbers>
+#include <span>
+#include <string>
+
+#include "mapping/typed_polygon.hpp"
+
+namespace pex::mapping {
+
+// A pose in the map frame: metres, metres, radians.
+struct Pose2 {
+  double x = 0.0;
+  double y = 0.0;
+  double theta = 0.0;
+};
+
+struct ScanPolygonOptions {
+  // Readings that are NaN, inf, below range_min_m or at/beyond range_max_m
+  // are "no return". The caller passes the tighter of its config and the
+  // sensor's own limits.
+  double range_min_m = 0.05;
+  double range_max_m = 30.0;
+  // A beam with no return marks free space up to this range (frontier arc).
+  double free_range_m = 4.0;
+  // Successive Edge Following with the adaptive breakpoint of Borges & Aldon
+  // (2004): beams i-1 and i belong to one cluster when their points are at
+  // most r[i-1] * sin(dphi) / sin(lambda - dphi) + 3 sigma apart, so the
+  // break distance grows with the range.
+  double break_lambda_rad = 10.0 * std::numbers::pi / 180.0;
+  double break_sigma_m = 0.01;
+  // RDP tolerance for cluster polylines.
+  double rdp_epsilon_m = 0.03;
+  // Least-squares refit of each RDP segment; a vertex from intersecting two
+  // fitted lines that moves farther than refit_max_shift_m from its RDP point
+  // (nearly parallel lines) keeps the RDP point instead.
+  bool least_squares_refit = true;
+  double refit_max_shift_m = 0.10;
+  // No-return arcs are sampled with at most this angle between vertices.
+  double free_arc_step_rad = 0.1;
+  // Scans with more beams are refused (bad input, not a 2D lidar).
+  int max_beams = 100000;
+};
+
+struct ScanPolygonResult {
+  bool ok = false;
+  std::string error;       // why there is no polygon, when !ok
+  TypedPolygon polygon;    // valid, simple, counter-clockwise, no holes, when ok
+  int beams_returned = 0;
+  int beams_no_return = 0;
+  int clusters = 0;
+  // Which construction gave the polygon: 0 full (RDP + refit), 1 RDP without
+  // refit, 2 every return as a vertex (always simple: a star around the origin).
+  int fallback_level = 0;
+};
+
+// The free-space polygon of one scan. Beam i points at angle_min +
+// i * angle_increment in the sensor frame; `sensor_pose` is the sensor's pose
+// in the map frame. Never throws; bad input gives ok == false and an error.
+ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_min,
+                                  double angle_increment, const Pose2& sensor_pose,
+                                  const ScanPolygonOptions& options);
+
+}  // namespace pex::mapping

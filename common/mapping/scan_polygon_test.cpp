@@ -1,0 +1,185 @@
+#include "mapping/scan_polygon.hpp"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mapping/test_support.hpp"
+
+namespace pex::mapping {
+namespace {
+
+using testing::add_box;
+using testing::cast_scan;
+using testing::ScanSpec;
+using testing::Wall;
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+double distance_to_walls(const Point& p, const std::vector<Wall>& walls) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& w : walls) best = std::min(best, bg::distance(p, Segment(w.a, w.b)));
+  return best;
+}
+
+ScanPolygonResult build(const std::vector<float>& ranges, const ScanSpec& spec, const Pose2& pose,
+                        ScanPolygonOptions options = {}) {
+  options.range_max_m = spec.range_max_m;
+  return scan_to_polygon(ranges, spec.angle_min, spec.angle_increment, pose, options);
+}
+
+TEST(ScanToPolygon, RoomSeenFromInsideHasObstacleEdgesOnTheWalls) {
+  std::vector<Wall> walls;
+  add_box(walls, 0, 0, 6, 4);
+  const ScanSpec spec;
+  const Pose2 pose{2.0, 1.5, 0.3};
+  const auto result = build(cast_scan(walls, pose, spec), spec, pose);
+  ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_EQ(result.fallback_level, 0);
+  EXPECT_TRUE(is_valid(result.polygon));
+  const TypedMultiPolygon map{result.polygon};
+  // Every obstacle edge lies on a wall (noise-free: up to the fit's rounding).
+  double obstacle_length = 0.0;
+  for_each_edge(map, [&](const Point& a, const Point& b, EdgeType t) {
+    if (t != EdgeType::kObstacle) return;
+    obstacle_length += bg::distance(a, b);
+    EXPECT_LT(distance_to_walls(a, walls), 0.01);
+    EXPECT_LT(distance_to_walls(b, walls), 0.01);
+  });
+  // The 270-degree scan sees most of the 20 m of walls; the area it saw is
+  // within the room and most of it.
+  EXPECT_GT(obstacle_length, 12.0);
+  EXPECT_LE(area(map), 24.0 + 1e-6);
+  EXPECT_GT(area(map), 15.0);
+  // The sensor origin is a vertex and both its edges are frontiers.
+  const auto& ring = result.polygon.geometry.outer();
+  EXPECT_NEAR(ring.front().x(), pose.x, 1e-12);
+  EXPECT_NEAR(ring.front().y(), pose.y, 1e-12);
+  EXPECT_EQ(result.polygon.edge_types[0].front(), EdgeType::kFrontier);
+  EXPECT_EQ(result.polygon.edge_types[0].back(), EdgeType::kFrontier);
+  // RDP + refit: a handful of vertices, not one per beam.
+  EXPECT_LT(vertex_count(result.polygon.geometry), 20u);
+}
+
+TEST(ScanToPolygon, NoReturnBeamsEndAtTheFreeRangeAsFrontier) {
+  const ScanSpec spec;
+  std::vector<float> ranges(static_cast<std::size_t>(spec.beams), kInf);
+  ranges[3] = kNaN;
+  ranges[4] = -1.0f;
+  ranges[5] = 0.0f;
+  ranges[6] = 1e9f;
+  ScanPolygonOptions options;
+  options.free_range_m = 3.0;
+  const auto result = build(ranges, spec, {}, options);
+  ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_EQ(result.beams_returned, 0);
+  const TypedMultiPolygon map{result.polygon};
+  EXPECT_DOUBLE_EQ(edge_length(map, EdgeType::kObstacle), 0.0);
+  const double span = spec.angle_increment * (spec.beams - 1);
+  const double sector = 0.5 * span * 9.0;
+  EXPECT_NEAR(area(map), sector, 0.02 * sector);
+}
+
+TEST(ScanToPolygon, RefusesBadInputWithAnError) {
+  const ScanSpec spec;
+  const std::vector<float> ranges(10, 2.0f);
+  auto expect_error = [](const ScanPolygonResult& r) {
+    EXPECT_FALSE(r.ok);
+    EXPECT_FALSE(r.error.empty());
+  };
+  ScanPolygonOptions o;
+  expect_error(scan_to_polygon(std::vector<float>{1.0f}, 0, 0.1, {}, o));
+  expect_error(scan_to_polygon(ranges, 0, 0.0, {}, o));
+  expect_error(scan_to_polygon(ranges, std::nan(""), 0.1, {}, o));
+  expect_error(scan_to_polygon(ranges, 0, 0.1, {std::nan(""), 0, 0}, o));
+  o.max_beams = 5;
+  expect_error(scan_to_polygon(ranges, 0, 0.1, {}, o));
+}
+
+TEST(ScanToPolygon, NegativeIncrementGivesTheSamePolygonArea) {
+  std::vector<Wall> walls;
+  add_box(walls, -3, -2, 4, 5);
+  ScanSpec spec;
+  const Pose2 pose{0.5, 0.5, 1.0};
+  auto ranges = cast_scan(walls, pose, spec);
+  const auto forward = build(ranges, spec, pose);
+  std::reverse(ranges.begin(), ranges.end());
+  ScanSpec reversed = spec;
+  reversed.angle_min = spec.angle_min + spec.angle_increment * (spec.beams - 1);
+  reversed.angle_increment = -spec.angle_increment;
+  const auto backward = build(ranges, reversed, pose);
+  ASSERT_TRUE(forward.ok && backward.ok);
+  EXPECT_NEAR(bg::area(forward.polygon.geometry), bg::area(backward.polygon.geometry), 1e-9);
+}
+
+TEST(ScanToPolygon, FullTurnScannerStaysSimple) {
+  std::vector<Wall> walls;
+  add_box(walls, -3, -2, 4, 5);
+  ScanSpec spec;
+  spec.angle_min = -std::numbers::pi;
+  spec.beams = 721;  // the last beam repeats the first
+  const Pose2 pose{0.5, 0.5, 0.0};
+  const auto result = build(cast_scan(walls, pose, spec), spec, pose);
+  ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_TRUE(is_valid(result.polygon));
+  EXPECT_GT(bg::area(result.polygon.geometry), 0.9 * 35.0);
+}
+
+TEST(ScanToPolygon, DeterministicBitForBit) {
+  std::mt19937_64 rng(7);
+  const auto walls = testing::random_room(12, 9, 8, rng);
+  const ScanSpec spec;
+  const Pose2 pose{4.0, 4.0, 0.7};
+  std::mt19937_64 noise_a(3), noise_b(3);
+  const auto a = build(cast_scan(walls, pose, spec, 0.02, &noise_a), spec, pose);
+  const auto b = build(cast_scan(walls, pose, spec, 0.02, &noise_b), spec, pose);
+  ASSERT_TRUE(a.ok && b.ok);
+  ASSERT_EQ(a.polygon.geometry.outer().size(), b.polygon.geometry.outer().size());
+  for (std::size_t i = 0; i < a.polygon.geometry.outer().size(); ++i) {
+    EXPECT_EQ(a.polygon.geometry.outer()[i].x(), b.polygon.geometry.outer()[i].x());
+    EXPECT_EQ(a.polygon.geometry.outer()[i].y(), b.polygon.geometry.outer()[i].y());
+  }
+  EXPECT_EQ(a.polygon.edge_types, b.polygon.edge_types);
+}
+
+// Garbage in (random ranges, NaN, inf, negative, huge, noise on walls):
+// always a valid simple polygon or an explicit error, never an invalid ring.
+TEST(ScanToPolygon, RandomScansGiveValidPolygonsOrErrors) {
+  std::mt19937_64 rng(12345);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto walls = testing::random_room(15, 10, 12, rng);
+  int ok = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    ScanSpec spec;
+    spec.beams = 2 + static_cast<int>(u(rng) * 700);
+    spec.angle_increment = (u(rng) < 0.1 ? -1 : 1) * (0.001 + u(rng) * 0.02);
+    spec.angle_min = -u(rng) * 4.0;
+    const Pose2 pose{1 + 13 * u(rng), 1 + 8 * u(rng), 6.28 * u(rng)};
+    std::vector<float> ranges;
+    if (trial % 2 == 0) {
+      ranges = cast_scan(walls, pose, spec, 0.03 * u(rng), &rng);
+    } else {
+      ranges.resize(static_cast<std::size_t>(spec.beams));
+      for (auto& r : ranges) {
+        const double k = u(rng);
+        r = k < 0.05 ? kNaN : k < 0.1 ? kInf : k < 0.15 ? -1.0f : static_cast<float>(u(rng) * 12);
+      }
+    }
+    const auto result = build(ranges, spec, pose);
+    if (!result.ok) {
+      EXPECT_FALSE(result.error.empty());
+      continue;
+    }
+    ++ok;
+    std::string why;
+    ASSERT_TRUE(is_valid(result.polygon, &why)) << "trial " << trial << ": " << why;
+    EXPECT_GT(bg::area(result.polygon.geometry), 0.0);
+  }
+  EXPECT_GT(ok, 2900);
+}
+
+}  // namespace
+}  // namespace pex::mapping

@@ -1,0 +1,202 @@
+// Boost.Geometry 1.74 buffer/rescale code trips -Wmaybe-uninitialized when
+// inlined into our code; the warning is in Boost, not here.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "mapping/typed_ops.hpp"
+
+#include <cmath>
+#include <exception>
+
+namespace pex::mapping {
+
+namespace {
+
+constexpr double kSnap = 1e-9;
+constexpr double kClipSearchRadius = 1e-6;
+
+bool on_same_box_side(const Point& a, const Point& b, const Box& box) {
+  const auto& lo = box.min_corner();
+  const auto& hi = box.max_corner();
+  return (a.x() == lo.x() && b.x() == lo.x()) || (a.x() == hi.x() && b.x() == hi.x()) ||
+         (a.y() == lo.y() && b.y() == lo.y()) || (a.y() == hi.y() && b.y() == hi.y());
+}
+
+TypedOpResult finish(MultiPolygon geometry, const EdgeTypeIndex& index, double search_radius_m,
+                     const TypedOpOptions& options) {
+  TypedOpResult result;
+  if (options.border_box) snap_to_box(geometry, *options.border_box);
+  std::string why;
+  if (options.validate && !bg::is_valid(geometry, why)) {
+    result.error = "invalid result: " + why;
+    return result;
+  }
+  result.polygons = assign_types(geometry, index, search_radius_m, options, &result.reassign);
+  result.ok = true;
+  return result;
+}
+
+}  // namespace
+
+void snap_to_box(MultiPolygon& geometry, const Box& box) {
+  const double xs[2] = {box.min_corner().x(), box.max_corner().x()};
+  const double ys[2] = {box.min_corner().y(), box.max_corner().y()};
+  auto snap_ring = [&](Ring& ring) {
+    for (auto& p : ring) {
+      for (double x : xs)
+        if (std::abs(p.x() - x) <= kSnap) p.x(x);
+      for (double y : ys)
+        if (std::abs(p.y() - y) <= kSnap) p.y(y);
+    }
+  };
+  for (auto& polygon : geometry) {
+    snap_ring(polygon.outer());
+    for (auto& inner : polygon.inners()) snap_ring(inner);
+  }
+}
+
+TypedMultiPolygon assign_types(const MultiPolygon& geometry, const EdgeTypeIndex& index,
+                               double search_radius_m, const TypedOpOptions& options,
+                               ReassignStats* stats) {
+  TypedMultiPolygon out;
+  out.reserve(geometry.size());
+  auto type_ring = [&](const Ring& ring) {
+    std::vector<EdgeType> types;
+    types.reserve(ring.empty() ? 0 : ring.size() - 1);
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+      if (options.border_box && on_same_box_side(ring[i], ring[i + 1], *options.border_box)) {
+        types.push_back(EdgeType::kBorder);
+        continue;
+      }
+      if (options.uniform_type || !options.assign_edge_types) {
+        types.push_back(options.uniform_type.value_or(EdgeType::kFrontier));
+        continue;
+      }
+      const auto m = index.match(ring[i], ring[i + 1], search_radius_m);
+      types.push_back(m.type);
+      if (stats) {
+        ++stats->edges;
+        stats->candidates += m.candidates;
+      }
+    }
+    return types;
+  };
+  for (const auto& polygon : geometry) {
+    TypedPolygon typed{polygon, {}};
+    typed.edge_types.reserve(1 + polygon.inners().size());
+    typed.edge_types.push_back(type_ring(polygon.outer()));
+    for (const auto& inner : polygon.inners()) typed.edge_types.push_back(type_ring(inner));
+    out.push_back(std::move(typed));
+  }
+  return out;
+}
+
+TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
+                          const TypedOpOptions& options) {
+  // Only the polygons of `a` whose boxes meet b's box take part; the others
+  // are disjoint from b and pass through unchanged (with their types).
+  Box b_box;
+  bg::assign_inverse(b_box);
+  for (const auto& p : b) bg::expand(b_box, bg::return_envelope<Box>(p.geometry));
+  TypedMultiPolygon involved, untouched;
+  for (const auto& p : a) {
+    if (bg::disjoint(bg::return_envelope<Box>(p.geometry), b_box)) {
+      untouched.push_back(p);
+    } else {
+      involved.push_back(p);
+    }
+  }
+  MultiPolygon geometry;
+  try {
+    bg::union_(geometry_of(involved), geometry_of(b), geometry);
+  } catch (const std::exception& e) {
+    return TypedOpResult{false, std::string("union failed: ") + e.what(), {}, {}};
+  }
+  EdgeTypeIndex index;
+  if (options.assign_edge_types && !options.uniform_type) {
+    index.add(involved);
+    index.add(b);
+    index.build();
+  }
+  auto result = finish(std::move(geometry), index, kClipSearchRadius, options);
+  if (result.ok)
+    for (auto& p : untouched) result.polygons.push_back(std::move(p));
+  return result;
+}
+
+TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
+                               std::optional<EdgeType> a_type, std::optional<EdgeType> b_type,
+                               const TypedOpOptions& options) {
+  MultiPolygon geometry;
+  try {
+    bg::difference(geometry_of(a), geometry_of(b), geometry);
+  } catch (const std::exception& e) {
+    return TypedOpResult{false, std::string("difference failed: ") + e.what(), {}, {}};
+  }
+  EdgeTypeIndex index;
+  if (options.assign_edge_types) {
+    if (a_type) index.add_as(a, *a_type); else index.add(a);
+    if (b_type) index.add_as(b, *b_type); else index.add(b);
+    index.build();
+  }
+  return finish(std::move(geometry), index, kClipSearchRadius, options);
+}
+
+TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
+                         const TypedOpOptions& options) {
+  TypedOpOptions clip_options = options;
+  clip_options.border_box = box;
+  TypedOpResult result;
+  result.ok = true;
+  // Polygon by polygon: one far from the box is skipped, one well inside is
+  // copied with its types, only the ones crossing a side are clipped (a
+  // multi-polygon's parts are disjoint, so their pieces are too).
+  const double margin = 1e-6;
+  const Box inner(Point(box.min_corner().x() + margin, box.min_corner().y() + margin),
+                  Point(box.max_corner().x() - margin, box.max_corner().y() - margin));
+  for (const auto& polygon : polygons) {
+    Box envelope;
+    bg::envelope(polygon.geometry, envelope);
+    if (bg::disjoint(envelope, box)) continue;
+    if (bg::within(envelope, inner)) {
+      result.polygons.push_back(polygon);
+      continue;
+    }
+    MultiPolygon geometry;
+    try {
+      bg::intersection(polygon.geometry, box, geometry);
+    } catch (const std::exception& e) {
+      return TypedOpResult{false, std::string("clip failed: ") + e.what(), {}, {}};
+    }
+    EdgeTypeIndex index;
+    if (options.assign_edge_types && !options.uniform_type) {
+      index.add(polygon);
+      index.build();
+    }
+    auto piece = finish(std::move(geometry), index, kClipSearchRadius, clip_options);
+    if (!piece.ok) return piece;
+    result.reassign.edges += piece.reassign.edges;
+    result.reassign.candidates += piece.reassign.candidates;
+    for (auto& p : piece.polygons) result.polygons.push_back(std::move(p));
+  }
+  return result;
+}
+
+TypedOpResult typed_offset(const TypedMultiPolygon& polygons, double distance_m,
+                           int points_per_circle, const TypedOpOptions& options) {
+  namespace bs = bg::strategy::buffer;
+  MultiPolygon geometry;
+  try {
+    bg::buffer(geometry_of(polygons), geometry, bs::distance_symmetric<double>(distance_m),
+               bs::side_straight(), bs::join_round(points_per_circle), bs::end_round(points_per_circle),
+               bs::point_circle(points_per_circle));
+  } catch (const std::exception& e) {
+    return TypedOpResult{false, std::string("offset failed: ") + e.what(), {}, {}};
+  }
+  EdgeTypeIndex index;
+  if (options.assign_edge_types) {
+    index.add(polygons);
+    index.build();
+  }
+  return finish(std::move(geometry), index, std::abs(distance_m) + kClipSearchRadius, options);
+}
+
+}  // namespace pex::mapping

@@ -1,0 +1,68 @@
+#pragma once
+// Boolean operations and offsetting on typed polygons: Boost.Geometry computes
+// the geometry, then the reassignment pass (edge_reassignment.hpp) types every
+// output edge from the input edges.
+#include <optional>
+#include <string>
+
+#include "mapping/edge_reassignment.hpp"
+#include "mapping/typed_polygon.hpp"
+
+namespace pex::mapping {
+
+struct TypedOpOptions {
+  // false: plain geometry, every edge typed frontier (the benchmark baseline).
+  bool assign_edge_types = true;
+  // Output edges lying on this box's boundary are typed kBorder without a
+  // search (PolygonMap's tiles); nullopt: no such box.
+  std::optional<Box> border_box;
+  // Set: every non-border edge gets this type without a search (inputs whose
+  // origin alone decides the type, such as the obstacle band).
+  std::optional<EdgeType> uniform_type;
+  // Check the output with bg::is_valid (ok == false if invalid). PolygonMap
+  // turns it off for intermediate results and checks each tile once at the
+  // end of an insert instead (validity checks cost as much as the overlay).
+  bool validate = true;
+};
+
+struct TypedOpResult {
+  bool ok = false;
+  std::string error;          // why not ok: Boost threw, or the output is invalid
+  TypedMultiPolygon polygons;
+  ReassignStats reassign;
+};
+
+// Union of a and b; each output edge keeps the type of its source edge.
+TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
+                          const TypedOpOptions& options = {});
+
+// a minus b. Edges from a take `a_type` (their own type if nullopt), edges
+// from b take `b_type` (their own if nullopt). The paper's planning map is
+// typed_difference(free, obstacles, kFrontier, kObstacle).
+TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
+                               std::optional<EdgeType> a_type, std::optional<EdgeType> b_type,
+                               const TypedOpOptions& options = {});
+
+// Intersection of a typed polygon with a box: edges on the box's boundary are
+// kBorder, the others keep the polygon's types.
+TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
+                         const TypedOpOptions& options = {});
+
+// Minkowski offset by distance_m (> 0 grows, < 0 shrinks), round joins with
+// `points_per_circle`. For a disk robot of radius r the configuration free
+// space is typed_offset(free_space, -r): each output edge takes the type of
+// the input edge it was offset from.
+TypedOpResult typed_offset(const TypedMultiPolygon& polygons, double distance_m,
+                           int points_per_circle = 16, const TypedOpOptions& options = {});
+
+// Types `geometry` from `index` (or all frontier when !assign_edge_types),
+// with border edges of options.border_box typed kBorder.
+TypedMultiPolygon assign_types(const MultiPolygon& geometry, const EdgeTypeIndex& index,
+                               double search_radius_m, const TypedOpOptions& options,
+                               ReassignStats* stats);
+
+// Sets coordinates within 1e-9 m of the box's sides exactly onto them, so
+// neighbouring tiles share bit-identical border vertices.
+void snap_to_box(MultiPolygon& geometry, const Box& box);
+
+}  // namespace pex::mapping

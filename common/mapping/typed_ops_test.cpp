@@ -1,0 +1,142 @@
+#include "mapping/typed_ops.hpp"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mapping/polygon_map.hpp"
+#include "mapping/scan_polygon.hpp"
+#include "mapping/test_support.hpp"
+
+namespace pex::mapping {
+namespace {
+
+using E = EdgeType;
+
+TypedPolygon rect(double x0, double y0, double x1, double y1, std::vector<EdgeType> types) {
+  TypedPolygon p;
+  p.geometry.outer() = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}};
+  p.edge_types.push_back(std::move(types));
+  return p;
+}
+
+// Independent check: the type of the input edge that geometrically contains
+// the output edge (both end points within 1e-7 of it), if exactly one type does.
+std::optional<EdgeType> containing_type(const TypedMultiPolygon& inputs, const Point& a, const Point& b) {
+  std::optional<EdgeType> found;
+  bool ambiguous = false;
+  for_each_edge(inputs, [&](const Point& p, const Point& q, EdgeType t) {
+    const Segment s(p, q);
+    if (bg::distance(a, s) < 1e-7 && bg::distance(b, s) < 1e-7) {
+      if (found && *found != t) ambiguous = true;
+      found = t;
+    }
+  });
+  if (ambiguous) return std::nullopt;
+  return found;
+}
+
+TEST(TypedUnion, OutputEdgesKeepTheTypeOfTheEdgeTheyLieOn) {
+  const auto a = rect(0, 0, 4, 4, {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier});
+  const auto b = rect(2, 1, 6, 3, {E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle});
+  const auto result = typed_union({a}, {b});
+  ASSERT_TRUE(result.ok) << result.error;
+  ASSERT_TRUE(is_valid(result.polygons));
+  EXPECT_NEAR(area(result.polygons), 16.0 + 4.0, 1e-9);
+  int checked = 0;
+  for_each_edge(result.polygons, [&](const Point& p, const Point& q, EdgeType t) {
+    const auto expected = containing_type({a, b}, p, q);
+    ASSERT_TRUE(expected.has_value());
+    EXPECT_EQ(t, *expected);
+    ++checked;
+  });
+  EXPECT_EQ(checked, 8);
+  // a's bottom and top, b's right side; a's right side pieces and b's top and bottom are frontier.
+  EXPECT_NEAR(edge_length(result.polygons, E::kObstacle), 4 + 2 + 4, 1e-9);
+}
+
+TEST(TypedDifference, EdgesFromTheSubtrahendAreObstacles) {
+  const auto free_space = rect(0, 0, 10, 10, {E::kObstacle, E::kObstacle, E::kFrontier, E::kFrontier});
+  const auto obstacle = rect(4, 4, 6, 6, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
+  const auto result = typed_difference({free_space}, {obstacle}, E::kFrontier, E::kObstacle);
+  ASSERT_TRUE(result.ok) << result.error;
+  ASSERT_EQ(result.polygons.size(), 1u);
+  ASSERT_EQ(result.polygons[0].geometry.inners().size(), 1u);
+  EXPECT_NEAR(edge_length(result.polygons, E::kObstacle), 8.0, 1e-9);
+  EXPECT_NEAR(edge_length(result.polygons, E::kFrontier), 40.0, 1e-9);
+}
+
+TEST(TypedClip, BoxSidesAreBorderEdges) {
+  const auto a = rect(0, 0, 4, 4, {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  const auto result = typed_clip({a}, Box(Point(2, -1), Point(5, 5)));
+  ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_NEAR(area(result.polygons), 8.0, 1e-12);
+  EXPECT_NEAR(edge_length(result.polygons, E::kBorder), 4.0, 1e-12);
+  EXPECT_NEAR(edge_length(result.polygons, E::kObstacle), 8.0, 1e-12);
+}
+
+TEST(TypedOffset, ShrinkingForARobotDiskKeepsTypes) {
+  const auto room = rect(0, 0, 10, 6, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle});
+  const auto result = typed_offset({room}, -0.5);
+  ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_NEAR(area(result.polygons), 9.0 * 5.0, 1e-4);  // Boost's buffer is ~1e-5 exact
+  // The right side (x = 10) was a frontier: its offset (x = 9.5, 5 m) too.
+  EXPECT_NEAR(edge_length(result.polygons, E::kFrontier), 5.0, 1e-4);
+  EXPECT_NEAR(edge_length(result.polygons, E::kObstacle), 9.0 + 9.0 + 5.0, 1e-4);
+}
+
+TEST(TypedOffset, GrowingAddsRoundCorners) {
+  const auto square = rect(0, 0, 2, 2, {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  const auto result = typed_offset({square}, 0.5, 32);
+  ASSERT_TRUE(result.ok) << result.error;
+  const double expected = 4.0 + 4 * 2 * 0.5 + std::numbers::pi * 0.25;
+  EXPECT_NEAR(area(result.polygons), expected, 0.01);
+  EXPECT_DOUBLE_EQ(edge_length(result.polygons, E::kFrontier), 0.0);
+}
+
+// Unions of random scan polygons: every output edge's type agrees with the
+// brute-force oracle (all input edges scored), area never shrinks.
+TEST(TypedUnion, RandomScanUnionsAgreeWithBruteForceOracle) {
+  std::mt19937_64 rng(2024);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto walls = testing::random_room(20, 14, 15, rng);
+  const testing::ScanSpec spec;
+  ScanPolygonOptions options;
+  options.range_max_m = spec.range_max_m;
+  TypedMultiPolygon map;
+  int unions = 0;
+  std::int64_t mismatches = 0, edges = 0;
+  for (int k = 0; k < 150; ++k) {
+    const Pose2 pose{2 + 16 * u(rng), 2 + 10 * u(rng), 6.28 * u(rng)};
+    const auto scan = scan_to_polygon(testing::cast_scan(walls, pose, spec, 0.01, &rng), spec.angle_min,
+                                      spec.angle_increment, pose, options);
+    ASSERT_TRUE(scan.ok) << scan.error;
+    const double before = area(map);
+    auto result = typed_union(map, {scan.polygon});
+    if (!result.ok) continue;  // counted by the map; here we check the successful ones
+    ++unions;
+    ASSERT_TRUE(is_valid(result.polygons));
+    EXPECT_GE(area(result.polygons), before - 1e-9);
+    std::vector<EdgeTypeIndex::Edge> inputs;
+    for_each_edge(map, [&](const Point& a, const Point& b, EdgeType t) { inputs.push_back({a, b, t}); });
+    for_each_edge(scan.polygon, [&](const Point& a, const Point& b, EdgeType t) { inputs.push_back({a, b, t}); });
+    for_each_edge(result.polygons, [&](const Point& a, const Point& b, EdgeType t) {
+      EdgeType best_type = E::kFrontier;
+      double best = std::numeric_limits<double>::infinity();
+      bool any = false;
+      for (const auto& e : inputs) {
+        const double p = edge_match_penalty(a, b, e.a, e.b);
+        if (!any || better_match(p, e.type, best, best_type)) best = p, best_type = e.type, any = true;
+      }
+      ++edges;
+      if (best_type != t) ++mismatches;
+    });
+    map = simplify_typed(result.polygons, 0.0);
+  }
+  EXPECT_GT(unions, 140);
+  EXPECT_GT(edges, 1000);
+  EXPECT_EQ(mismatches, 0);
+}
+
+}  // namespace
+}  // namespace pex::mapping

@@ -1,0 +1,100 @@
+#pragma once
+// Typed polygons: polygons with holes (Boost.Geometry) whose every edge carries
+// a type, obstacle or frontier (paper, section "Polygonal domain").
+//
+// Coordinates are double metres in the map frame (docs/mapping.md says why).
+// Rings are closed (the last point repeats the first) and oriented as the MAP
+// message wants them: outer rings counter-clockwise, holes clockwise, so the
+// free space is always on the left of an edge.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <boost/geometry.hpp>
+#include <boost/geometry/geometries/box.hpp>
+#include <boost/geometry/geometries/point_xy.hpp>
+#include <boost/geometry/geometries/polygon.hpp>
+#include <boost/geometry/geometries/multi_polygon.hpp>
+#include <boost/geometry/geometries/segment.hpp>
+
+namespace pex::mapping {
+
+namespace bg = boost::geometry;
+
+using Point = bg::model::d2::point_xy<double>;
+using Polygon = bg::model::polygon<Point, /*ClockWise=*/false, /*Closed=*/true>;
+using Ring = Polygon::ring_type;
+using MultiPolygon = bg::model::multi_polygon<Polygon>;
+using Segment = bg::model::segment<Point>;
+using Box = bg::model::box<Point>;
+
+// The type of one edge. kBorder marks an artificial edge on the box of a map
+// tile (PolygonMap clips the map into tiles); it never leaves PolygonMap.
+enum class EdgeType : std::uint8_t { kObstacle = 0, kFrontier = 1, kBorder = 2 };
+
+const char* to_string(EdgeType type);
+
+// A polygon with holes and one type per edge.
+// Contract: edge_types.size() == 1 + geometry.inners().size(); edge_types[0]
+// belongs to the outer ring, edge_types[1 + k] to hole k; entry i of a ring is
+// the type of the edge from point i to point i + 1, so a closed ring of n + 1
+// points (n distinct vertices) has n types.
+struct TypedPolygon {
+  Polygon geometry;
+  std::vector<std::vector<EdgeType>> edge_types;
+};
+using TypedMultiPolygon = std::vector<TypedPolygon>;
+
+// True if the type arrays match the rings (see TypedPolygon's contract).
+bool types_match_rings(const TypedPolygon& polygon);
+bool types_match_rings(const TypedMultiPolygon& polygons);
+
+// Boost.Geometry validity of the geometry plus types_match_rings. `why`, if
+// given, receives Boost's reason on failure.
+bool is_valid(const TypedPolygon& polygon, std::string* why = nullptr);
+bool is_valid(const TypedMultiPolygon& polygons, std::string* why = nullptr);
+
+// Number of distinct vertices (a closed ring of n + 1 points counts n).
+std::size_t vertex_count(const Polygon& polygon);
+std::size_t vertex_count(const MultiPolygon& polygons);
+std::size_t vertex_count(const TypedMultiPolygon& polygons);
+
+double area(const TypedMultiPolygon& polygons);
+// Total length of the edges of one type.
+double edge_length(const TypedMultiPolygon& polygons, EdgeType type);
+
+MultiPolygon geometry_of(const TypedMultiPolygon& polygons);
+// Every edge gets `type` (used for inputs whose origin alone decides the type).
+TypedMultiPolygon with_uniform_type(const MultiPolygon& polygons, EdgeType type);
+
+// Heap bytes held by the geometry and types (for memory figures).
+std::size_t memory_bytes(const TypedMultiPolygon& polygons);
+
+// Visits every edge: fn(a, b, type).
+template <class Fn>
+void for_each_edge(const TypedPolygon& polygon, Fn&& fn) {
+  auto visit_ring = [&](const Ring& ring, const std::vector<EdgeType>& types) {
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) fn(ring[i], ring[i + 1], types[i]);
+  };
+  visit_ring(polygon.geometry.outer(), polygon.edge_types[0]);
+  for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
+    visit_ring(polygon.geometry.inners()[k], polygon.edge_types[1 + k]);
+}
+template <class Fn>
+void for_each_edge(const TypedMultiPolygon& polygons, Fn&& fn) {
+  for (const auto& p : polygons) for_each_edge(p, fn);
+}
+
+// Ramer-Douglas-Peucker on every ring, never across a change of edge type: a
+// ring is cut into runs of equal type and each run is simplified with its
+// end points fixed, so an obstacle edge is never merged with a frontier edge.
+// A simplification that would make a polygon invalid is not applied to that
+// polygon (it is kept as it was). epsilon_m <= 0 returns the input unchanged.
+TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsilon_m);
+
+// Indices of the points RDP keeps from points[first..last] (both kept).
+void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t last,
+              double epsilon_m, std::vector<bool>& keep);
+
+}  // namespace pex::mapping

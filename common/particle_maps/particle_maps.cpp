@@ -1,0 +1,109 @@
+#include "particle_maps/particle_maps.hpp"
+
+#include <cmath>
+#include <map>
+#include <set>
+#include <tuple>
+
+namespace pex::particle_maps {
+
+using mapping::Pose2;
+
+Pose2 compose(const Pose2& a, const Pose2& b) {
+  const double c = std::cos(a.theta), s = std::sin(a.theta);
+  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, std::remainder(a.theta + b.theta, 2.0 * M_PI)};
+}
+
+mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const Pose2& pose) {
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  auto move = [&](mapping::Ring& ring) {
+    for (auto& p : ring) {
+      const double x = p.x(), y = p.y();
+      p = mapping::Point(pose.x + c * x - s * y, pose.y + s * x + c * y);
+    }
+  };
+  mapping::TypedPolygon out = polygon;
+  move(out.geometry.outer());
+  for (auto& inner : out.geometry.inners()) move(inner);
+  return out;
+}
+
+ParticleMaps::ParticleMaps(ParticleMapsOptions options) : options_(std::move(options)) {}
+
+UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, const SensorScan& scan) {
+  UpdateResult r;
+  if (particles.empty() || static_cast<int>(particles.size()) > options_.max_particles) {
+    r.error = "particle count " + std::to_string(particles.size()) + " not in [1, " +
+              std::to_string(options_.max_particles) + "]";
+    return r;
+  }
+  const bool first = maps_.empty();
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const auto& p = particles[i];
+    if (!std::isfinite(p.pose.x) || !std::isfinite(p.pose.y) || !std::isfinite(p.pose.theta)) {
+      r.error = "particle " + std::to_string(i) + " has a non-finite pose";
+      return r;
+    }
+    if (!first && (p.parent < 0 || p.parent >= static_cast<int>(maps_.size()))) {
+      r.error = "particle " + std::to_string(i) + " names parent " + std::to_string(p.parent) +
+                " of a generation of " + std::to_string(maps_.size());
+      return r;
+    }
+  }
+
+  // The scan's polygon once, in the sensor frame; each particle gets a moved copy.
+  const mapping::ScanPolygonResult local =
+      mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, Pose2{}, options_.scan);
+
+  std::vector<mapping::PolygonMap> next;
+  next.reserve(particles.size());
+  // Children of one parent at bit-identical poses get identical maps: insert once.
+  std::map<std::tuple<int, double, double, double>, std::size_t> done;
+  for (const auto& p : particles) {
+    const int parent = first ? -1 : p.parent;
+    const auto key = std::make_tuple(parent, p.pose.x, p.pose.y, p.pose.theta);
+    if (auto it = done.find(key); it != done.end()) {
+      next.push_back(next[it->second]);
+      continue;
+    }
+    next.push_back(first ? mapping::PolygonMap(options_.map) : maps_[static_cast<std::size_t>(parent)]);
+    if (local.ok) {
+      const auto result =
+          next.back().insert(transformed(local.polygon, compose(p.pose, scan.sensor_in_base)));
+      ++r.inserts;
+      if (!result.ok) ++r.insert_failures;
+    }
+    done.emplace(key, next.size() - 1);
+  }
+  maps_ = std::move(next);
+  ++updates_;
+  r.ok = true;
+  r.scan_inserted = local.ok;
+  if (!local.ok) r.error = "scan gave no polygon: " + local.error;
+  return r;
+}
+
+std::size_t ParticleMaps::unique_tiles() const {
+  std::set<const mapping::Tile*> seen;
+  for (const auto& m : maps_)
+    for (const auto& [key, tile] : m.tiles()) seen.insert(tile.get());
+  return seen.size();
+}
+
+std::size_t ParticleMaps::memory_bytes() const {
+  std::set<const mapping::Tile*> seen;
+  std::size_t bytes = 0;
+  for (const auto& m : maps_) {
+    // The table of tile pointers is each map's own.
+    bytes += sizeof(mapping::PolygonMap) +
+             m.tiles().size() * (sizeof(mapping::PolygonMap::TileKey) + 2 * sizeof(void*) + 32);
+    for (const auto& [key, tile] : m.tiles()) {
+      if (!seen.insert(tile.get()).second) continue;
+      bytes += sizeof(mapping::Tile) + mapping::memory_bytes(tile->free) +
+               mapping::memory_bytes(tile->obstacles) + mapping::memory_bytes(tile->planning);
+    }
+  }
+  return bytes;
+}
+
+}  // namespace pex::particle_maps

@@ -1,0 +1,81 @@
+#pragma once
+// One polygonal map per SLAM particle (paper, section 4.1): every filter update
+// the new generation's maps are their parents' maps — copied by sharing their
+// immutable tiles — and the update's scan is inserted into each under that
+// particle's pose. The best particle's map is then consistent with the best
+// particle's whole trajectory at once, so a switch of the best particle (a loop
+// closure) needs no refinement pass.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mapping/polygon_map.hpp"
+#include "mapping/scan_polygon.hpp"
+
+namespace pex::particle_maps {
+
+struct ParticleMapsOptions {
+  mapping::PolygonMapOptions map;
+  mapping::ScanPolygonOptions scan;
+  int max_particles = 1000;  // an update with more is refused as bad input
+};
+
+// One particle of a filter update: its pose (map frame) when the scan was
+// taken, and its parent's index in the previous update (-1 on the first).
+struct ParticleState {
+  mapping::Pose2 pose;
+  int parent = -1;
+};
+
+// A scan in the sensor frame, and where the sensor sits on the robot.
+struct SensorScan {
+  std::span<const float> ranges;
+  double angle_min = 0.0;        // rad
+  double angle_increment = 0.0;  // rad
+  mapping::Pose2 sensor_in_base; // m, m, rad
+};
+
+struct UpdateResult {
+  bool ok = false;             // false: nothing changed (bad input), see error
+  std::string error;
+  bool scan_inserted = false;  // false: the scan gave no polygon (maps copied only)
+  int inserts = 0;             // distinct inserts done (equal children share one)
+  int insert_failures = 0;     // inserts where some tile kept its old state
+};
+
+// The scan polygon moved by a rigid transform (rotation about the origin by
+// pose.theta, then translation). Validity is preserved up to rounding; the map
+// validates every tile it writes anyway.
+mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const mapping::Pose2& pose);
+
+// a ∘ b: pose b given in the frame of pose a.
+mapping::Pose2 compose(const mapping::Pose2& a, const mapping::Pose2& b);
+
+class ParticleMaps {
+ public:
+  explicit ParticleMaps(ParticleMapsOptions options = {});
+
+  // Applies one filter update. Parents must index the previous update's
+  // particles (all -1, or valid indices, on the first update any parent is
+  // ignored). On bad input (parent out of range, non-finite pose, too many
+  // particles) nothing changes and ok is false.
+  UpdateResult update(const std::vector<ParticleState>& particles, const SensorScan& scan);
+
+  std::size_t size() const { return maps_.size(); }
+  const mapping::PolygonMap& map(std::size_t particle) const { return maps_.at(particle); }
+  std::int64_t updates() const { return updates_; }
+
+  // Heap bytes of all maps, each shared tile counted once.
+  std::size_t memory_bytes() const;
+  // Tiles over all maps, each shared tile counted once.
+  std::size_t unique_tiles() const;
+
+ private:
+  ParticleMapsOptions options_;
+  std::vector<mapping::PolygonMap> maps_;
+  std::int64_t updates_ = 0;
+};
+
+}  // namespace pex::particle_maps

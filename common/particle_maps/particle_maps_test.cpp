@@ -1,0 +1,175 @@
+#include "particle_maps/particle_maps.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using pex::mapping::Pose2;
+using pex::particle_maps::ParticleMaps;
+using pex::particle_maps::ParticleState;
+using pex::particle_maps::SensorScan;
+
+namespace {
+
+// Ranges seen from `pose` inside the axis-aligned room [0, w] x [0, h]:
+// 181 beams over 180 degrees, the distance to where each ray leaves the room.
+std::vector<float> room_scan(const Pose2& pose, double w, double h) {
+  std::vector<float> r;
+  for (int i = 0; i <= 180; ++i) {
+    const double a = pose.theta - M_PI / 2 + i * M_PI / 180;
+    const double dx = std::cos(a), dy = std::sin(a);
+    double t = 1e9;
+    if (dx > 1e-12) t = std::min(t, (w - pose.x) / dx);
+    if (dx < -1e-12) t = std::min(t, -pose.x / dx);
+    if (dy > 1e-12) t = std::min(t, (h - pose.y) / dy);
+    if (dy < -1e-12) t = std::min(t, -pose.y / dy);
+    r.push_back(static_cast<float>(t));
+  }
+  return r;
+}
+
+SensorScan scan_of(const std::vector<float>& ranges) {
+  return SensorScan{ranges, -M_PI / 2, M_PI / 180, Pose2{}};
+}
+
+pex::particle_maps::ParticleMapsOptions options() {
+  pex::particle_maps::ParticleMapsOptions o;
+  o.scan.range_max_m = 30.0;
+  return o;
+}
+
+}  // namespace
+
+TEST(ParticleMaps, TransformedMovesEveryVertexRigidly) {
+  const auto ranges = room_scan({5, 5, 0}, 20, 10);
+  const auto local = pex::mapping::scan_to_polygon(ranges, -M_PI / 2, M_PI / 180, Pose2{}, options().scan);
+  ASSERT_TRUE(local.ok) << local.error;
+  const Pose2 pose{3.0, -2.0, 0.7};
+  const auto moved = pex::particle_maps::transformed(local.polygon, pose);
+  EXPECT_NEAR(boost::geometry::area(moved.geometry), boost::geometry::area(local.polygon.geometry), 1e-9);
+  // The same polygon as building it at that pose directly.
+  const auto direct = pex::mapping::scan_to_polygon(ranges, -M_PI / 2, M_PI / 180, pose, options().scan);
+  ASSERT_TRUE(direct.ok);
+  ASSERT_EQ(direct.polygon.geometry.outer().size(), moved.geometry.outer().size());
+  for (std::size_t i = 0; i < moved.geometry.outer().size(); ++i) {
+    EXPECT_NEAR(moved.geometry.outer()[i].x(), direct.polygon.geometry.outer()[i].x(), 1e-9);
+    EXPECT_NEAR(moved.geometry.outer()[i].y(), direct.polygon.geometry.outer()[i].y(), 1e-9);
+  }
+  EXPECT_EQ(moved.edge_types, local.polygon.edge_types);
+}
+
+TEST(ParticleMaps, EachMapEqualsTheMapBuiltAlongItsOwnAncestry) {
+  // Three generations of 4 particles with resampling; each final map must equal a
+  // map built from scratch by inserting the scans at the poses of its ancestors.
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  ParticleMaps maps(options());
+  std::vector<std::vector<Pose2>> ancestry(4);  // per particle: poses of its line so far
+  std::vector<std::vector<float>> scans;
+  const std::vector<std::vector<int>> parents = {{-1, -1, -1, -1}, {0, 0, 2, 3}, {1, 1, 1, 0}};
+  for (int g = 0; g < 3; ++g) {
+    const Pose2 truth{4.0 + 3.0 * g, 5.0, 0.2 * g};
+    scans.push_back(room_scan(truth, 20, 10));
+    std::vector<ParticleState> ps;
+    std::vector<std::vector<Pose2>> next_ancestry;
+    for (int i = 0; i < 4; ++i) {
+      const Pose2 pose{truth.x + noise(rng), truth.y + noise(rng), truth.theta + 0.1 * noise(rng)};
+      ps.push_back({pose, parents[g][i]});
+      auto line = g == 0 ? std::vector<Pose2>{} : ancestry[parents[g][i]];
+      line.push_back(pose);
+      next_ancestry.push_back(line);
+    }
+    ancestry = next_ancestry;
+    const auto r = maps.update(ps, scan_of(scans.back()));
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_TRUE(r.scan_inserted);
+  }
+  ASSERT_EQ(maps.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    pex::mapping::PolygonMap oracle(options().map);
+    for (int g = 0; g < 3; ++g) {
+      const auto local = pex::mapping::scan_to_polygon(scans[g], -M_PI / 2, M_PI / 180, Pose2{}, options().scan);
+      oracle.insert(pex::particle_maps::transformed(local.polygon, ancestry[i][g]));
+    }
+    EXPECT_DOUBLE_EQ(maps.map(i).free_area_m2(), oracle.free_area_m2()) << i;
+    EXPECT_EQ(maps.map(i).free_vertex_count(), oracle.free_vertex_count()) << i;
+  }
+  // Particles 0, 1, 2 descend from different lines than 3: their maps differ.
+  EXPECT_NE(maps.map(0).free_area_m2(), maps.map(3).free_area_m2());
+}
+
+TEST(ParticleMaps, ChildrenShareTheTilesTheScanDidNotTouch) {
+  ParticleMaps maps(options());
+  // A long corridor: the first scan looks at its left end, the second at its
+  // right end, so the two touch disjoint tiles.
+  const Pose2 left_pose{10, 2, M_PI};
+  const auto left = room_scan(left_pose, 80, 4);
+  ASSERT_TRUE(maps.update({{left_pose, -1}}, scan_of(left)).ok);
+  const std::size_t tiles_left = maps.unique_tiles();
+  const std::size_t bytes_left = maps.memory_bytes();
+  const auto right = room_scan({70, 2, 0}, 80, 4);
+  std::vector<ParticleState> children;
+  for (int i = 0; i < 30; ++i) children.push_back({{70.0 + 0.01 * i, 2.0, 0.0}, 0});
+  ASSERT_TRUE(maps.update(children, scan_of(right)).ok);
+
+  // Every child holds the left end through the very tiles its parent had.
+  for (std::size_t i = 0; i < maps.size(); ++i) {
+    std::size_t shared = 0;
+    for (const auto& [key, tile] : maps.map(i).tiles())
+      if (maps.map(0).tiles().count(key) && maps.map(0).tiles().at(key) == tile) ++shared;
+    EXPECT_GE(shared, tiles_left) << i;
+  }
+  // So memory is the left end once plus 30 right ends, not 30 whole maps.
+  ParticleMaps single(options());
+  single.update({{left_pose, -1}}, scan_of(left));
+  single.update({{{70.0, 2.0, 0.0}, 0}}, scan_of(right));
+  const std::size_t one_map = single.memory_bytes();
+  ASSERT_GT(one_map, bytes_left);
+  // Tiles: the left end's once, each child's own right end.
+  const std::size_t tiles_right = single.unique_tiles() - tiles_left;
+  EXPECT_EQ(maps.unique_tiles(), tiles_left + 30 * tiles_right);
+  // Bytes: sharing the left end saves about its size 29 times over.
+  EXPECT_LT(maps.memory_bytes(), 30 * one_map - 29 * bytes_left / 2);
+}
+
+TEST(ParticleMaps, IdenticalChildrenInsertOnce) {
+  ParticleMaps maps(options());
+  const auto s = room_scan({5, 5, 0}, 20, 10);
+  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}}, scan_of(s)).ok);
+  const auto r = maps.update({{{6, 5, 0}, 0}, {{6, 5, 0}, 0}, {{6, 5, 0.1}, 0}}, scan_of(room_scan({6, 5, 0}, 20, 10)));
+  ASSERT_TRUE(r.ok);
+  EXPECT_EQ(r.inserts, 2);
+  EXPECT_EQ(maps.map(0).free_area_m2(), maps.map(1).free_area_m2());
+}
+
+TEST(ParticleMaps, BadParentsOrPosesChangeNothing) {
+  ParticleMaps maps(options());
+  const auto s = room_scan({5, 5, 0}, 20, 10);
+  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}, {{5.1, 5, 0}, -1}}, scan_of(s)).ok);
+  const double area0 = maps.map(0).free_area_m2();
+  auto r = maps.update({{{6, 5, 0}, 2}}, scan_of(s));  // parent 2 of a generation of 2
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("parent 2"), std::string::npos) << r.error;
+  r = maps.update({{{NAN, 5, 0}, 0}}, scan_of(s));
+  EXPECT_FALSE(r.ok);
+  r = maps.update({}, scan_of(s));
+  EXPECT_FALSE(r.ok);
+  ASSERT_EQ(maps.size(), 2u);
+  EXPECT_EQ(maps.map(0).free_area_m2(), area0);
+  EXPECT_EQ(maps.updates(), 1);
+}
+
+TEST(ParticleMaps, AScanWithoutPolygonStillAdvancesTheGeneration) {
+  ParticleMaps maps(options());
+  const auto s = room_scan({5, 5, 0}, 20, 10);
+  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}}, scan_of(s)).ok);
+  const std::vector<float> none(181, std::numeric_limits<float>::quiet_NaN());
+  const std::vector<float> empty;
+  const auto r = maps.update({{{5, 5, 0}, 0}, {{5, 5, 0}, 0}}, scan_of(empty));
+  EXPECT_TRUE(r.ok);
+  EXPECT_FALSE(r.scan_inserted);
+  EXPECT_EQ(maps.size(), 2u);
+  EXPECT_EQ(maps.map(1).free_area_m2(), maps.map(0).free_area_m2());
+  (void)none;
+}

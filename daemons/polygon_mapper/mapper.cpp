@@ -1,0 +1,218 @@
+#include "mapper.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "runtime/config.hpp"
+
+namespace pex::polygon_mapper {
+
+namespace {
+
+double wrap_angle(double a) {
+  a = std::remainder(a, 2.0 * std::numbers::pi);
+  return a;
+}
+
+bool finite(double v) { return std::isfinite(v); }
+
+}  // namespace
+
+MapperOptions load_options(runtime::ConfigReader& config) {
+  using runtime::positive;
+  using runtime::non_negative;
+  MapperOptions o;
+  // "slam" arrives with the SLAM issue (per-particle maps); until then it is refused.
+  o.pose_source = config.get<std::string>("pose_source", o.pose_source,
+                                          runtime::one_of({"odometry", "sim_truth"}));
+  o.insert_min_distance_m = config.get<double>("insert_min_distance_m", o.insert_min_distance_m, non_negative<double>());
+  o.insert_min_rotation_rad = config.get<double>("insert_min_rotation_rad", o.insert_min_rotation_rad, non_negative<double>());
+  o.publish_rate_hz = config.get<double>("publish_rate_hz", o.publish_rate_hz, runtime::in_range(0.01, 100.0));
+  o.pose_buffer_s = config.get<double>("pose_buffer_s", o.pose_buffer_s, positive<double>());
+  o.max_pose_gap_s = config.get<double>("max_pose_gap_s", o.max_pose_gap_s, positive<double>());
+  o.max_pending_scans = config.get<int>("max_pending_scans", o.max_pending_scans, runtime::in_range(1, 1000));
+  auto scan = config.section("scan");
+  o.scan.range_min_m = scan.get<double>("range_min_m", o.scan.range_min_m, non_negative<double>());
+  o.scan.range_max_m = scan.get<double>("range_max_m", o.scan.range_max_m, positive<double>());
+  o.scan.free_range_m = scan.get<double>("free_range_m", o.scan.free_range_m, positive<double>());
+  o.scan.break_lambda_rad = scan.get<double>("break_lambda_rad", o.scan.break_lambda_rad, runtime::in_range(0.01, 1.5));
+  o.scan.break_sigma_m = scan.get<double>("break_sigma_m", o.scan.break_sigma_m, non_negative<double>());
+  o.scan.rdp_epsilon_m = scan.get<double>("rdp_epsilon_m", o.scan.rdp_epsilon_m, non_negative<double>());
+  o.scan.least_squares_refit = scan.get<bool>("least_squares_refit", o.scan.least_squares_refit);
+  o.scan.refit_max_shift_m = scan.get<double>("refit_max_shift_m", o.scan.refit_max_shift_m, non_negative<double>());
+  o.scan.free_arc_step_rad = scan.get<double>("free_arc_step_rad", o.scan.free_arc_step_rad, runtime::in_range(0.001, 1.0));
+  o.scan.max_beams = scan.get<int>("max_beams", o.scan.max_beams, runtime::in_range(2, 1000000));
+  auto map = config.section("map");
+  o.map.tile_size_m = map.get<double>("tile_size_m", o.map.tile_size_m, runtime::in_range(1.0, 1000.0));
+  o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m);
+  o.map.obstacle_inner_m = map.get<double>("obstacle_inner_m", o.map.obstacle_inner_m, non_negative<double>());
+  o.map.obstacle_outer_m = map.get<double>("obstacle_outer_m", o.map.obstacle_outer_m, positive<double>());
+  o.map.simplify_epsilon_m = map.get<double>("simplify_epsilon_m", o.map.simplify_epsilon_m, non_negative<double>());
+  if (o.scan.free_range_m > o.scan.range_max_m)
+    throw runtime::ConfigError(config.origin() + ": scan.free_range_m (" + std::to_string(o.scan.free_range_m) +
+                               ") must not exceed scan.range_max_m (" + std::to_string(o.scan.range_max_m) + ")");
+  return o;
+}
+
+bool PoseBuffer::add(const TimedPose& pose) {
+  if (!finite(pose.pose.x) || !finite(pose.pose.y) || !finite(pose.pose.theta)) return false;
+  if (!poses_.empty() && pose.utime <= poses_.back().utime) return false;
+  poses_.push_back(pose);
+  while (!poses_.empty() && poses_.front().utime < pose.utime - keep_us_) poses_.pop_front();
+  return true;
+}
+
+PoseBuffer::Lookup PoseBuffer::pose_at(std::int64_t utime, std::int64_t max_gap_us, mapping::Pose2& out) const {
+  if (poses_.empty()) return Lookup::kEmpty;
+  if (utime < poses_.front().utime) return Lookup::kTooOld;
+  if (utime > poses_.back().utime) return Lookup::kTooNew;
+  // First pose at or after utime.
+  auto it = std::lower_bound(poses_.begin(), poses_.end(), utime,
+                             [](const TimedPose& p, std::int64_t t) { return p.utime < t; });
+  if (it->utime == utime) {
+    out = it->pose;
+    return Lookup::kOk;
+  }
+  const TimedPose& b = *it;
+  const TimedPose& a = *(it - 1);
+  if (b.utime - a.utime > max_gap_us) return Lookup::kGap;
+  const double s = static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+  out.x = a.pose.x + s * (b.pose.x - a.pose.x);
+  out.y = a.pose.y + s * (b.pose.y - a.pose.y);
+  out.theta = wrap_angle(a.pose.theta + s * wrap_angle(b.pose.theta - a.pose.theta));
+  return Lookup::kOk;
+}
+
+Mapper::Mapper(MapperOptions options)
+    : options_(std::move(options)), poses_(options_.pose_buffer_s), map_(options_.map) {}
+
+void Mapper::on_scan(const pex::laser_scan_t& scan) {
+  if (scan.nranges < 2 || static_cast<std::size_t>(scan.nranges) != scan.ranges.size())
+    throw std::invalid_argument("scan has " + std::to_string(scan.nranges) + " ranges");
+  if (scan.nranges > options_.scan.max_beams)
+    throw std::invalid_argument("scan has more than max_beams ranges");
+  if (scan.nintensities != 0 && scan.nintensities != scan.nranges)
+    throw std::invalid_argument("intensities and ranges differ in size");
+  if (!finite(scan.angle_min) || !finite(scan.angle_increment) || scan.angle_increment == 0.0f ||
+      !finite(scan.range_min) || !finite(scan.range_max) || !finite(scan.sensor_x) ||
+      !finite(scan.sensor_y) || !finite(scan.sensor_theta))
+    throw std::invalid_argument("scan has non-finite or zero angle/range/sensor fields");
+  ++counters_.scans_received;
+  pending_.push_back(scan);
+  while (static_cast<int>(pending_.size()) > options_.max_pending_scans) {
+    pending_.pop_front();
+    ++counters_.scans_without_pose;
+  }
+  process_pending();
+}
+
+void Mapper::on_pose(const TimedPose& pose) {
+  poses_.add(pose);
+  process_pending();
+}
+
+void Mapper::process_pending() {
+  while (!pending_.empty()) {
+    if (!try_insert(pending_.front())) return;  // waits for a newer pose
+    pending_.pop_front();
+  }
+}
+
+bool Mapper::try_insert(const pex::laser_scan_t& scan) {
+  mapping::Pose2 robot;
+  const auto lookup = poses_.pose_at(scan.utime, static_cast<std::int64_t>(options_.max_pose_gap_s * 1e6), robot);
+  if (lookup == PoseBuffer::Lookup::kTooNew || lookup == PoseBuffer::Lookup::kEmpty) return false;
+  if (lookup != PoseBuffer::Lookup::kOk) {
+    ++counters_.scans_without_pose;
+    return true;  // consumed: it will never get a pose
+  }
+  if (last_insert_pose_) {
+    const double moved = std::hypot(robot.x - last_insert_pose_->x, robot.y - last_insert_pose_->y);
+    const double turned = std::abs(wrap_angle(robot.theta - last_insert_pose_->theta));
+    if (moved < options_.insert_min_distance_m && turned < options_.insert_min_rotation_rad) {
+      ++counters_.scans_skipped_no_motion;
+      return true;
+    }
+  }
+  // Sensor pose in the map: the robot pose composed with the mounting.
+  const double c = std::cos(robot.theta), s = std::sin(robot.theta);
+  const mapping::Pose2 sensor{robot.x + c * scan.sensor_x - s * scan.sensor_y,
+                              robot.y + s * scan.sensor_x + c * scan.sensor_y,
+                              wrap_angle(robot.theta + scan.sensor_theta)};
+  mapping::ScanPolygonOptions scan_options = options_.scan;
+  scan_options.range_min_m = std::max<double>(scan_options.range_min_m, scan.range_min);
+  scan_options.range_max_m = std::min<double>(scan_options.range_max_m, scan.range_max);
+  scan_options.free_range_m = std::min(scan_options.free_range_m, scan_options.range_max_m);
+  const auto polygon = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options);
+  if (!polygon.ok) {
+    ++counters_.scan_polygon_errors;
+    return true;
+  }
+  const auto result = map_.insert(polygon.polygon);
+  counters_.failed_tile_updates = map_.failed_tile_updates();
+  ++counters_.scans_inserted;
+  last_insert_pose_ = robot;
+  last_scan_utime_ = scan.utime;
+  if (result.tiles_touched > 0) dirty_ = true;
+  return true;
+}
+
+pex::polygon_map_t to_message(const mapping::TypedMultiPolygon& polygons) {
+  pex::polygon_map_t msg{};
+  msg.particle = -1;
+  std::int32_t vertices = 0;
+  for (std::size_t k = 0; k < polygons.size(); ++k) {
+    const auto& p = polygons[k];
+    auto add_ring = [&](const mapping::Ring& ring, const std::vector<mapping::EdgeType>& types, bool hole) {
+      pex::polygon_ring_t r{};
+      r.polygon = static_cast<std::int32_t>(k);
+      r.hole = hole;
+      r.nvertices = static_cast<std::int32_t>(types.size());
+      for (std::size_t i = 0; i < types.size(); ++i) {
+        r.x.push_back(ring[i].x());
+        r.y.push_back(ring[i].y());
+        // Braced copies: the LCM constants are declared but not defined (no odr-use).
+        r.edge_type.push_back(types[i] == mapping::EdgeType::kObstacle
+                                  ? std::int8_t{pex::polygon_ring_t::EDGE_OBSTACLE}
+                                  : std::int8_t{pex::polygon_ring_t::EDGE_FRONTIER});
+      }
+      vertices += r.nvertices;
+      msg.rings.push_back(std::move(r));
+    };
+    add_ring(p.geometry.outer(), p.edge_types[0], false);
+    for (std::size_t h = 0; h < p.geometry.inners().size(); ++h)
+      add_ring(p.geometry.inners()[h], p.edge_types[1 + h], true);
+  }
+  msg.nrings = static_cast<std::int32_t>(msg.rings.size());
+  msg.vertex_count = vertices;
+  msg.free_area_m2 = mapping::area(polygons);
+  msg.obstacle_length_m = mapping::edge_length(polygons, mapping::EdgeType::kObstacle);
+  msg.frontier_length_m = mapping::edge_length(polygons, mapping::EdgeType::kFrontier);
+  return msg;
+}
+
+std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
+  if (dirty_) {
+    const auto merged = map_.planning_map();
+    if (merged.ok) {
+      message_ = to_message(merged.polygons);
+      dirty_ = false;
+    } else {
+      ++counters_.merge_failures;  // keep the last good message; retried next time
+    }
+  }
+  if (!message_) return std::nullopt;
+  message_->utime = now_utime;
+  message_->scan_utime = last_scan_utime_;
+  message_->generation = counters_.scans_inserted;
+  message_->scans_inserted = static_cast<std::int32_t>(counters_.scans_inserted);
+  if (last_insert_pose_) {
+    message_->robot_x = last_insert_pose_->x;
+    message_->robot_y = last_insert_pose_->y;
+    message_->robot_theta = last_insert_pose_->theta;
+  }
+  return message_;
+}
+
+}  // namespace pex::polygon_mapper

@@ -1,0 +1,105 @@
+#pragma once
+// The polygon_mapper's adapter between LCM messages and pex::mapping: pairs
+// each scan with the pose at its time, decides when a scan is inserted, and
+// turns the merged planning map into a pex::polygon_map_t.
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+
+#include <pex/laser_scan_t.hpp>
+#include <pex/polygon_map_t.hpp>
+
+#include "mapping/polygon_map.hpp"
+#include "mapping/scan_polygon.hpp"
+
+namespace pex::runtime {
+class ConfigReader;
+}
+
+namespace pex::polygon_mapper {
+
+struct MapperOptions {
+  std::string pose_source = "odometry";   // "odometry" (ODOMETRY) or "sim_truth" (SIM_TRUTH)
+  double insert_min_distance_m = 0.2;     // insert a scan when the robot moved this far ...
+  double insert_min_rotation_rad = 0.25;  // ... or turned this much since the last insert
+  double publish_rate_hz = 1.0;
+  double pose_buffer_s = 5.0;             // poses kept for pairing with scans
+  double max_pose_gap_s = 0.5;            // poses bracketing a scan may be this far apart
+  int max_pending_scans = 20;             // scans waiting for a newer pose
+  mapping::ScanPolygonOptions scan;       // range_max_m caps the sensor's own range_max
+  mapping::PolygonMapOptions map;
+};
+
+// Reads every key of config/polygon_mapper.toml; throws ConfigError on bad values.
+MapperOptions load_options(runtime::ConfigReader& config);
+
+struct TimedPose {
+  std::int64_t utime = 0;
+  mapping::Pose2 pose;
+};
+
+// Poses in time order; pose_at() interpolates (theta along the shorter arc).
+class PoseBuffer {
+ public:
+  explicit PoseBuffer(double keep_s = 5.0) : keep_us_(static_cast<std::int64_t>(keep_s * 1e6)) {}
+  // Poses older than the newest are dropped (out of order), as are non-finite ones.
+  bool add(const TimedPose& pose);
+  enum class Lookup { kOk, kTooOld, kTooNew, kGap, kEmpty };
+  // The pose at `utime`, if two buffered poses at most max_gap_us apart bracket it.
+  Lookup pose_at(std::int64_t utime, std::int64_t max_gap_us, mapping::Pose2& out) const;
+  std::size_t size() const { return poses_.size(); }
+
+ private:
+  std::int64_t keep_us_;
+  std::deque<TimedPose> poses_;
+};
+
+struct MapperCounters {
+  std::int64_t scans_received = 0;
+  std::int64_t scans_inserted = 0;
+  std::int64_t scans_skipped_no_motion = 0;
+  std::int64_t scans_without_pose = 0;
+  std::int64_t scan_polygon_errors = 0;
+  std::int64_t failed_tile_updates = 0;
+  std::int64_t merge_failures = 0;
+};
+
+class Mapper {
+ public:
+  explicit Mapper(MapperOptions options);
+
+  // Throws std::invalid_argument for a malformed scan (bad angles, sizes).
+  void on_scan(const pex::laser_scan_t& scan);
+  // A pose from the configured source.
+  void on_pose(const TimedPose& pose);
+
+  // The MAP message of the current map (merged only when the map changed). If
+  // the merge fails the last good message is kept (counted), so a published
+  // map is always valid. nullopt until a scan was inserted.
+  std::optional<pex::polygon_map_t> map_message(std::int64_t now_utime);
+
+  const MapperCounters& counters() const { return counters_; }
+  const mapping::PolygonMap& map() const { return map_; }
+  const MapperOptions& options() const { return options_; }
+
+ private:
+  void process_pending();
+  // Inserts if the robot moved enough; false if the scan must wait for a pose.
+  bool try_insert(const pex::laser_scan_t& scan);
+
+  MapperOptions options_;
+  PoseBuffer poses_;
+  std::deque<pex::laser_scan_t> pending_;
+  mapping::PolygonMap map_;
+  std::optional<mapping::Pose2> last_insert_pose_;
+  std::int64_t last_scan_utime_ = 0;
+  std::optional<pex::polygon_map_t> message_;
+  bool dirty_ = false;
+  MapperCounters counters_;
+};
+
+// The MAP message for a typed multipolygon (outer rings CCW, holes CW).
+pex::polygon_map_t to_message(const mapping::TypedMultiPolygon& polygons);
+
+}  // namespace pex::polygon_mapper

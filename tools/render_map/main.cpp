@@ -1,0 +1,66 @@
+// pex-render-map --log IN.lcm [--channel MAP] --svg OUT.svg --png OUT.png
+// Draws the last MAP message of an LCM log (free space filled, obstacle edges
+// black, frontier edges orange) with the robot path from every MAP's pose.
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <pex/polygon_map_t.hpp>
+
+#include "render.hpp"
+#include "runtime/channels.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"Render the last MAP of an LCM log to SVG and/or PNG"};
+  std::string log_path, channel{pex::runtime::channels::kMap}, svg_path, png_path;
+  pex::render_map::RenderOptions options;
+  app.add_option("--log", log_path, "LCM log to read")->required();
+  app.add_option("--channel", channel, "channel of the pex.polygon_map_t messages");
+  app.add_option("--svg", svg_path, "SVG output");
+  app.add_option("--png", png_path, "PNG output");
+  app.add_option("--pixels-per-m", options.pixels_per_m, "scale (shrinks for large maps)");
+  CLI11_PARSE(app, argc, argv);
+  if (svg_path.empty() && png_path.empty()) {
+    std::fprintf(stderr, "pex-render-map: give --svg and/or --png\n");
+    return 64;
+  }
+  lcm::LogFile log(log_path, "r");
+  if (!log.good()) {
+    std::fprintf(stderr, "pex-render-map: cannot read %s\n", log_path.c_str());
+    return 66;
+  }
+  pex::polygon_map_t last{};
+  bool found = false;
+  long rejected = 0;
+  pex::render_map::Path path;
+  for (const lcm::LogEvent* event = log.readNextEvent(); event; event = log.readNextEvent()) {
+    if (event->channel != channel) continue;
+    pex::polygon_map_t msg;
+    if (msg.decode(event->data, 0, event->datalen) != event->datalen) {
+      ++rejected;
+      continue;
+    }
+    if (path.empty() || path.back() != std::make_pair(msg.robot_x, msg.robot_y))
+      path.emplace_back(msg.robot_x, msg.robot_y);
+    last = std::move(msg);
+    found = true;
+  }
+  if (!found) {
+    std::fprintf(stderr, "pex-render-map: no decodable %s message in %s (%ld rejected)\n", channel.c_str(),
+                 log_path.c_str(), rejected);
+    return 65;
+  }
+  if (!svg_path.empty()) {
+    std::ofstream(svg_path) << pex::render_map::to_svg(last, path, options);
+  }
+  if (!png_path.empty()) {
+    const auto png = pex::render_map::encode_png(pex::render_map::rasterise(last, path, options));
+    std::ofstream(png_path, std::ios::binary).write(reinterpret_cast<const char*>(png.data()),
+                                                    static_cast<std::streamsize>(png.size()));
+  }
+  std::printf("rendered %d rings, %d vertices, %.1f m2 free, %zu path points (%ld messages rejected)\n",
+              last.nrings, last.vertex_count, last.free_area_m2, path.size(), rejected);
+  return 0;
+}
