@@ -1,0 +1,233 @@
+#include "planning/cspace.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mapping/typed_ops.hpp"
+
+namespace pex::planning {
+
+namespace bg = boost::geometry;
+namespace bgi = boost::geometry::index;
+
+double distance(const Point& a, const Point& b) { return std::hypot(a.x() - b.x(), a.y() - b.y()); }
+
+Point closest_point_on_segment(const Point& p, const Point& a, const Point& b) {
+  const double dx = b.x() - a.x(), dy = b.y() - a.y();
+  const double len2 = dx * dx + dy * dy;
+  if (len2 <= 0.0) return a;
+  double t = ((p.x() - a.x()) * dx + (p.y() - a.y()) * dy) / len2;
+  t = std::clamp(t, 0.0, 1.0);
+  return Point(a.x() + t * dx, a.y() + t * dy);
+}
+
+namespace {
+
+double orient(const Point& p, const Point& q, const Point& r) {
+  return (q.x() - p.x()) * (r.y() - p.y()) - (q.y() - p.y()) * (r.x() - p.x());
+}
+
+// r is collinear with p-q: is it within the segment's box?
+bool within_box(const Point& p, const Point& q, const Point& r) {
+  return std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) &&
+         std::min(p.y(), q.y()) <= r.y() && r.y() <= std::max(p.y(), q.y());
+}
+
+Point left_normal(const Point& a, const Point& b) {
+  const double len = distance(a, b);
+  if (len <= 0.0) return Point(0.0, 0.0);
+  return Point(-(b.y() - a.y()) / len, (b.x() - a.x()) / len);
+}
+
+double segment_distance(const Point& p, const Point& a, const Point& b) {
+  return distance(p, closest_point_on_segment(p, a, b));
+}
+
+mapping::Box box_of(const Point& a, const Point& b) {
+  return mapping::Box(Point(std::min(a.x(), b.x()), std::min(a.y(), b.y())),
+                      Point(std::max(a.x(), b.x()), std::max(a.y(), b.y())));
+}
+
+}  // namespace
+
+bool segments_intersect(const Point& p1, const Point& p2, const Point& q1, const Point& q2) {
+  const double d1 = orient(q1, q2, p1), d2 = orient(q1, q2, p2);
+  const double d3 = orient(p1, p2, q1), d4 = orient(p1, p2, q2);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0)))
+    return true;
+  if (d1 == 0 && within_box(q1, q2, p1)) return true;
+  if (d2 == 0 && within_box(q1, q2, p2)) return true;
+  if (d3 == 0 && within_box(p1, p2, q1)) return true;
+  if (d4 == 0 && within_box(p1, p2, q2)) return true;
+  return false;
+}
+
+double polyline_length(const std::vector<Point>& points) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < points.size(); ++i) length += distance(points[i - 1], points[i]);
+  return length;
+}
+
+ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygon& free_space,
+                                                          const CSpaceOptions& options) {
+  options_ = options;
+  polygons_.clear();
+  edges_.clear();
+  reflex_nodes_.clear();
+  tree_.reset();
+  BuildResult result;
+  if (!(options.robot_radius_m >= 0.0) || !(options.clearance_margin_m >= 0.0) ||
+      !(options.interior_offset_m > 0.0) || options.points_per_circle < 4) {
+    result.error = "bad C-space options";
+    return result;
+  }
+  if (!mapping::types_match_rings(free_space)) {
+    result.error = "map edge types do not match its rings";
+    return result;
+  }
+  if (free_space.empty()) {
+    result.ok = true;
+    return result;
+  }
+
+  const double shrink_m = options.robot_radius_m + options.clearance_margin_m;
+  if (shrink_m > 0.0) {
+    auto offset = mapping::typed_offset(free_space, -shrink_m, options.points_per_circle);
+    if (!offset.ok) {
+      result.error = "offset by the robot radius failed: " + offset.error;
+      return result;
+    }
+    polygons_ = std::move(offset.polygons);
+  } else {
+    polygons_ = free_space;
+  }
+  if (options.simplify_epsilon_m > 0.0) polygons_ = mapping::simplify_typed(polygons_, options.simplify_epsilon_m);
+
+  // Edges ring by ring, with repeated points dropped, linked to their neighbours.
+  auto add_ring = [&](const mapping::Ring& ring, const std::vector<EdgeType>& types) {
+    std::vector<Point> points;
+    std::vector<EdgeType> point_types;  // type of the edge starting at points[i]
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+      if (!points.empty() && bg::equals(points.back(), ring[i])) continue;
+      points.push_back(ring[i]);
+      point_types.push_back(types[i]);
+    }
+    while (points.size() > 1 && bg::equals(points.front(), points.back())) {
+      points.pop_back();
+      point_types.pop_back();
+    }
+    const std::size_t n = points.size();
+    if (n < 3) return;
+    const auto first = static_cast<std::uint32_t>(edges_.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto index = static_cast<std::uint32_t>(first + i);
+      edges_.push_back(Edge{points[i], points[(i + 1) % n], point_types[i],
+                            i == 0 ? static_cast<std::uint32_t>(first + n - 1) : index - 1,
+                            i + 1 == n ? first : index + 1});
+    }
+  };
+  for (const auto& polygon : polygons_) {
+    add_ring(polygon.geometry.outer(), polygon.edge_types[0]);
+    for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
+      add_ring(polygon.geometry.inners()[k], polygon.edge_types[1 + k]);
+  }
+
+  std::vector<Value> values;
+  values.reserve(edges_.size());
+  for (std::uint32_t i = 0; i < edges_.size(); ++i) values.emplace_back(box_of(edges_[i].a, edges_[i].b), i);
+  tree_ = std::make_unique<Tree>(values.begin(), values.end());
+
+  // Reflex vertices: a right turn, because the free space is on the left.
+  for (std::uint32_t i = 0; i < edges_.size(); ++i) {
+    const Edge& in = edges_[i];
+    const Edge& out = edges_[in.next];
+    const double turn = orient(in.a, in.b, out.b) / (distance(in.a, in.b) * distance(out.a, out.b));
+    if (!(turn < -1e-9)) continue;
+    if (auto node = inward(in.b, i, /*at_vertex_b=*/true)) reflex_nodes_.push_back(*node);
+  }
+  result.ok = true;
+  return result;
+}
+
+bool ConfigurationSpace::covers(const Point& p) const {
+  for (const auto& polygon : polygons_)
+    if (bg::covered_by(p, polygon.geometry)) return true;
+  return false;
+}
+
+double ConfigurationSpace::distance_to_boundary(const Point& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  if (!tree_) return best;
+  // Boxes come nearest first; an edge is never nearer than its box.
+  for (auto it = tree_->qbegin(bgi::nearest(p, static_cast<unsigned>(edges_.size()))); it != tree_->qend(); ++it) {
+    if (bg::distance(p, it->first) > best) break;
+    const Edge& e = edges_[it->second];
+    best = std::min(best, segment_distance(p, e.a, e.b));
+  }
+  return best;
+}
+
+bool ConfigurationSpace::segment_free(const Point& a, const Point& b) const {
+  ++segment_tests_;
+  if (!tree_) return true;
+  for (auto it = tree_->qbegin(bgi::intersects(mapping::Segment(a, b))); it != tree_->qend(); ++it) {
+    const Edge& e = edges_[it->second];
+    if (segments_intersect(a, b, e.a, e.b)) return false;
+  }
+  return true;
+}
+
+std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t edge, bool at_vertex_b) const {
+  const double delta = options_.interior_offset_m;
+  Point direction;
+  double step = delta;
+  if (at_vertex_b) {
+    const Edge& in = edges_[edge];
+    const Edge& out = edges_[in.next];
+    const Point n1 = left_normal(in.a, in.b), n2 = left_normal(out.a, out.b);
+    Point sum(n1.x() + n2.x(), n1.y() + n2.y());
+    const double len = std::hypot(sum.x(), sum.y());
+    if (len < 1e-9) {
+      direction = n1;  // a spike: the edges run back on themselves
+    } else {
+      direction = Point(sum.x() / len, sum.y() / len);
+      // len / 2 is the sine of half the interior angle: at a sharp corner the
+      // bisector must go further to get delta away from both edges.
+      step = delta / std::max(len / 2.0, 0.1);
+    }
+  } else {
+    direction = left_normal(edges_[edge].a, edges_[edge].b);
+  }
+  const Point candidate(q.x() + step * direction.x(), q.y() + step * direction.y());
+  if (!covers(candidate) || distance_to_boundary(candidate) < 0.5 * delta) return std::nullopt;
+  return candidate;
+}
+
+std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, double max_distance_m) const {
+  if (!tree_ || !std::isfinite(p.x()) || !std::isfinite(p.y())) return std::nullopt;
+  if (covers(p) && distance_to_boundary(p) >= 0.5 * options_.interior_offset_m) return p;
+  const mapping::Box window(Point(p.x() - max_distance_m, p.y() - max_distance_m),
+                            Point(p.x() + max_distance_m, p.y() + max_distance_m));
+  double best = std::numeric_limits<double>::infinity();
+  std::uint32_t best_edge = 0;
+  Point best_point;
+  for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) {
+    const Edge& e = edges_[it->second];
+    const Point q = closest_point_on_segment(p, e.a, e.b);
+    const double d = distance(p, q);
+    // Ties go to the lower edge index: the answer does not depend on the tree's order.
+    if (d < best || (d == best && it->second < best_edge)) {
+      best = d;
+      best_edge = it->second;
+      best_point = q;
+    }
+  }
+  if (!(best <= max_distance_m)) return std::nullopt;
+  const Edge& e = edges_[best_edge];
+  if (bg::equals(best_point, e.b)) return inward(best_point, best_edge, true);
+  if (bg::equals(best_point, e.a)) return inward(best_point, e.prev, true);
+  return inward(best_point, best_edge, false);
+}
+
+}  // namespace pex::planning

@@ -1,0 +1,112 @@
+#pragma once
+// The configuration space of a disk robot: the free space of the planning map
+// shrunk by the robot's radius (paper, "Polygon offsetting"), with an index of
+// its boundary edges for segment and nearest-point queries.
+//
+// A point of the C-space is a position of the robot's centre at which the
+// robot's disk touches no edge of the map (obstacle or frontier: the robot
+// stays out of unknown space too). A segment between two C-space points is a
+// motion the robot can make when it crosses no C-space boundary edge.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <boost/geometry/index/rtree.hpp>
+
+#include "mapping/typed_polygon.hpp"
+
+namespace pex::planning {
+
+using mapping::EdgeType;
+using mapping::Point;
+using mapping::TypedMultiPolygon;
+
+struct CSpaceOptions {
+  double robot_radius_m = 0.25;
+  // Added to the radius: the planned clearance from every map edge is
+  // robot_radius_m + clearance_margin_m - simplify_epsilon_m at least.
+  double clearance_margin_m = 0.05;
+  // Vertices of the round joins the offset puts around the map's corners.
+  int points_per_circle = 16;
+  // Ramer-Douglas-Peucker tolerance after offsetting (0 = off): fewer
+  // vertices, fewer graph nodes.
+  double simplify_epsilon_m = 0.01;
+  // Graph nodes on the boundary (reflex vertices, snapped candidates) are
+  // moved this far into the interior, so segment tests between them never
+  // have to decide a touch at an end point.
+  double interior_offset_m = 1e-3;
+};
+
+class ConfigurationSpace {
+ public:
+  struct Edge {
+    Point a, b;
+    EdgeType type;        // the type of the map edge it was offset from
+    std::uint32_t prev;   // edge ending at a (same ring)
+    std::uint32_t next;   // edge starting at b (same ring)
+  };
+
+  struct BuildResult {
+    bool ok = false;
+    std::string error;  // why not ok (offset failed, empty map, ...)
+  };
+
+  // Offsets `free_space` (outer rings counter-clockwise, holes clockwise:
+  // free space on the left of every edge) inward by the robot radius plus
+  // margin. An empty result (the map is narrower than the robot) is ok: the
+  // C-space is simply empty.
+  BuildResult build(const TypedMultiPolygon& free_space, const CSpaceOptions& options);
+
+  const TypedMultiPolygon& polygons() const { return polygons_; }
+  const std::vector<Edge>& edges() const { return edges_; }
+  const CSpaceOptions& options() const { return options_; }
+  bool empty() const { return polygons_.empty(); }
+
+  // True if p is inside or on the boundary.
+  bool covers(const Point& p) const;
+  // Distance from p to the nearest boundary edge (+inf if there is none).
+  double distance_to_boundary(const Point& p) const;
+  // True if the segment a-b crosses or touches no boundary edge. With both
+  // ends in the C-space's interior this means the whole segment is in it.
+  bool segment_free(const Point& a, const Point& b) const;
+
+  // A point of the interior within `max_distance_m` of p, at least about
+  // interior_offset_m from the boundary: p itself if it is such a point, else
+  // the nearest boundary point moved inward. nullopt if there is none.
+  std::optional<Point> nearest_interior_point(const Point& p, double max_distance_m) const;
+
+  // The reflex vertices (interior angle > 180 degrees), each moved
+  // interior_offset_m inward along its bisector: the nodes through which
+  // shortest paths bend.
+  const std::vector<Point>& reflex_nodes() const { return reflex_nodes_; }
+
+  // Segment tests done so far (for statistics).
+  std::int64_t segment_tests() const { return segment_tests_; }
+
+ private:
+  using Box = mapping::Box;
+  using Value = std::pair<Box, std::uint32_t>;
+  using Tree = boost::geometry::index::rtree<Value, boost::geometry::index::rstar<16>>;
+
+  std::optional<Point> inward(const Point& q, std::uint32_t edge, bool at_vertex_b) const;
+
+  CSpaceOptions options_;
+  TypedMultiPolygon polygons_;
+  std::vector<Edge> edges_;
+  std::vector<Point> reflex_nodes_;
+  std::unique_ptr<Tree> tree_;
+  mutable std::int64_t segment_tests_ = 0;
+};
+
+// Small geometry helpers shared by the planning code.
+double distance(const Point& a, const Point& b);
+// The point of segment a-b closest to p.
+Point closest_point_on_segment(const Point& p, const Point& a, const Point& b);
+// True if the closed segments p1-p2 and q1-q2 share a point.
+bool segments_intersect(const Point& p1, const Point& p2, const Point& q1, const Point& q2);
+// Length of a polyline.
+double polyline_length(const std::vector<Point>& points);
+
+}  // namespace pex::planning

@@ -1,0 +1,81 @@
+#pragma once
+// One exploration step's planning (paper, Algorithm 1 lines "determine goal
+// candidates", "plan paths", "evaluate"): C-space of the map, goal candidates
+// on the frontiers moved into the C-space, shortest paths from the robot to
+// every candidate, and the best candidate: the one with the least path length
+// (the paper's cost), with a small tie-break for the turn it needs.
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "mapping/scan_polygon.hpp"
+#include "planning/cspace.hpp"
+#include "planning/frontier_goals.hpp"
+#include "planning/visibility_graph.hpp"
+
+namespace pex::planning {
+
+using mapping::Pose2;
+
+struct PlannerOptions {
+  CSpaceOptions cspace;
+  FrontierGoalOptions frontier;
+  // A frontier candidate is moved to the nearest C-space point; farther than
+  // this from the frontier and it is dropped (the robot cannot get near that
+  // frontier: a gap narrower than the robot). At least the robot radius plus
+  // the clearance margin, which is how far the C-space lies from a frontier.
+  double candidate_snap_distance_m = 1.0;
+  // The robot's own position is moved into the C-space when it is outside
+  // (pushed against a wall, map noise) by at most this much.
+  double start_snap_distance_m = 0.5;
+  // Candidates within this radius of a blacklisted point are not goals.
+  double blacklist_radius_m = 0.5;
+  // Cost = path length + this times the turn the first leg needs (|rad|):
+  // among nearly equal paths, prefer the one ahead.
+  double turn_cost_m_per_rad = 0.1;
+};
+
+struct GoalCandidate {
+  Point frontier_point;         // on the frontier
+  Point position;               // in the C-space: where the robot goes
+  int chain = -1;               // frontier chain index
+  double chain_length_m = 0.0;  // length of that frontier chain
+  bool blacklisted = false;
+  bool reachable = false;
+  double path_length_m = std::numeric_limits<double>::infinity();
+  double cost = std::numeric_limits<double>::infinity();
+  std::vector<Point> path;      // robot position first, candidate last
+};
+
+struct PlanStats {
+  int frontier_chains = 0;
+  int chains_too_short = 0;
+  int candidates_not_in_cspace = 0;  // no C-space point near enough
+  int cspace_vertices = 0;
+  int reflex_nodes = 0;
+  std::int64_t segment_tests = 0;
+};
+
+struct Plan {
+  bool ok = false;
+  std::string error;                    // why not ok
+  std::vector<GoalCandidate> candidates;  // every candidate that got into the C-space
+  int best = -1;                        // index into candidates, -1: none reachable
+  PlanStats stats;
+
+  int reachable_count() const;
+  const GoalCandidate* best_candidate() const { return best >= 0 ? &candidates[static_cast<std::size_t>(best)] : nullptr; }
+};
+
+// Plans on `map` (the planning map: free space whose edges are typed obstacle
+// or frontier) from `robot`. Candidates near a point of `blacklist` are kept
+// in the plan (so a caller can still recognise them) but never chosen.
+// Pure and deterministic.
+Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
+                      const PlannerOptions& options);
+
+// Angle wrapped to (-pi, pi].
+double wrap_angle(double angle_rad);
+
+}  // namespace pex::planning

@@ -1,0 +1,103 @@
+#include "planning/frontier_goals.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "planning/cspace.hpp"
+
+namespace pex::planning {
+
+namespace {
+
+bool is_frontier(mapping::EdgeType type) { return type != mapping::EdgeType::kObstacle; }
+
+void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeType>& types,
+                     std::vector<FrontierChain>& chains) {
+  const std::size_t n = ring.size() < 2 ? 0 : ring.size() - 1;  // edges
+  if (n == 0 || types.size() != n) return;
+  std::size_t start = n;  // first edge of a chain: a frontier edge after an obstacle edge
+  for (std::size_t i = 0; i < n; ++i) {
+    if (is_frontier(types[i]) && !is_frontier(types[(i + n - 1) % n])) {
+      start = i;
+      break;
+    }
+  }
+  if (start == n) {
+    bool any = false;
+    for (auto t : types) any = any || is_frontier(t);
+    if (!any) return;
+    FrontierChain chain;  // the whole ring is frontier
+    chain.closed = true;
+    chain.points.assign(ring.begin(), ring.end());
+    chain.length_m = polyline_length(chain.points);
+    chains.push_back(std::move(chain));
+    return;
+  }
+  // Walk once around the ring from `start`, cutting at obstacle edges.
+  FrontierChain current;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = (start + k) % n;
+    if (is_frontier(types[i])) {
+      if (current.points.empty()) current.points.push_back(ring[i]);
+      current.points.push_back(ring[i + 1]);
+    } else if (!current.points.empty()) {
+      current.length_m = polyline_length(current.points);
+      chains.push_back(std::move(current));
+      current = FrontierChain{};
+    }
+  }
+  if (!current.points.empty()) {
+    current.length_m = polyline_length(current.points);
+    chains.push_back(std::move(current));
+  }
+}
+
+}  // namespace
+
+std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map) {
+  std::vector<FrontierChain> chains;
+  for (const auto& polygon : map) {
+    if (!mapping::types_match_rings(polygon)) continue;
+    add_ring_chains(polygon.geometry.outer(), polygon.edge_types[0], chains);
+    for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
+      add_ring_chains(polygon.geometry.inners()[k], polygon.edge_types[1 + k], chains);
+  }
+  return chains;
+}
+
+Point point_at_arc_length(const std::vector<Point>& polyline, double s) {
+  if (polyline.empty()) return Point(0.0, 0.0);
+  for (std::size_t i = 1; i < polyline.size(); ++i) {
+    const double len = distance(polyline[i - 1], polyline[i]);
+    if (s <= len && len > 0.0) {
+      const double t = std::max(0.0, s / len);
+      return Point(polyline[i - 1].x() + t * (polyline[i].x() - polyline[i - 1].x()),
+                   polyline[i - 1].y() + t * (polyline[i].y() - polyline[i - 1].y()));
+    }
+    s -= len;
+  }
+  return polyline.back();
+}
+
+std::vector<FrontierPoint> frontier_candidates(const std::vector<FrontierChain>& chains,
+                                               const FrontierGoalOptions& options, int* dropped_chains) {
+  std::vector<FrontierPoint> out;
+  int dropped = 0;
+  const double span = 2.0 * options.sensor_range_m;
+  for (std::size_t c = 0; c < chains.size(); ++c) {
+    const auto& chain = chains[c];
+    if (!(chain.length_m >= options.min_frontier_length_m) || !(span > 0.0)) {
+      ++dropped;
+      continue;
+    }
+    const int n = std::max(1, static_cast<int>(std::ceil(chain.length_m / span)));
+    const double piece = chain.length_m / n;
+    for (int i = 0; i < n; ++i)
+      out.push_back(FrontierPoint{point_at_arc_length(chain.points, (i + 0.5) * piece), static_cast<int>(c),
+                                  chain.length_m});
+  }
+  if (dropped_chains) *dropped_chains = dropped;
+  return out;
+}
+
+}  // namespace pex::planning

@@ -1,0 +1,55 @@
+#pragma once
+// Goal candidates on the frontiers of a typed polygonal map (paper, section
+// "Map representation"): candidates lie on frontier edges, neighbours about
+// twice the sensor range apart along the frontier, so that every frontier
+// point is within sensor range of some candidate; visiting all candidates
+// therefore reveals what lies behind every frontier.
+#include <vector>
+
+#include "mapping/typed_polygon.hpp"
+
+namespace pex::planning {
+
+using mapping::Point;
+using mapping::TypedMultiPolygon;
+
+// A maximal run of consecutive frontier edges of one ring.
+struct FrontierChain {
+  std::vector<Point> points;  // polyline; closed chains repeat the first point at the end
+  bool closed = false;        // the whole ring is frontier
+  double length_m = 0.0;
+};
+
+// Every frontier chain of the map, ring by ring in map order. Edges typed
+// kBorder (a tile border that was not dissolved) count as frontier: they
+// separate the map from space it does not describe.
+std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map);
+
+struct FrontierGoalOptions {
+  // Radius within which a candidate "covers" the frontier (the paper's sensor
+  // range; an effective range below the laser's maximum gives denser goals).
+  double sensor_range_m = 5.0;
+  // Chains shorter than this are noise (gaps between scan points, slivers
+  // along walls) and get no candidate.
+  double min_frontier_length_m = 0.3;
+};
+
+struct FrontierPoint {
+  Point point;               // on the chain
+  int chain = -1;            // index into the chains
+  double chain_length_m = 0.0;
+};
+
+// Candidates on the chains: a chain of length L >= min_frontier_length_m gets
+// n = ceil(L / (2 * sensor_range_m)) candidates at arc lengths (i + 1/2) L / n,
+// so each covers the arc of length L / n around it and, because a chord is no
+// longer than its arc, every point of the chain is within sensor_range_m of
+// a candidate. `dropped_chains`, if given, counts the chains too short.
+std::vector<FrontierPoint> frontier_candidates(const std::vector<FrontierChain>& chains,
+                                               const FrontierGoalOptions& options,
+                                               int* dropped_chains = nullptr);
+
+// The point at arc length s along a polyline (clamped to its ends).
+Point point_at_arc_length(const std::vector<Point>& polyline, double s);
+
+}  // namespace pex::planning

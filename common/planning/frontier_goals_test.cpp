@@ -1,0 +1,103 @@
+#include "planning/frontier_goals.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "planning/cspace.hpp"
+#include "planning/test_maps.hpp"
+
+namespace pex::planning {
+namespace {
+
+using E = mapping::EdgeType;
+using testing::RingSpec;
+using testing::typed_polygon;
+
+// An L-shaped room whose frontier runs along several edges (a chain bending
+// around corners), with a short frontier sliver and a hole that is all frontier.
+mapping::TypedMultiPolygon l_room() {
+  RingSpec outer{{Point(0, 0), Point(30, 0), Point(30, 10), Point(10, 10), Point(10, 30), Point(0, 30)},
+                 {E::kFrontier, E::kFrontier, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle}};
+  RingSpec hole{{Point(3, 3), Point(3, 3.2), Point(3.2, 3.2), Point(3.2, 3)},
+                {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier}};
+  return {typed_polygon(outer, {hole})};
+}
+
+TEST(FrontierChains, RunsOfFrontierEdgesAcrossTheRingStart) {
+  const auto chains = frontier_chains(l_room());
+  ASSERT_EQ(chains.size(), 3u);
+  // Edges 0..2 (30 + 10 + 20 m) form one chain; edge 4 (10 -> 0 along the top,
+  // 10 m) another; the hole is a closed chain of 0.8 m.
+  EXPECT_NEAR(chains[0].length_m, 60.0, 1e-12);
+  EXPECT_FALSE(chains[0].closed);
+  EXPECT_NEAR(chains[1].length_m, 10.0, 1e-12);
+  EXPECT_TRUE(chains[2].closed);
+  EXPECT_NEAR(chains[2].length_m, 0.8, 1e-12);
+}
+
+TEST(FrontierChains, ChainWrappingPastVertexZeroIsOneChain) {
+  // Frontier on the last and the first edge: one chain through vertex 0.
+  RingSpec outer{{Point(0, 0), Point(4, 0), Point(4, 4), Point(0, 4)},
+                 {E::kFrontier, E::kObstacle, E::kObstacle, E::kFrontier}};
+  const auto chains = frontier_chains({typed_polygon(outer)});
+  ASSERT_EQ(chains.size(), 1u);
+  EXPECT_NEAR(chains[0].length_m, 8.0, 1e-12);
+  EXPECT_EQ(chains[0].points.front().x(), 0.0);
+  EXPECT_EQ(chains[0].points.front().y(), 4.0);
+  EXPECT_EQ(chains[0].points.back().x(), 4.0);
+}
+
+TEST(FrontierCandidates, EveryFrontierPointIsWithinSensorRange) {
+  FrontierGoalOptions options;
+  options.sensor_range_m = 4.0;
+  options.min_frontier_length_m = 1.0;
+  const auto map = l_room();
+  const auto chains = frontier_chains(map);
+  int dropped = -1;
+  const auto candidates = frontier_candidates(chains, options, &dropped);
+  EXPECT_EQ(dropped, 1);  // the 0.8 m hole
+  // ceil(60 / 8) + ceil(10 / 8)
+  EXPECT_EQ(candidates.size(), 8u + 2u);
+  // Sample every frontier edge of the map itself every 1 cm.
+  int sampled = 0;
+  mapping::for_each_edge(map, [&](const Point& a, const Point& b, E type) {
+    if (type != E::kFrontier) return;
+    const double len = distance(a, b);
+    if (len < 1.0 && std::abs(a.x() - 3.1) < 0.2) return;  // the dropped sliver
+    for (double s = 0.0; s <= len; s += 0.01) {
+      const Point p(a.x() + (b.x() - a.x()) * s / len, a.y() + (b.y() - a.y()) * s / len);
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const auto& c : candidates) nearest = std::min(nearest, distance(p, c.point));
+      ASSERT_LE(nearest, options.sensor_range_m + 1e-9) << p.x() << "," << p.y();
+      ++sampled;
+    }
+  });
+  EXPECT_GT(sampled, 6000);
+  // Candidates lie on their chain.
+  for (const auto& c : candidates) {
+    double d = std::numeric_limits<double>::infinity();
+    const auto& pts = chains[static_cast<std::size_t>(c.chain)].points;
+    for (std::size_t i = 1; i < pts.size(); ++i)
+      d = std::min(d, distance(c.point, closest_point_on_segment(c.point, pts[i - 1], pts[i])));
+    EXPECT_LT(d, 1e-9);
+  }
+}
+
+TEST(FrontierCandidates, ShortChainGetsOneCandidateInTheMiddle) {
+  FrontierChain chain{{Point(0, 0), Point(2, 0), Point(2, 2)}, false, 4.0};
+  const auto candidates = frontier_candidates({chain}, FrontierGoalOptions{5.0, 0.3});
+  ASSERT_EQ(candidates.size(), 1u);
+  EXPECT_NEAR(candidates[0].point.x(), 2.0, 1e-12);
+  EXPECT_NEAR(candidates[0].point.y(), 0.0, 1e-12);
+}
+
+TEST(FrontierCandidates, NoFrontierNoCandidate) {
+  const auto map = mapping::TypedMultiPolygon{typed_polygon(testing::rectangle(0, 0, 5, 5))};
+  EXPECT_TRUE(frontier_chains(map).empty());
+  EXPECT_TRUE(frontier_candidates(frontier_chains(map), {}).empty());
+}
+
+}  // namespace
+}  // namespace pex::planning

@@ -1,0 +1,260 @@
+#include "planning/mission.hpp"
+
+#include <gtest/gtest.h>
+
+#include "planning/test_maps.hpp"
+
+namespace pex::planning {
+namespace {
+
+using E = mapping::EdgeType;
+using testing::rectangle;
+using testing::typed_polygon;
+
+constexpr std::int64_t kSecond = 1'000'000;
+
+// A corridor 20 x 3 m, frontier at the chosen ends.
+mapping::TypedMultiPolygon corridor(bool left_frontier, bool right_frontier) {
+  return {typed_polygon(rectangle(0, 0, 20, 3,
+                                  {E::kObstacle, right_frontier ? E::kFrontier : E::kObstacle, E::kObstacle,
+                                   left_frontier ? E::kFrontier : E::kObstacle}))};
+}
+
+MissionOptions test_options() {
+  MissionOptions o;
+  o.planner.cspace.robot_radius_m = 0.3;
+  o.planner.turn_cost_m_per_rad = 0.0;
+  o.pose_timeout_us = kSecond;
+  o.map_timeout_us = 10 * kSecond;
+  o.replan_period_us = kSecond;
+  o.progress_timeout_us = 5 * kSecond;
+  return o;
+}
+
+TEST(Mission, IdleUntilItHasAMapAndAPose) {
+  Mission m(test_options());
+  auto out = m.step(0);
+  EXPECT_EQ(out.phase, Phase::kIdle);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  m.on_pose(Pose2{5, 1.5, 0}, 0);
+  out = m.step(100'000);
+  EXPECT_EQ(out.phase, Phase::kIdle);
+  EXPECT_NE(out.status.find("map"), std::string::npos);
+}
+
+TEST(Mission, SelectsTheNearestGoalAndDrivesTowardIt) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{15, 1.5, 0}, 0);
+  auto out = m.step(0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  ASSERT_TRUE(out.goal.has_value());
+  EXPECT_NEAR(out.goal->x(), 20 - 0.35, 0.01);
+  EXPECT_EQ(out.goal_candidates, 1);
+  EXPECT_TRUE(out.planned);
+  ASSERT_GE(out.path.size(), 2u);
+  m.on_pose(Pose2{15, 1.5, 0}, 100'000);
+  out = m.step(100'000);
+  EXPECT_GT(out.command.v_mps, 0.0);
+  EXPECT_NEAR(out.explored_area_m2, 60.0, 1e-9);
+}
+
+TEST(Mission, GoalReachedWaitsForANewerMapThenTakesTheNextGoal) {
+  Mission m(test_options());
+  m.on_map(corridor(true, true), 0);
+  m.on_pose(Pose2{14, 1.5, 0}, 0);
+  auto out = m.step(0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point first = *out.goal;
+  EXPECT_GT(first.x(), 10.0);  // the right end is nearer
+  // The robot arrives.
+  m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 200'000);
+  out = m.step(200'000);
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_NE(out.status.find("reached"), std::string::npos);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  ASSERT_EQ(m.visited_goals().size(), 1u);
+  // The same map again: it waits.
+  out = m.step(1'500'000);
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_FALSE(out.planned);
+  // A newer map in which the right frontier is still there (the laser could
+  // not clear it): the visited goal is not offered again, the left end is.
+  m.on_map(corridor(true, true), 1'600'000);
+  m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 1'600'000);
+  out = m.step(1'700'000);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(out.goal->x(), 1.0);
+}
+
+TEST(Mission, DoneWhenNoFrontierIsLeftOnTwoMaps) {
+  Mission m(test_options());
+  m.on_map(corridor(false, false), 0);
+  m.on_pose(Pose2{5, 1.5, 0}, 0);
+  auto out = m.step(0);
+  EXPECT_EQ(out.phase, Phase::kSelecting);  // one map is not enough
+  out = m.step(2 * kSecond);                // the same map again does not count twice
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  m.on_map(corridor(false, false), 2'100'000);
+  m.on_pose(Pose2{5, 1.5, 0}, 2'100'000);
+  out = m.step(2'200'000);
+  ASSERT_EQ(out.phase, Phase::kDone);
+  EXPECT_NE(out.status.find("no frontier left"), std::string::npos);
+  // DONE is final: the robot stays stopped.
+  m.on_map(corridor(true, true), 3'000'000);
+  out = m.step(3'100'000);
+  EXPECT_EQ(out.phase, Phase::kDone);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  EXPECT_EQ(out.command.omega_radps, 0.0);
+}
+
+TEST(Mission, GoalGoneOnANewMapChoosesAnother) {
+  Mission m(test_options());
+  m.on_map(corridor(true, true), 0);
+  m.on_pose(Pose2{14, 1.5, 0}, 0);
+  auto out = m.step(0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  EXPECT_GT(out.goal->x(), 10.0);
+  // The right end turned out to be a wall.
+  m.on_map(corridor(true, false), 900'000);
+  m.on_pose(Pose2{14.5, 1.5, 0}, 1'000'000);
+  out = m.step(1'000'000);  // replan period reached
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(out.goal->x(), 1.0);
+  EXPECT_TRUE(m.blacklist().empty());  // explored, not given up
+}
+
+TEST(Mission, BlockedGoalIsBlacklisted) {
+  Mission m(test_options());
+  m.on_map(corridor(true, true), 0);
+  m.on_pose(Pose2{12, 1.5, 0}, 0);
+  auto out = m.step(0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  ASSERT_GT(out.goal->x(), 10.0);
+  // A wall across the corridor at x = 16 with a 0.4 m gap: the right end is
+  // still a frontier but the robot cannot get there.
+  testing::RingSpec blocked{{Point(0, 0), Point(16, 0), Point(16, 1.3), Point(16.2, 1.3), Point(16.2, 0), Point(20, 0),
+                             Point(20, 3), Point(16.2, 3), Point(16.2, 1.7), Point(16, 1.7), Point(16, 3), Point(0, 3)},
+                            {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier,
+                             E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier}};
+  m.on_map({typed_polygon(blocked)}, 900'000);
+  m.on_pose(Pose2{12.5, 1.5, 0}, 1'000'000);
+  out = m.step(1'000'000);
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_NE(out.status.find("gave up"), std::string::npos);
+  ASSERT_EQ(m.blacklist().size(), 1u);
+  EXPECT_GT(m.blacklist()[0].x(), 16.0);
+  out = m.step(1'100'000);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(out.goal->x(), 1.0);
+}
+
+TEST(Mission, FailsAfterRepeatedGoalsWithoutProgress) {
+  MissionOptions o = test_options();
+  o.max_consecutive_failures = 2;
+  Mission m(o);
+  // A room with frontiers on three sides; the robot never moves (wheels stuck).
+  m.on_map({typed_polygon(rectangle(0, 0, 20, 20, {E::kFrontier, E::kFrontier, E::kFrontier, E::kObstacle}))}, 0);
+  Phase phase = Phase::kIdle;
+  std::string status;
+  for (std::int64_t t = 0; t <= 30 * kSecond; t += 100'000) {
+    m.on_pose(Pose2{3, 10, 0}, t);
+    if (t % (5 * kSecond) == 0) m.on_map({typed_polygon(rectangle(0, 0, 20, 20, {E::kFrontier, E::kFrontier,
+                                                                                    E::kFrontier, E::kObstacle}))},
+                                         t);
+    const auto out = m.step(t);
+    phase = out.phase;
+    status = out.status;
+    if (phase == Phase::kFailed) {
+      EXPECT_EQ(out.command.v_mps, 0.0);
+      break;
+    }
+  }
+  ASSERT_EQ(phase, Phase::kFailed);
+  EXPECT_NE(status.find("no progress"), std::string::npos);
+  EXPECT_EQ(m.blacklist().size(), 2u);
+}
+
+TEST(Mission, AGoalThatMovesOnWithItsFrontierIsProgress) {
+  // The corridor's far end recedes 0.5 m a second (the robot sees further
+  // down it) while the path to it does not get shorter: no give-up.
+  Mission m(test_options());
+  auto receding = [](double length_m) {
+    return mapping::TypedMultiPolygon{typed_polygon(
+        rectangle(0, 0, length_m, 3, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}))};
+  };
+  for (std::int64_t t = 0; t <= 30 * kSecond; t += 100'000) {
+    if (t % kSecond == 0) m.on_map(receding(20.0 + 0.5 * static_cast<double>(t / kSecond)), t);
+    m.on_pose(Pose2{15, 1.5, 0}, t);
+    const auto out = m.step(t);
+    ASSERT_EQ(out.phase, Phase::kMoving) << "at " << t << ": " << out.status;
+  }
+  EXPECT_TRUE(m.blacklist().empty());
+}
+
+TEST(Mission, StaleInputsStopTheRobotUntilTheyAreFresh) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{5, 1.5, 0}, 0);
+  m.step(0);
+  m.on_pose(Pose2{5, 1.5, 0}, 200'000);
+  auto out = m.step(200'000);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  ASSERT_GT(out.command.v_mps, 0.0);
+  out = m.step(1'500'000);  // the last pose is 1.3 s old
+  EXPECT_TRUE(out.degraded);
+  EXPECT_EQ(out.phase, Phase::kMoving);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  EXPECT_EQ(out.command.omega_radps, 0.0);
+  EXPECT_NE(out.status.find("pose is stale"), std::string::npos);
+  m.on_pose(Pose2{5, 1.5, 0}, 1'550'000);
+  out = m.step(1'600'000);
+  EXPECT_FALSE(out.degraded);
+  EXPECT_EQ(out.phase, Phase::kMoving);
+}
+
+// Two rooms joined by a 0.66 m gap: passable for a 0.3 m robot, not with a
+// 0.05 m clearance margin on top. The frontier is in the right room.
+mapping::TypedMultiPolygon rooms_with_a_narrow_gap() {
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(5, 0), Point(5, 2.17), Point(5.2, 2.17), Point(5.2, 0), Point(10, 0), Point(10, 5),
+       Point(5.2, 5), Point(5.2, 2.83), Point(5, 2.83), Point(5, 5), Point(0, 5)},
+      {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle,
+       E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}})};
+}
+
+TEST(Mission, SqueezesThroughANarrowGapWithoutTheMarginOnlyWhenNothingElseIsLeft) {
+  MissionOptions o = test_options();
+  o.planner.cspace.clearance_margin_m = 0.05;
+  Mission m(o);
+  m.on_map(rooms_with_a_narrow_gap(), 0);
+  m.on_pose(Pose2{2, 2.5, 0}, 0);
+  auto out = m.step(0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_NE(out.status.find("without clearance margin"), std::string::npos) << out.status;
+  EXPECT_GT(out.goal->x(), 9.0);
+
+  o.tight_fallback = false;
+  Mission strict(o);
+  strict.on_map(rooms_with_a_narrow_gap(), 0);
+  strict.on_pose(Pose2{2, 2.5, 0}, 0);
+  EXPECT_EQ(strict.step(0).phase, Phase::kSelecting);
+  strict.on_map(rooms_with_a_narrow_gap(), 1'000'000);
+  strict.on_pose(Pose2{2, 2.5, 0}, 1'000'000);
+  out = strict.step(1'000'000);
+  EXPECT_EQ(out.phase, Phase::kDone);
+  EXPECT_NE(out.status.find("none reachable"), std::string::npos) << out.status;
+}
+
+TEST(Mission, CountsDistanceTravelledButNotPoseJumps) {
+  Mission m(test_options());
+  m.on_pose(Pose2{0, 0, 0}, 0);
+  m.on_pose(Pose2{0.3, 0.4, 0}, 1);
+  m.on_pose(Pose2{10, 0.4, 0}, 2);  // a SLAM jump
+  m.on_pose(Pose2{10, 0.9, 0}, 3);
+  m.on_pose(Pose2{std::nan(""), 0, 0}, 4);  // ignored
+  EXPECT_NEAR(m.step(5).distance_travelled_m, 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace pex::planning

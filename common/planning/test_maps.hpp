@@ -1,0 +1,61 @@
+#pragma once
+// Test support (not used by the library): small typed maps written by hand.
+#include <cmath>
+#include <vector>
+
+#include "mapping/typed_polygon.hpp"
+#include "planning/cspace.hpp"
+
+namespace pex::planning::testing {
+
+using mapping::EdgeType;
+using mapping::Point;
+
+// A ring from distinct vertices (closed here), with one type per edge.
+struct RingSpec {
+  std::vector<Point> points;
+  std::vector<EdgeType> types;  // empty: all obstacle
+};
+
+inline mapping::Ring closed_ring(const std::vector<Point>& points) {
+  mapping::Ring ring(points.begin(), points.end());
+  ring.push_back(points.front());
+  return ring;
+}
+
+// A typed polygon; the outer ring must be counter-clockwise, holes clockwise.
+inline mapping::TypedPolygon typed_polygon(const RingSpec& outer, const std::vector<RingSpec>& holes = {}) {
+  mapping::TypedPolygon p;
+  p.geometry.outer() = closed_ring(outer.points);
+  auto types_of = [](const RingSpec& r) {
+    return r.types.empty() ? std::vector<EdgeType>(r.points.size(), EdgeType::kObstacle) : r.types;
+  };
+  p.edge_types.push_back(types_of(outer));
+  for (const auto& h : holes) {
+    p.geometry.inners().push_back(closed_ring(h.points));
+    p.edge_types.push_back(types_of(h));
+  }
+  return p;
+}
+
+// Axis-aligned rectangle, counter-clockwise from (x0, y0); types per side in
+// the order bottom, right, top, left.
+inline RingSpec rectangle(double x0, double y0, double x1, double y1,
+                          std::vector<EdgeType> types = {}) {
+  return RingSpec{{Point(x0, y0), Point(x1, y0), Point(x1, y1), Point(x0, y1)}, std::move(types)};
+}
+
+// The same rectangle clockwise (a hole), from (x0, y0) up the left side.
+inline RingSpec rectangle_hole(double x0, double y0, double x1, double y1) {
+  return RingSpec{{Point(x0, y0), Point(x0, y1), Point(x1, y1), Point(x1, y0)}, {}};
+}
+
+// Distance from p to the boundary of a ring.
+inline double distance_to_ring(const Point& p, const std::vector<Point>& ring) {
+  double best = 1e300;
+  for (std::size_t i = 0; i < ring.size(); ++i)
+    best = std::min(best, distance(p, closest_point_on_segment(p, ring[i], ring[(i + 1) % ring.size()])));
+  return best;
+}
+
+}  // namespace pex::planning::testing

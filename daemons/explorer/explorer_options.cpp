@@ -1,0 +1,103 @@
+#include "explorer_options.hpp"
+
+#include <cstdint>
+#include <optional>
+
+#include "runtime/channels.hpp"
+#include "runtime/config.hpp"
+
+namespace pex::explorer {
+
+namespace {
+
+using runtime::in_range;
+using runtime::non_negative;
+using runtime::positive;
+
+std::int64_t us_from_ms(int ms) { return static_cast<std::int64_t>(ms) * 1000; }
+
+}  // namespace
+
+ExplorerOptions load_options(runtime::ConfigReader& config) {
+  ExplorerOptions o;
+  auto& m = o.mission;
+  auto& planner = m.planner;
+  auto& cspace = planner.cspace;
+  auto& follower = m.follower;
+
+  o.pose_channel = config.get<std::string>(
+      "pose_channel", o.pose_channel, [](const std::string& name) -> std::optional<std::string> {
+        const auto* info = runtime::channels::find(name);
+        if (info && info->type == "pex.pose_t") return std::nullopt;
+        return "must be a registered channel of type pex.pose_t (SLAM_POSE or SIM_TRUTH)";
+      });
+  o.cmd_rate_hz = config.get<double>("cmd_rate_hz", o.cmd_rate_hz, in_range(1.0, 100.0));
+  o.state_rate_hz = config.get<double>("state_rate_hz", o.state_rate_hz, in_range(0.1, 100.0));
+  o.map.max_vertices = config.get<std::int64_t>("max_map_vertices", o.map.max_vertices, positive<std::int64_t>());
+
+  // The robot and its configuration space.
+  cspace.robot_radius_m = config.get<double>("robot_radius_m", cspace.robot_radius_m, in_range(0.01, 5.0));
+  cspace.clearance_margin_m =
+      config.get<double>("clearance_margin_m", cspace.clearance_margin_m, in_range(0.0, 2.0));
+  cspace.points_per_circle = config.get<int>("points_per_circle", cspace.points_per_circle, in_range(4, 360));
+  cspace.simplify_epsilon_m =
+      config.get<double>("cspace_simplify_epsilon_m", cspace.simplify_epsilon_m, in_range(0.0, 0.5));
+
+  // Goal candidates.
+  planner.frontier.sensor_range_m =
+      config.get<double>("sensor_range_m", planner.frontier.sensor_range_m, in_range(0.1, 100.0));
+  planner.frontier.min_frontier_length_m =
+      config.get<double>("min_frontier_length_m", planner.frontier.min_frontier_length_m, non_negative<double>());
+  planner.candidate_snap_distance_m =
+      config.get<double>("candidate_snap_distance_m", planner.candidate_snap_distance_m, positive<double>());
+  planner.start_snap_distance_m =
+      config.get<double>("start_snap_distance_m", planner.start_snap_distance_m, positive<double>());
+  planner.blacklist_radius_m =
+      config.get<double>("blacklist_radius_m", planner.blacklist_radius_m, non_negative<double>());
+  planner.turn_cost_m_per_rad =
+      config.get<double>("turn_cost_m_per_rad", planner.turn_cost_m_per_rad, non_negative<double>());
+  if (planner.candidate_snap_distance_m < cspace.robot_radius_m + cspace.clearance_margin_m)
+    throw runtime::ConfigError(config.origin() +
+                               ": candidate_snap_distance_m must be at least robot_radius_m + clearance_margin_m "
+                               "(the C-space lies that far from every frontier)");
+
+  // Path following.
+  follower.max_speed_mps = config.get<double>("max_speed_mps", follower.max_speed_mps, in_range(0.01, 5.0));
+  follower.min_speed_mps = config.get<double>("min_speed_mps", follower.min_speed_mps, non_negative<double>());
+  follower.max_omega_radps = config.get<double>("max_omega_radps", follower.max_omega_radps, in_range(0.01, 10.0));
+  follower.max_accel_mps2 = config.get<double>("max_accel_mps2", follower.max_accel_mps2, in_range(0.01, 20.0));
+  follower.max_angular_accel_radps2 =
+      config.get<double>("max_angular_accel_radps2", follower.max_angular_accel_radps2, in_range(0.01, 50.0));
+  follower.lookahead_m = config.get<double>("lookahead_m", follower.lookahead_m, in_range(0.05, 10.0));
+  follower.turn_in_place_rad =
+      config.get<double>("turn_in_place_rad", follower.turn_in_place_rad, in_range(0.05, 3.2));
+  follower.turn_in_place_exit_rad =
+      config.get<double>("turn_in_place_exit_rad", follower.turn_in_place_exit_rad, in_range(0.01, 3.2));
+  follower.turn_gain_per_s = config.get<double>("turn_gain_per_s", follower.turn_gain_per_s, in_range(0.1, 20.0));
+  follower.goal_tolerance_m = config.get<double>("goal_tolerance_m", follower.goal_tolerance_m, in_range(0.01, 5.0));
+  follower.corner_tolerance_m =
+      config.get<double>("corner_tolerance_m", follower.corner_tolerance_m, in_range(0.01, 2.0));
+  if (follower.turn_in_place_exit_rad > follower.turn_in_place_rad)
+    throw runtime::ConfigError(config.origin() + ": turn_in_place_exit_rad must not exceed turn_in_place_rad");
+
+  // Mission.
+  m.replan_period_us =
+      us_from_ms(config.get<int>("replan_period_ms", static_cast<int>(m.replan_period_us / 1000), in_range(50, 60'000)));
+  m.pose_timeout_us =
+      us_from_ms(config.get<int>("pose_timeout_ms", static_cast<int>(m.pose_timeout_us / 1000), in_range(10, 60'000)));
+  m.map_timeout_us =
+      us_from_ms(config.get<int>("map_timeout_ms", static_cast<int>(m.map_timeout_us / 1000), in_range(100, 600'000)));
+  m.progress_timeout_us = us_from_ms(
+      config.get<int>("progress_timeout_ms", static_cast<int>(m.progress_timeout_us / 1000), in_range(1000, 3'600'000)));
+  m.progress_min_m = config.get<double>("progress_min_m", m.progress_min_m, positive<double>());
+  m.goal_match_radius_m = config.get<double>("goal_match_radius_m", m.goal_match_radius_m, positive<double>());
+  m.switch_margin_m = config.get<double>("switch_margin_m", m.switch_margin_m, non_negative<double>());
+  m.max_consecutive_failures =
+      config.get<int>("max_consecutive_failures", m.max_consecutive_failures, in_range(1, 1000));
+  m.done_confirmations = config.get<int>("done_confirmations", m.done_confirmations, in_range(1, 100));
+  m.max_travel_step_m = config.get<double>("max_travel_step_m", m.max_travel_step_m, positive<double>());
+  m.tight_fallback = config.get<bool>("tight_fallback", m.tight_fallback);
+  return o;
+}
+
+}  // namespace pex::explorer

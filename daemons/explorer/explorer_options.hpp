@@ -1,0 +1,26 @@
+#pragma once
+// The explorer daemon's options: every key of config/explorer.toml, read in
+// one place into the planning library's option structs.
+#include <string>
+
+#include "map_message.hpp"
+#include "planning/mission.hpp"
+
+namespace pex::runtime {
+class ConfigReader;
+}
+
+namespace pex::explorer {
+
+struct ExplorerOptions {
+  std::string pose_channel = "SLAM_POSE";  // a registered pex.pose_t channel (SIM_TRUTH for tests)
+  double cmd_rate_hz = 10.0;               // BASE_CMD rate (the mission steps at this rate)
+  double state_rate_hz = 2.0;              // EXPLORE_STATE rate
+  MapDecodeOptions map;
+  planning::MissionOptions mission;
+};
+
+// Reads and validates every key; throws runtime::ConfigError on a bad value.
+ExplorerOptions load_options(runtime::ConfigReader& config);
+
+}  // namespace pex::explorer

@@ -1,0 +1,171 @@
+// The explorer daemon's adapter: MAP decoding, options, the node without a bus.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "explorer_node.hpp"
+#include "explorer_options.hpp"
+#include "map_message.hpp"
+#include "runtime/config.hpp"
+
+namespace pex::explorer {
+namespace {
+
+using mapping::EdgeType;
+using mapping::Point;
+
+pex::polygon_ring_t ring(std::int32_t polygon, bool hole, const std::vector<std::pair<double, double>>& pts,
+                         std::vector<std::int8_t> types = {}) {
+  pex::polygon_ring_t r{};
+  r.polygon = polygon;
+  r.hole = hole;
+  for (const auto& [x, y] : pts) {
+    r.x.push_back(x);
+    r.y.push_back(y);
+  }
+  r.edge_type = types.empty() ? std::vector<std::int8_t>(pts.size(), std::int8_t{0}) : types;
+  r.nvertices = static_cast<std::int32_t>(pts.size());
+  return r;
+}
+
+pex::polygon_map_t map_of(std::vector<pex::polygon_ring_t> rings) {
+  pex::polygon_map_t m{};
+  m.rings = std::move(rings);
+  m.nrings = static_cast<std::int32_t>(m.rings.size());
+  return m;
+}
+
+// A 20 x 3 m corridor with a frontier at its right end (edge 1).
+pex::polygon_map_t corridor() {
+  return map_of({ring(0, false, {{0, 0}, {20, 0}, {20, 3}, {0, 3}}, {0, 1, 0, 0})});
+}
+
+TEST(DecodeMap, RoomWithAHole) {
+  const auto d = decode_map(map_of({ring(7, false, {{0, 0}, {10, 0}, {10, 10}, {0, 10}}),
+                                    ring(7, true, {{4, 4}, {4, 6}, {6, 6}, {6, 4}}, {1, 1, 1, 1})}));
+  ASSERT_TRUE(d.ok) << d.error;
+  ASSERT_EQ(d.polygons.size(), 1u);
+  EXPECT_NEAR(mapping::area(d.polygons), 96.0, 1e-12);
+  EXPECT_NEAR(mapping::edge_length(d.polygons, EdgeType::kFrontier), 8.0, 1e-12);
+  EXPECT_EQ(d.rings_reoriented, 0);
+}
+
+TEST(DecodeMap, ReversesARingGivenClockwiseWithItsTypes) {
+  // The corridor clockwise: (0,0) (0,3) (20,3) (20,0); the frontier edge is
+  // (20,3) -> (20,0), entry 2.
+  const auto d = decode_map(map_of({ring(0, false, {{0, 0}, {0, 3}, {20, 3}, {20, 0}}, {0, 0, 1, 0})}));
+  ASSERT_TRUE(d.ok) << d.error;
+  EXPECT_EQ(d.rings_reoriented, 1);
+  int frontier_edges = 0;
+  mapping::for_each_edge(d.polygons, [&](const Point& a, const Point& b, EdgeType t) {
+    if (t != EdgeType::kFrontier) return;
+    ++frontier_edges;
+    EXPECT_EQ(a.x(), 20.0);
+    EXPECT_EQ(b.x(), 20.0);
+    EXPECT_LT(a.y(), b.y());  // counter-clockwise now: up the right side
+  });
+  EXPECT_EQ(frontier_edges, 1);
+}
+
+TEST(DecodeMap, RefusesBadMessagesAndDropsBrokenPolygons) {
+  auto nan = corridor();
+  nan.rings[0].x[1] = std::nan("");
+  EXPECT_FALSE(decode_map(nan).ok);
+  auto bad_type = corridor();
+  bad_type.rings[0].edge_type[0] = 5;
+  EXPECT_NE(decode_map(bad_type).error.find("edge type"), std::string::npos);
+  auto count = corridor();
+  count.nrings = 3;
+  EXPECT_FALSE(decode_map(count).ok);
+  auto sizes = corridor();
+  sizes.rings[0].y.pop_back();
+  EXPECT_FALSE(decode_map(sizes).ok);
+  MapDecodeOptions small;
+  small.max_vertices = 3;
+  EXPECT_NE(decode_map(corridor(), small).error.find("limit"), std::string::npos);
+  // A bow-tie polygon beside a good one: the bow-tie goes, the room stays.
+  const auto mixed = decode_map(map_of({ring(0, false, {{0, 0}, {10, 0}, {10, 10}, {0, 10}}),
+                                        ring(1, false, {{20, 0}, {22, 2}, {22, 0}, {20, 2}})}));
+  ASSERT_TRUE(mixed.ok) << mixed.error;
+  EXPECT_EQ(mixed.polygons.size(), 1u);
+  EXPECT_EQ(mixed.polygons_dropped, 1);
+  // Only broken polygons: refused.
+  EXPECT_FALSE(decode_map(map_of({ring(1, false, {{20, 0}, {22, 2}, {22, 0}, {20, 2}})})).ok);
+  // An empty map is a map (nothing seen yet).
+  EXPECT_TRUE(decode_map(map_of({})).ok);
+}
+
+TEST(DecodeMap, EncodeDecodeRoundTrip) {
+  const auto first = decode_map(corridor());
+  ASSERT_TRUE(first.ok);
+  const auto again = decode_map(encode_map(first.polygons, 1));
+  ASSERT_TRUE(again.ok);
+  ASSERT_EQ(again.polygons.size(), 1u);
+  EXPECT_EQ(again.polygons[0].edge_types, first.polygons[0].edge_types);
+  EXPECT_TRUE(boost::geometry::equals(again.polygons[0].geometry, first.polygons[0].geometry));
+}
+
+TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
+  for (const char* file : {"/config/explorer.toml"}) {
+    auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + file);
+    config.get<int>("heartbeat_period_ms", 1000);  // read by run_daemon
+    const auto o = load_options(config);
+    EXPECT_NO_THROW(config.finish()) << file;
+    EXPECT_EQ(o.pose_channel, "SLAM_POSE");
+    EXPECT_EQ(o.mission.planner.cspace.robot_radius_m, 0.27);
+  }
+}
+
+TEST(ExplorerOptions, RejectsBadValues) {
+  for (const char* text : {"pose_channel = \"MAP\"", "robot_radius_m = -1.0", "max_speed_mps = 0.0",
+                           "turn_in_place_rad = 0.2\nturn_in_place_exit_rad = 0.5",
+                           "robot_radius_m = 1.5\ncandidate_snap_distance_m = 1.0"}) {
+    auto config = runtime::ConfigReader::from_string(text, "test.toml");
+    EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
+  }
+  auto sim = runtime::ConfigReader::from_string("pose_channel = \"SIM_TRUTH\"", "test.toml");
+  EXPECT_EQ(load_options(sim).pose_channel, "SIM_TRUTH");
+}
+
+TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {
+  ExplorerOptions options;
+  ExplorerNode node(options);
+  EXPECT_EQ(node.step(0).v, 0.0);
+  EXPECT_EQ(node.state_message(0).phase, +pex::explore_state_t::PHASE_IDLE);
+
+  pex::pose_t pose{};
+  pose.x = 10;
+  pose.y = 1.5;
+  ASSERT_EQ(node.on_map(corridor(), 0), "");
+  ASSERT_EQ(node.on_pose(pose, 0), "");
+  node.step(0);
+  ASSERT_EQ(node.on_pose(pose, 100'000), "");
+  const auto cmd = node.step(100'000);
+  EXPECT_GT(cmd.v, 0.0);
+  EXPECT_EQ(cmd.source, "explorer");
+  const auto state = node.state_message(100'000);
+  EXPECT_EQ(state.phase, +pex::explore_state_t::PHASE_MOVING);
+  EXPECT_GE(state.npath, 2);
+  EXPECT_EQ(state.path_x.size(), static_cast<std::size_t>(state.npath));
+  const auto& cs = options.mission.planner.cspace;
+  EXPECT_NEAR(state.goal_x, 20.0 - cs.robot_radius_m - cs.clearance_margin_m, 0.01);
+  EXPECT_EQ(state.goal_candidates, 1);
+  EXPECT_NEAR(state.explored_area_m2, 60.0, 1e-9);
+
+  const auto stale = node.step(2'000'000);  // no pose for 1.9 s
+  EXPECT_EQ(stale.v, 0.0);
+  EXPECT_EQ(stale.omega, 0.0);
+  EXPECT_TRUE(node.last_output().degraded);
+  EXPECT_NE(node.state_message(2'000'000).status.find("DEGRADED"), std::string::npos);
+
+  pex::pose_t bad = pose;
+  bad.theta = std::nan("");
+  EXPECT_NE(node.on_pose(bad, 2'100'000), "");
+  auto broken = corridor();
+  broken.rings[0].edge_type[0] = 9;
+  EXPECT_NE(node.on_map(broken, 2'100'000), "");
+  EXPECT_EQ(node.counters().maps_accepted, 1);
+}
+
+}  // namespace
+}  // namespace pex::explorer
