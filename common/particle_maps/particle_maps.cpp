@@ -1,8 +1,10 @@
 #include "particle_maps/particle_maps.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
+#include <thread>
 #include <tuple>
 
 namespace pex::particle_maps {
@@ -30,7 +32,8 @@ mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const Po
 
 ParticleMaps::ParticleMaps(ParticleMapsOptions options) : options_(std::move(options)) {}
 
-UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, const SensorScan& scan) {
+UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, const SensorScan& scan,
+                                  const mapping::ScanPolygonOptions& scan_options) {
   UpdateResult r;
   if (particles.empty() || static_cast<int>(particles.size()) > options_.max_particles) {
     r.error = "particle count " + std::to_string(particles.size()) + " not in [1, " +
@@ -53,28 +56,42 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
 
   // The scan's polygon once, in the sensor frame; each particle gets a moved copy.
   const mapping::ScanPolygonResult local =
-      mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, Pose2{}, options_.scan);
+      mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, Pose2{}, scan_options);
 
   std::vector<mapping::PolygonMap> next;
   next.reserve(particles.size());
   // Children of one parent at bit-identical poses get identical maps: insert once.
-  std::map<std::tuple<int, double, double, double>, std::size_t> done;
-  for (const auto& p : particles) {
+  std::map<std::tuple<int, double, double, double>, std::size_t> first_with_key;
+  std::vector<std::size_t> copy_of(particles.size());  // index whose map this one repeats
+  std::vector<std::size_t> to_insert;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const auto& p = particles[i];
     const int parent = first ? -1 : p.parent;
-    const auto key = std::make_tuple(parent, p.pose.x, p.pose.y, p.pose.theta);
-    if (auto it = done.find(key); it != done.end()) {
-      next.push_back(next[it->second]);
-      continue;
-    }
+    const auto [it, inserted] = first_with_key.emplace(std::make_tuple(parent, p.pose.x, p.pose.y, p.pose.theta), i);
+    copy_of[i] = it->second;
     next.push_back(first ? mapping::PolygonMap(options_.map) : maps_[static_cast<std::size_t>(parent)]);
-    if (local.ok) {
-      const auto result =
-          next.back().insert(transformed(local.polygon, compose(p.pose, scan.sensor_in_base)));
-      ++r.inserts;
-      if (!result.ok) ++r.insert_failures;
-    }
-    done.emplace(key, next.size() - 1);
+    if (inserted && local.ok) to_insert.push_back(i);
   }
+  // The inserts: each touches its own map only, so they can run side by side.
+  std::vector<char> failed(particles.size(), 0);
+  auto work = [&](std::size_t worker, std::size_t workers) {
+    for (std::size_t k = worker; k < to_insert.size(); k += workers) {
+      const std::size_t i = to_insert[k];
+      const auto result =
+          next[i].insert(transformed(local.polygon, compose(particles[i].pose, scan.sensor_in_base)));
+      failed[i] = result.ok ? 0 : 1;
+    }
+  };
+  const std::size_t workers =
+      std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(options_.threads), to_insert.size()));
+  std::vector<std::thread> pool;
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w, workers);
+  work(0, workers);
+  for (auto& t : pool) t.join();
+  for (std::size_t i = 0; i < particles.size(); ++i)
+    if (copy_of[i] != i) next[i] = next[copy_of[i]];
+  r.inserts = static_cast<int>(to_insert.size());
+  for (char f : failed) r.insert_failures += f;
   maps_ = std::move(next);
   ++updates_;
   r.ok = true;

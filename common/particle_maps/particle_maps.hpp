@@ -18,8 +18,10 @@ namespace pex::particle_maps {
 
 struct ParticleMapsOptions {
   mapping::PolygonMapOptions map;
-  mapping::ScanPolygonOptions scan;
   int max_particles = 1000;  // an update with more is refused as bad input
+  // Inserts of one update run on this many threads; each map is written by one
+  // thread only, so the result does not depend on the count.
+  int threads = 1;
 };
 
 // One particle of a filter update: its pose (map frame) when the scan was
@@ -61,7 +63,8 @@ class ParticleMaps {
   // particles (all -1, or valid indices, on the first update any parent is
   // ignored). On bad input (parent out of range, non-finite pose, too many
   // particles) nothing changes and ok is false.
-  UpdateResult update(const std::vector<ParticleState>& particles, const SensorScan& scan);
+  UpdateResult update(const std::vector<ParticleState>& particles, const SensorScan& scan,
+                      const mapping::ScanPolygonOptions& scan_options);
 
   std::size_t size() const { return maps_.size(); }
   const mapping::PolygonMap& map(std::size_t particle) const { return maps_.at(particle); }

@@ -33,9 +33,11 @@ SensorScan scan_of(const std::vector<float>& ranges) {
   return SensorScan{ranges, -M_PI / 2, M_PI / 180, Pose2{}};
 }
 
-pex::particle_maps::ParticleMapsOptions options() {
-  pex::particle_maps::ParticleMapsOptions o;
-  o.scan.range_max_m = 30.0;
+pex::particle_maps::ParticleMapsOptions options() { return {}; }
+
+pex::mapping::ScanPolygonOptions scan_options() {
+  pex::mapping::ScanPolygonOptions o;
+  o.range_max_m = 30.0;
   return o;
 }
 
@@ -43,13 +45,13 @@ pex::particle_maps::ParticleMapsOptions options() {
 
 TEST(ParticleMaps, TransformedMovesEveryVertexRigidly) {
   const auto ranges = room_scan({5, 5, 0}, 20, 10);
-  const auto local = pex::mapping::scan_to_polygon(ranges, -M_PI / 2, M_PI / 180, Pose2{}, options().scan);
+  const auto local = pex::mapping::scan_to_polygon(ranges, -M_PI / 2, M_PI / 180, Pose2{}, scan_options());
   ASSERT_TRUE(local.ok) << local.error;
   const Pose2 pose{3.0, -2.0, 0.7};
   const auto moved = pex::particle_maps::transformed(local.polygon, pose);
   EXPECT_NEAR(boost::geometry::area(moved.geometry), boost::geometry::area(local.polygon.geometry), 1e-9);
   // The same polygon as building it at that pose directly.
-  const auto direct = pex::mapping::scan_to_polygon(ranges, -M_PI / 2, M_PI / 180, pose, options().scan);
+  const auto direct = pex::mapping::scan_to_polygon(ranges, -M_PI / 2, M_PI / 180, pose, scan_options());
   ASSERT_TRUE(direct.ok);
   ASSERT_EQ(direct.polygon.geometry.outer().size(), moved.geometry.outer().size());
   for (std::size_t i = 0; i < moved.geometry.outer().size(); ++i) {
@@ -81,7 +83,7 @@ TEST(ParticleMaps, EachMapEqualsTheMapBuiltAlongItsOwnAncestry) {
       next_ancestry.push_back(line);
     }
     ancestry = next_ancestry;
-    const auto r = maps.update(ps, scan_of(scans.back()));
+    const auto r = maps.update(ps, scan_of(scans.back()), scan_options());
     ASSERT_TRUE(r.ok) << r.error;
     EXPECT_TRUE(r.scan_inserted);
   }
@@ -89,7 +91,7 @@ TEST(ParticleMaps, EachMapEqualsTheMapBuiltAlongItsOwnAncestry) {
   for (int i = 0; i < 4; ++i) {
     pex::mapping::PolygonMap oracle(options().map);
     for (int g = 0; g < 3; ++g) {
-      const auto local = pex::mapping::scan_to_polygon(scans[g], -M_PI / 2, M_PI / 180, Pose2{}, options().scan);
+      const auto local = pex::mapping::scan_to_polygon(scans[g], -M_PI / 2, M_PI / 180, Pose2{}, scan_options());
       oracle.insert(pex::particle_maps::transformed(local.polygon, ancestry[i][g]));
     }
     EXPECT_DOUBLE_EQ(maps.map(i).free_area_m2(), oracle.free_area_m2()) << i;
@@ -105,13 +107,13 @@ TEST(ParticleMaps, ChildrenShareTheTilesTheScanDidNotTouch) {
   // right end, so the two touch disjoint tiles.
   const Pose2 left_pose{10, 2, M_PI};
   const auto left = room_scan(left_pose, 80, 4);
-  ASSERT_TRUE(maps.update({{left_pose, -1}}, scan_of(left)).ok);
+  ASSERT_TRUE(maps.update({{left_pose, -1}}, scan_of(left), scan_options()).ok);
   const std::size_t tiles_left = maps.unique_tiles();
   const std::size_t bytes_left = maps.memory_bytes();
   const auto right = room_scan({70, 2, 0}, 80, 4);
   std::vector<ParticleState> children;
   for (int i = 0; i < 30; ++i) children.push_back({{70.0 + 0.01 * i, 2.0, 0.0}, 0});
-  ASSERT_TRUE(maps.update(children, scan_of(right)).ok);
+  ASSERT_TRUE(maps.update(children, scan_of(right), scan_options()).ok);
 
   // Every child holds the left end through the very tiles its parent had.
   for (std::size_t i = 0; i < maps.size(); ++i) {
@@ -122,8 +124,8 @@ TEST(ParticleMaps, ChildrenShareTheTilesTheScanDidNotTouch) {
   }
   // So memory is the left end once plus 30 right ends, not 30 whole maps.
   ParticleMaps single(options());
-  single.update({{left_pose, -1}}, scan_of(left));
-  single.update({{{70.0, 2.0, 0.0}, 0}}, scan_of(right));
+  single.update({{left_pose, -1}}, scan_of(left), scan_options());
+  single.update({{{70.0, 2.0, 0.0}, 0}}, scan_of(right), scan_options());
   const std::size_t one_map = single.memory_bytes();
   ASSERT_GT(one_map, bytes_left);
   // Tiles: the left end's once, each child's own right end.
@@ -136,8 +138,9 @@ TEST(ParticleMaps, ChildrenShareTheTilesTheScanDidNotTouch) {
 TEST(ParticleMaps, IdenticalChildrenInsertOnce) {
   ParticleMaps maps(options());
   const auto s = room_scan({5, 5, 0}, 20, 10);
-  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}}, scan_of(s)).ok);
-  const auto r = maps.update({{{6, 5, 0}, 0}, {{6, 5, 0}, 0}, {{6, 5, 0.1}, 0}}, scan_of(room_scan({6, 5, 0}, 20, 10)));
+  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}}, scan_of(s), scan_options()).ok);
+  const auto r = maps.update({{{6, 5, 0}, 0}, {{6, 5, 0}, 0}, {{6, 5, 0.1}, 0}},
+                             scan_of(room_scan({6, 5, 0}, 20, 10)), scan_options());
   ASSERT_TRUE(r.ok);
   EXPECT_EQ(r.inserts, 2);
   EXPECT_EQ(maps.map(0).free_area_m2(), maps.map(1).free_area_m2());
@@ -146,14 +149,14 @@ TEST(ParticleMaps, IdenticalChildrenInsertOnce) {
 TEST(ParticleMaps, BadParentsOrPosesChangeNothing) {
   ParticleMaps maps(options());
   const auto s = room_scan({5, 5, 0}, 20, 10);
-  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}, {{5.1, 5, 0}, -1}}, scan_of(s)).ok);
+  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}, {{5.1, 5, 0}, -1}}, scan_of(s), scan_options()).ok);
   const double area0 = maps.map(0).free_area_m2();
-  auto r = maps.update({{{6, 5, 0}, 2}}, scan_of(s));  // parent 2 of a generation of 2
+  auto r = maps.update({{{6, 5, 0}, 2}}, scan_of(s), scan_options());  // parent 2 of a generation of 2
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("parent 2"), std::string::npos) << r.error;
-  r = maps.update({{{NAN, 5, 0}, 0}}, scan_of(s));
+  r = maps.update({{{NAN, 5, 0}, 0}}, scan_of(s), scan_options());
   EXPECT_FALSE(r.ok);
-  r = maps.update({}, scan_of(s));
+  r = maps.update({}, scan_of(s), scan_options());
   EXPECT_FALSE(r.ok);
   ASSERT_EQ(maps.size(), 2u);
   EXPECT_EQ(maps.map(0).free_area_m2(), area0);
@@ -163,13 +166,34 @@ TEST(ParticleMaps, BadParentsOrPosesChangeNothing) {
 TEST(ParticleMaps, AScanWithoutPolygonStillAdvancesTheGeneration) {
   ParticleMaps maps(options());
   const auto s = room_scan({5, 5, 0}, 20, 10);
-  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}}, scan_of(s)).ok);
+  ASSERT_TRUE(maps.update({{{5, 5, 0}, -1}}, scan_of(s), scan_options()).ok);
   const std::vector<float> none(181, std::numeric_limits<float>::quiet_NaN());
   const std::vector<float> empty;
-  const auto r = maps.update({{{5, 5, 0}, 0}, {{5, 5, 0}, 0}}, scan_of(empty));
+  const auto r = maps.update({{{5, 5, 0}, 0}, {{5, 5, 0}, 0}}, scan_of(empty), scan_options());
   EXPECT_TRUE(r.ok);
   EXPECT_FALSE(r.scan_inserted);
   EXPECT_EQ(maps.size(), 2u);
   EXPECT_EQ(maps.map(1).free_area_m2(), maps.map(0).free_area_m2());
   (void)none;
+}
+
+TEST(ParticleMaps, ThreadCountDoesNotChangeTheMaps) {
+  auto run = [](int threads) {
+    auto o = options();
+    o.threads = threads;
+    ParticleMaps maps(o);
+    std::vector<ParticleState> ps;
+    for (int i = 0; i < 6; ++i) ps.push_back({{5.0 + 0.02 * i, 5.0, 0.01 * i}, -1});
+    maps.update(ps, scan_of(room_scan({5, 5, 0}, 20, 10)), scan_options());
+    for (auto& p : ps) {
+      p.pose.x += 2.0;
+      p.parent = static_cast<int>(&p - ps.data()) % 3;
+    }
+    maps.update(ps, scan_of(room_scan({7, 5, 0}, 20, 10)), scan_options());
+    std::vector<std::pair<double, std::size_t>> out;
+    for (std::size_t i = 0; i < maps.size(); ++i)
+      out.emplace_back(maps.map(i).free_area_m2(), maps.map(i).free_vertex_count());
+    return out;
+  };
+  EXPECT_EQ(run(1), run(3));
 }

@@ -34,8 +34,9 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   app.add_option("--log-level", g_args.log_level, "trace, debug, info, warn, error, critical, off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
   if (info.supports_replay) {
-    app.add_option("--log", g_args.replay_log,
-                   "replay this LCM log through the same handlers, as fast as possible, then exit")
+    app.add_option("--log", g_args.replay_logs,
+                   "replay this LCM log through the same handlers, as fast as possible, then exit "
+                   "(several: merged by event time)")
         ->check(CLI::ExistingFile);
     app.add_option("--out", g_args.replay_out, "with --log: write what is published to this LCM log");
   }
@@ -56,7 +57,7 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   spdlog::set_default_logger(logger);
   spdlog::set_level(spdlog::level::from_str(g_args.log_level));
 
-  const bool offline = !g_args.replay_log.empty();
+  const bool offline = !g_args.replay_logs.empty();
   const int signal_fd = make_signal_fd();
   try {
     ConfigReader config =
@@ -69,10 +70,11 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
     node.set_signal_fd(signal_fd);
     setup(node, config);
     config.finish();
-    spdlog::info("started ({}; config {})", offline ? "replay of " + g_args.replay_log : "live",
+    spdlog::info("started ({}; config {})",
+                 offline ? "replay of " + std::to_string(g_args.replay_logs.size()) + " log(s)" : "live",
                  config.origin());
     if (offline) {
-      const int64_t events = node.replay_log(g_args.replay_log);
+      const int64_t events = node.replay_logs(g_args.replay_logs);
       spdlog::info("replayed {} events, {} rejected, {} errors", events, node.msgs_rejected(),
                    node.errors());
     } else {

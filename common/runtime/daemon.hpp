@@ -12,6 +12,7 @@
 //   78  bad configuration (EX_CONFIG): unknown key, wrong type, value out of range
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -38,7 +39,8 @@ struct DaemonInfo {
   std::string name;         // "lidar_reader": status name, log prefix
   std::string description;  // one line for --help
   // Adds `--log IN.lcm` (replay a log through the same handlers, as fast as
-  // possible, then exit) and `--out OUT.lcm` (write what it publishes).
+  // possible, then exit; given several times, the logs are merged by event
+  // time) and `--out OUT.lcm` (write what it publishes).
   bool supports_replay = false;
   // Daemon-specific command-line options, registered before parsing.
   std::function<void(CLI::App&)> add_options = {};
@@ -55,7 +57,7 @@ struct CommonArgs {
   std::string config_path;
   std::string lcm_url;
   std::string log_level = "info";
-  std::string replay_log;
+  std::vector<std::string> replay_logs;
   std::string replay_out;
 };
 const CommonArgs& common_args();

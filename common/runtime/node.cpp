@@ -263,15 +263,25 @@ void Node::run() {
   shutdown();
 }
 
-int64_t Node::replay_log(const std::string& path) {
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw std::runtime_error("cannot read LCM log '" + path + "'");
+int64_t Node::replay_logs(const std::vector<std::string>& paths) {
+  std::vector<std::unique_ptr<lcm::LogFile>> logs;
+  std::vector<const lcm::LogEvent*> heads;
+  for (const auto& path : paths) {
+    logs.push_back(std::make_unique<lcm::LogFile>(path, "r"));
+    if (!logs.back()->good()) throw std::runtime_error("cannot read LCM log '" + path + "'");
+    heads.push_back(logs.back()->readNextEvent());
+  }
   if (state_ == pex::daemon_status_t::STATE_STARTING) set_state(pex::daemon_status_t::STATE_OK);
   int64_t events = 0;
   while (!stop_) {
-    const lcm::LogEvent* ev = log.readNextEvent();
-    if (!ev) break;
+    // The earliest head; strict < keeps ties in command-line order.
+    size_t next = heads.size();
+    for (size_t i = 0; i < heads.size(); ++i)
+      if (heads[i] && (next == heads.size() || heads[i]->timestamp < heads[next]->timestamp)) next = i;
+    if (next == heads.size()) break;
+    const lcm::LogEvent* ev = heads[next];
     dispatch(ev->channel, ev->data, ev->datalen, ev->timestamp);
+    heads[next] = logs[next]->readNextEvent();  // invalidates ev
     ++events;
     if (signal_fd_ >= 0 && events % 4096 == 0) {
       pollfd p{signal_fd_, POLLIN, 0};

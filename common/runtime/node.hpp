@@ -126,9 +126,11 @@ class Node {
   void run();
   void request_stop() { stop_ = true; }
   bool stopping() const { return stop_; }
-  // Offline: dispatches every event of an LCM log in order, then stops.
-  // Returns the number of events read. Throws std::runtime_error if unreadable.
-  int64_t replay_log(const std::string& path);
+  // Offline: dispatches every event of the LCM logs in order of event time
+  // (ties: the earlier log on the command line first), then stops. Returns the
+  // number of events read. Throws std::runtime_error if a log is unreadable.
+  int64_t replay_logs(const std::vector<std::string>& paths);
+  int64_t replay_log(const std::string& path) { return replay_logs({path}); }
   // Runs shutdown hooks (once) and publishes a last STATE_STOPPING status.
   void shutdown();
 

@@ -126,3 +126,31 @@ TEST(Node, OfflineOutputLogHoldsPublishedMessages) {
   EXPECT_GE(statuses, 1);  // the final STOPPING status at least
   std::filesystem::remove_all(dir);
 }
+
+TEST(Node, ReplayOfSeveralLogsMergesThemByEventTime) {
+  const auto dir = std::filesystem::temp_directory_path() / ("pex_node_merge_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  auto write_log = [&](const std::string& name, const std::vector<int64_t>& times, double tag) {
+    const std::string path = (dir / name).string();
+    lcm::LogFile log(path, "w");
+    for (int64_t t : times) {
+      const auto buf = encode(pose(t, tag));
+      lcm::LogEvent ev{};
+      ev.timestamp = t;
+      ev.channel = "P";
+      ev.datalen = static_cast<int32_t>(buf.size());
+      ev.data = const_cast<uint8_t*>(buf.data());
+      log.writeEvent(&ev);
+    }
+    return path;
+  };
+  const std::string a = write_log("a.lcm", {10, 30, 50}, 1.0);
+  const std::string b = write_log("b.lcm", {20, 30, 40, 60}, 2.0);
+  Node node(NodeOptions{"t", "", true, "", 1.0});
+  std::vector<std::pair<int64_t, double>> seen;
+  node.subscribe<pex::pose_t>("P", [&](const pex::pose_t& p) { seen.emplace_back(p.utime, p.x); });
+  EXPECT_EQ(node.replay_logs({a, b}), 7);
+  const std::vector<std::pair<int64_t, double>> expected = {{10, 1}, {20, 2}, {30, 1}, {30, 2}, {40, 2}, {50, 1}, {60, 2}};
+  EXPECT_EQ(seen, expected);
+  std::filesystem::remove_all(dir);
+}

@@ -1,12 +1,14 @@
-// pex-polygon-mapper: LIDAR_SCAN + a pose source (ODOMETRY or SIM_TRUTH) ->
-// the typed polygonal map (MAP). All mapping is in common/mapping; this file
-// only wires messages to the Mapper (mapper.hpp).
+// pex-polygon-mapper: LIDAR_SCAN + a pose source (ODOMETRY, SIM_TRUTH, or
+// SLAM_UPDATE with one map per particle) -> the typed polygonal map (MAP). All
+// mapping is in common/mapping and common/particle_maps; this file only wires
+// messages to the Mapper (mapper.hpp).
 #include <chrono>
 #include <memory>
 
 #include <pex/laser_scan_t.hpp>
 #include <pex/odometry_t.hpp>
 #include <pex/pose_t.hpp>
+#include <pex/slam_update_t.hpp>
 
 #include "mapper.hpp"
 #include "runtime/channels.hpp"
@@ -29,6 +31,9 @@ int main(int argc, char** argv) {
       node.counter("scan_polygon_errors") = c.scan_polygon_errors;
       node.counter("failed_tile_updates") = c.failed_tile_updates;
       node.counter("merge_failures") = c.merge_failures;
+      node.counter("slam_updates") = c.slam_updates;
+      node.counter("updates_without_scan") = c.updates_without_scan;
+      node.counter("best_switches") = c.best_switches;
       node.counter("map_vertices") = static_cast<std::int64_t>(mapper->map().planning_vertex_count());
     };
     node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [mapper, report](const pex::laser_scan_t& scan) {
@@ -39,7 +44,21 @@ int main(int argc, char** argv) {
       }
       report();
     });
-    if (mapper->options().pose_source == "odometry") {
+    const std::string& source = mapper->options().pose_source;
+    if (source == "slam") {
+      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, report](const pex::slam_update_t& update) {
+        bool switched = false;
+        try {
+          switched = mapper->on_slam_update(update);
+        } catch (const std::invalid_argument& e) {
+          throw pex::runtime::BadInput(e.what());
+        }
+        // A new best particle: its map goes out now, consistent with its trajectory.
+        if (switched)
+          if (auto msg = mapper->map_message(node.now_utime())) node.publish(ch::kMap, *msg);
+        report();
+      });
+    } else if (source == "odometry") {
       node.subscribe<pex::odometry_t>(ch::kOdometry, [mapper, report](const pex::odometry_t& odom) {
         mapper->on_pose({odom.utime, {odom.x, odom.y, odom.theta}});
         report();

@@ -1,5 +1,6 @@
 #include "mapper.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -23,9 +24,9 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   using runtime::positive;
   using runtime::non_negative;
   MapperOptions o;
-  // "slam" arrives with the SLAM issue (per-particle maps); until then it is refused.
   o.pose_source = config.get<std::string>("pose_source", o.pose_source,
-                                          runtime::one_of({"odometry", "sim_truth"}));
+                                          runtime::one_of({"odometry", "sim_truth", "slam"}));
+  o.threads = config.get<int>("threads", o.threads, runtime::in_range(1, 64));
   o.insert_min_distance_m = config.get<double>("insert_min_distance_m", o.insert_min_distance_m, non_negative<double>());
   o.insert_min_rotation_rad = config.get<double>("insert_min_rotation_rad", o.insert_min_rotation_rad, non_negative<double>());
   o.publish_rate_hz = config.get<double>("publish_rate_hz", o.publish_rate_hz, runtime::in_range(0.01, 100.0));
@@ -85,7 +86,86 @@ PoseBuffer::Lookup PoseBuffer::pose_at(std::int64_t utime, std::int64_t max_gap_
 }
 
 Mapper::Mapper(MapperOptions options)
-    : options_(std::move(options)), poses_(options_.pose_buffer_s), map_(options_.map) {}
+    : options_(std::move(options)),
+      poses_(options_.pose_buffer_s),
+      map_(options_.map),
+      particle_maps_(particle_maps::ParticleMapsOptions{options_.map, 1000, options_.threads}) {}
+
+const mapping::PolygonMap& Mapper::map() const {
+  return best_ >= 0 ? particle_maps_.map(static_cast<std::size_t>(best_)) : map_;
+}
+
+mapping::ScanPolygonOptions Mapper::scan_options_for(const pex::laser_scan_t& scan) const {
+  mapping::ScanPolygonOptions o = options_.scan;
+  o.range_min_m = std::max<double>(o.range_min_m, scan.range_min);
+  o.range_max_m = std::min<double>(o.range_max_m, scan.range_max);
+  o.free_range_m = std::min(o.free_range_m, o.range_max_m);
+  return o;
+}
+
+bool Mapper::on_slam_update(const pex::slam_update_t& update) {
+  if (update.nparticles < 1 || static_cast<std::size_t>(update.nparticles) != update.particles.size())
+    throw std::invalid_argument("SLAM_UPDATE has " + std::to_string(update.nparticles) + " particles in a field of " +
+                                std::to_string(update.particles.size()));
+  if (update.best < 0 || update.best >= update.nparticles)
+    throw std::invalid_argument("SLAM_UPDATE best particle " + std::to_string(update.best) + " out of range");
+  const int previous_best = best_;
+  waiting_updates_.push_back(update);
+  drain_waiting_updates();
+  // An update older than the oldest scan held can never be applied.
+  while (static_cast<int>(waiting_updates_.size()) > options_.max_pending_scans) {
+    waiting_updates_.pop_front();
+    ++counters_.updates_without_scan;
+  }
+  const bool switched = previous_best >= 0 && best_ != previous_best;
+  if (switched) ++counters_.best_switches;
+  return switched;
+}
+
+void Mapper::drain_waiting_updates() {
+  while (!waiting_updates_.empty()) {
+    bool applied = false;
+    try {
+      applied = apply_slam_update(waiting_updates_.front());
+    } catch (const std::invalid_argument&) {
+      waiting_updates_.pop_front();  // a refused update must not block the ones after it
+      throw;
+    }
+    if (!applied) return;
+    waiting_updates_.pop_front();
+  }
+}
+
+bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
+  auto scan = std::find_if(pending_.begin(), pending_.end(),
+                           [&](const pex::laser_scan_t& s) { return s.utime == update.scan_utime; });
+  if (scan == pending_.end()) {
+    if (!pending_.empty() && update.scan_utime < pending_.front().utime) {
+      ++counters_.updates_without_scan;  // its scan has already left the buffer
+      return true;
+    }
+    return false;  // wait for the scan
+  }
+  std::vector<particle_maps::ParticleState> particles;
+  particles.reserve(update.particles.size());
+  for (const auto& p : update.particles) particles.push_back({{p.x, p.y, p.theta}, p.parent});
+  const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment,
+                                              {scan->sensor_x, scan->sensor_y, scan->sensor_theta}};
+  const auto result = particle_maps_.update(particles, sensor_scan, scan_options_for(*scan));
+  if (!result.ok) throw std::invalid_argument("SLAM_UPDATE refused: " + result.error);
+  if (!result.scan_inserted) ++counters_.scan_polygon_errors;
+  counters_.failed_tile_updates += result.insert_failures;
+  ++counters_.slam_updates;
+  ++counters_.scans_inserted;
+  best_ = update.best;
+  generation_ = update.generation;
+  const auto& best = update.particles[static_cast<std::size_t>(update.best)];
+  last_insert_pose_ = mapping::Pose2{best.x, best.y, best.theta};
+  last_scan_utime_ = scan->utime;
+  pending_.erase(pending_.begin(), scan + 1);  // older scans will get no update either
+  dirty_ = true;
+  return true;
+}
 
 void Mapper::on_scan(const pex::laser_scan_t& scan) {
   if (scan.nranges < 2 || static_cast<std::size_t>(scan.nranges) != scan.ranges.size())
@@ -102,7 +182,12 @@ void Mapper::on_scan(const pex::laser_scan_t& scan) {
   pending_.push_back(scan);
   while (static_cast<int>(pending_.size()) > options_.max_pending_scans) {
     pending_.pop_front();
-    ++counters_.scans_without_pose;
+    if (options_.pose_source != "slam") ++counters_.scans_without_pose;
+  }
+  if (options_.pose_source == "slam") {
+    // A scan is kept for the SLAM_UPDATE that names it (most scans get none).
+    drain_waiting_updates();
+    return;
   }
   process_pending();
 }
@@ -140,10 +225,7 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   const mapping::Pose2 sensor{robot.x + c * scan.sensor_x - s * scan.sensor_y,
                               robot.y + s * scan.sensor_x + c * scan.sensor_y,
                               wrap_angle(robot.theta + scan.sensor_theta)};
-  mapping::ScanPolygonOptions scan_options = options_.scan;
-  scan_options.range_min_m = std::max<double>(scan_options.range_min_m, scan.range_min);
-  scan_options.range_max_m = std::min<double>(scan_options.range_max_m, scan.range_max);
-  scan_options.free_range_m = std::min(scan_options.free_range_m, scan_options.range_max_m);
+  const mapping::ScanPolygonOptions scan_options = scan_options_for(scan);
   const auto polygon = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options);
   if (!polygon.ok) {
     ++counters_.scan_polygon_errors;
@@ -194,7 +276,7 @@ pex::polygon_map_t to_message(const mapping::TypedMultiPolygon& polygons) {
 
 std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
   if (dirty_) {
-    const auto merged = map_.planning_map();
+    const auto merged = map().planning_map();
     if (merged.ok) {
       message_ = to_message(merged.polygons);
       dirty_ = false;
@@ -205,7 +287,8 @@ std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
   if (!message_) return std::nullopt;
   message_->utime = now_utime;
   message_->scan_utime = last_scan_utime_;
-  message_->generation = counters_.scans_inserted;
+  message_->particle = best_;
+  message_->generation = best_ >= 0 ? generation_ : counters_.scans_inserted;
   message_->scans_inserted = static_cast<std::int32_t>(counters_.scans_inserted);
   if (last_insert_pose_) {
     message_->robot_x = last_insert_pose_->x;

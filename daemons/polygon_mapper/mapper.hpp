@@ -9,9 +9,11 @@
 
 #include <pex/laser_scan_t.hpp>
 #include <pex/polygon_map_t.hpp>
+#include <pex/slam_update_t.hpp>
 
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
+#include "particle_maps/particle_maps.hpp"
 
 namespace pex::runtime {
 class ConfigReader;
@@ -20,7 +22,10 @@ class ConfigReader;
 namespace pex::polygon_mapper {
 
 struct MapperOptions {
-  std::string pose_source = "odometry";   // "odometry" (ODOMETRY) or "sim_truth" (SIM_TRUTH)
+  // "odometry" (ODOMETRY), "sim_truth" (SIM_TRUTH): one map, scans inserted at
+  // those poses. "slam" (SLAM_UPDATE): one map per particle, every update's scan
+  // inserted under every particle's pose; the best particle's map is published.
+  std::string pose_source = "odometry";
   double insert_min_distance_m = 0.2;     // insert a scan when the robot moved this far ...
   double insert_min_rotation_rad = 0.25;  // ... or turned this much since the last insert
   double publish_rate_hz = 1.0;
@@ -29,6 +34,7 @@ struct MapperOptions {
   int max_pending_scans = 20;             // scans waiting for a newer pose
   mapping::ScanPolygonOptions scan;       // range_max_m caps the sensor's own range_max
   mapping::PolygonMapOptions map;
+  int threads = 1;                        // slam: inserts of one update side by side
 };
 
 // Reads every key of config/polygon_mapper.toml; throws ConfigError on bad values.
@@ -63,6 +69,9 @@ struct MapperCounters {
   std::int64_t scan_polygon_errors = 0;
   std::int64_t failed_tile_updates = 0;
   std::int64_t merge_failures = 0;
+  std::int64_t slam_updates = 0;          // slam: updates applied
+  std::int64_t updates_without_scan = 0;  // slam: updates whose scan never arrived
+  std::int64_t best_switches = 0;         // slam: the best particle changed
 };
 
 class Mapper {
@@ -73,6 +82,10 @@ class Mapper {
   void on_scan(const pex::laser_scan_t& scan);
   // A pose from the configured source.
   void on_pose(const TimedPose& pose);
+  // pose_source "slam": one filter update. Returns true when the best particle
+  // changed, so the caller publishes the new best map at once. Throws
+  // std::invalid_argument for a malformed update (sizes, best index, parents).
+  bool on_slam_update(const pex::slam_update_t& update);
 
   // The MAP message of the current map (merged only when the map changed). If
   // the merge fails the last good message is kept (counted), so a published
@@ -80,13 +93,22 @@ class Mapper {
   std::optional<pex::polygon_map_t> map_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
-  const mapping::PolygonMap& map() const { return map_; }
+  // The map that is published: the single map, or the best particle's.
+  const mapping::PolygonMap& map() const;
+  // slam: the per-particle maps (empty before the first update).
+  const particle_maps::ParticleMaps& particle_maps() const { return particle_maps_; }
   const MapperOptions& options() const { return options_; }
 
  private:
   void process_pending();
   // Inserts if the robot moved enough; false if the scan must wait for a pose.
   bool try_insert(const pex::laser_scan_t& scan);
+  // slam: applies waiting updates in order while their scans are here.
+  void drain_waiting_updates();
+  // slam: applies the update if its scan is here; false if the scan is not.
+  bool apply_slam_update(const pex::slam_update_t& update);
+  // The scan-polygon options with the sensor's own range limits applied.
+  mapping::ScanPolygonOptions scan_options_for(const pex::laser_scan_t& scan) const;
 
   MapperOptions options_;
   PoseBuffer poses_;
@@ -97,6 +119,11 @@ class Mapper {
   std::optional<pex::polygon_map_t> message_;
   bool dirty_ = false;
   MapperCounters counters_;
+  // slam
+  particle_maps::ParticleMaps particle_maps_;
+  std::deque<pex::slam_update_t> waiting_updates_;  // their scan has not arrived yet
+  int best_ = -1;
+  std::int64_t generation_ = 0;
 };
 
 // The MAP message for a typed multipolygon (outer rings CCW, holes CW).

@@ -104,14 +104,142 @@ TEST(Mapper, ScanNewerThanEveryPoseWaitsForOne) {
   EXPECT_EQ(mapper.counters().scans_inserted, 1);
 }
 
-TEST(MapperOptions, ShippedConfigLoadsAndSlamIsRefusedForNow) {
+TEST(MapperOptions, ShippedConfigLoadsAndNamesTheSlamSource) {
   auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + "/config/polygon_mapper.toml");
   const auto options = load_options(config);
   config.get<int>("heartbeat_period_ms", 1000);  // read by run_daemon in the daemon
   EXPECT_NO_THROW(config.finish());
-  EXPECT_EQ(options.pose_source, "odometry");
-  auto slam = runtime::ConfigReader::from_string("pose_source = \"slam\"\n", "test");
-  EXPECT_THROW(load_options(slam), runtime::ConfigError);
+  EXPECT_EQ(options.pose_source, "slam");
+  auto bogus = runtime::ConfigReader::from_string("pose_source = \"gps\"\n", "test");
+  EXPECT_THROW(load_options(bogus), runtime::ConfigError);
+}
+
+// --- pose_source = "slam": one map per particle, best particle's map published.
+
+// Ranges seen from `pose` inside the room [0, 20] x [0, 10]: 181 beams over 180 degrees.
+pex::laser_scan_t room_scan(std::int64_t utime, const mapping::Pose2& pose) {
+  pex::laser_scan_t s{};
+  s.utime = utime;
+  s.angle_min = static_cast<float>(-M_PI / 2);
+  s.angle_increment = static_cast<float>(M_PI / 180);
+  s.range_min = 0.05f;
+  s.range_max = 30.0f;
+  for (int i = 0; i <= 180; ++i) {
+    const double a = pose.theta - M_PI / 2 + i * M_PI / 180, dx = std::cos(a), dy = std::sin(a);
+    double t = 1e9;
+    if (dx > 1e-12) t = std::min(t, (20 - pose.x) / dx);
+    if (dx < -1e-12) t = std::min(t, -pose.x / dx);
+    if (dy > 1e-12) t = std::min(t, (10 - pose.y) / dy);
+    if (dy < -1e-12) t = std::min(t, -pose.y / dy);
+    s.ranges.push_back(static_cast<float>(t));
+  }
+  s.nranges = static_cast<std::int32_t>(s.ranges.size());
+  return s;
+}
+
+pex::slam_update_t slam_update(std::int64_t generation, std::int64_t scan_utime, int best,
+                               const std::vector<std::pair<mapping::Pose2, int>>& particles) {
+  pex::slam_update_t u{};
+  u.utime = scan_utime + 1000;
+  u.scan_utime = scan_utime;
+  u.generation = generation;
+  u.best = best;
+  for (const auto& [pose, parent] : particles) {
+    pex::particle_t p{};
+    p.x = pose.x;
+    p.y = pose.y;
+    p.theta = pose.theta;
+    p.parent = parent;
+    u.particles.push_back(p);
+  }
+  u.nparticles = static_cast<std::int32_t>(u.particles.size());
+  return u;
+}
+
+MapperOptions slam_options() {
+  MapperOptions o;
+  o.pose_source = "slam";
+  return o;
+}
+
+TEST(MapperSlam, BestParticleSwitchPublishesTheNewBestMapBuiltAlongItsTrajectory) {
+  Mapper mapper(slam_options());
+  // The robot drives along y = 5; particle 1 believes it drives along y = 5.6
+  // (its map is shifted). Particle 0 is best until the last update.
+  const std::vector<double> xs = {4.0, 6.0, 8.0};
+  std::vector<pex::laser_scan_t> scans;
+  for (std::size_t g = 0; g < xs.size(); ++g) {
+    scans.push_back(room_scan(1'000'000 * static_cast<std::int64_t>(g + 1), {xs[g], 5.0, 0.0}));
+    mapper.on_scan(scans.back());
+    const int parent = g == 0 ? -1 : 0;
+    const bool last = g + 1 == xs.size();
+    const bool switched = mapper.on_slam_update(slam_update(
+        static_cast<std::int64_t>(g), scans.back().utime, last ? 1 : 0,
+        {{{xs[g], 5.0, 0.0}, parent}, {{xs[g], 5.6, 0.0}, g == 0 ? -1 : 1}}));
+    EXPECT_EQ(switched, last) << g;
+    auto msg = mapper.map_message(scans.back().utime + 2000);
+    ASSERT_TRUE(msg.has_value());
+    EXPECT_EQ(msg->particle, last ? 1 : 0);
+    EXPECT_EQ(msg->generation, static_cast<std::int64_t>(g));
+  }
+  EXPECT_EQ(mapper.counters().best_switches, 1);
+  EXPECT_EQ(mapper.counters().slam_updates, 3);
+
+  // The published map equals a map built from scratch along particle 1's trajectory.
+  mapping::PolygonMap oracle(slam_options().map);
+  for (std::size_t g = 0; g < xs.size(); ++g) {
+    const auto poly = mapping::scan_to_polygon(scans[g].ranges, scans[g].angle_min, scans[g].angle_increment,
+                                               {xs[g], 5.6, 0.0}, mapping::ScanPolygonOptions{});
+    ASSERT_TRUE(poly.ok);
+    oracle.insert(poly.polygon);
+  }
+  const auto expected = oracle.planning_map();
+  ASSERT_TRUE(expected.ok);
+  const auto msg = mapper.map_message(10'000'000);
+  ASSERT_TRUE(msg.has_value());
+  EXPECT_NEAR(msg->free_area_m2, mapping::area(expected.polygons), 1e-9);
+  EXPECT_EQ(msg->vertex_count, static_cast<std::int32_t>(mapping::vertex_count(expected.polygons)));
+  // And it lies where particle 1 saw the room: shifted up by 0.6 m, so its top
+  // reaches y = 10.6 - a little (obstacle band), well above the true wall at 10.
+  double max_y = -1e9;
+  for (const auto& ring : msg->rings)
+    for (double y : ring.y) max_y = std::max(max_y, y);
+  EXPECT_GT(max_y, 10.3);
+  EXPECT_DOUBLE_EQ(msg->robot_y, 5.6);
+}
+
+TEST(MapperSlam, AnUpdateBeforeItsScanWaitsForTheScan) {
+  Mapper mapper(slam_options());
+  const auto scan = room_scan(5'000'000, {5, 5, 0});
+  EXPECT_FALSE(mapper.on_slam_update(slam_update(0, scan.utime, 0, {{{5, 5, 0}, -1}})));
+  EXPECT_EQ(mapper.counters().slam_updates, 0);
+  mapper.on_scan(scan);
+  EXPECT_EQ(mapper.counters().slam_updates, 1);
+  EXPECT_TRUE(mapper.map_message(6'000'000).has_value());
+}
+
+TEST(MapperSlam, MalformedUpdatesAreRefusedAndTheMapsKept) {
+  Mapper mapper(slam_options());
+  const auto scan = room_scan(1'000'000, {5, 5, 0});
+  mapper.on_scan(scan);
+  mapper.on_slam_update(slam_update(0, scan.utime, 0, {{{5, 5, 0}, -1}, {{5, 5.1, 0}, -1}}));
+  const double area = mapper.map().free_area_m2();
+  auto bad = slam_update(1, scan.utime, 5, {{{5, 5, 0}, 0}});  // best out of range
+  EXPECT_THROW(mapper.on_slam_update(bad), std::invalid_argument);
+  bad = slam_update(1, scan.utime, 0, {{{5, 5, 0}, 0}});
+  bad.nparticles = 3;  // disagrees with the array
+  EXPECT_THROW(mapper.on_slam_update(bad), std::invalid_argument);
+  const auto scan2 = room_scan(2'000'000, {6, 5, 0});
+  mapper.on_scan(scan2);
+  EXPECT_THROW(mapper.on_slam_update(slam_update(1, scan2.utime, 0, {{{6, 5, 0}, 7}})), std::invalid_argument);
+  EXPECT_EQ(mapper.particle_maps().size(), 2u);
+  EXPECT_EQ(mapper.map().free_area_m2(), area);
+  // A good update after the refused ones still goes in.
+  const auto scan3 = room_scan(3'000'000, {7, 5, 0});
+  mapper.on_scan(scan3);
+  mapper.on_slam_update(slam_update(1, scan3.utime, 0, {{{7, 5, 0}, 0}, {{7, 5.1, 0}, 1}}));
+  EXPECT_EQ(mapper.counters().slam_updates, 2);
+  EXPECT_GT(mapper.map().free_area_m2(), area);
 }
 
 }  // namespace
