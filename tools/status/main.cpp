@@ -1,6 +1,7 @@
 // pex-status: listens to DAEMON_STATUS for a while and prints one line per
 // daemon — the quick "is the set healthy?" look on a robot with no screen.
 // Exit code 0 if every daemon named with --expect reported STATE_OK, else 1.
+// With --follow-mission it follows the exploration mission instead.
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -10,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <pex/daemon_status_t.hpp>
+#include <pex/explore_state_t.hpp>
 
 #include "runtime/channels.hpp"
 
@@ -33,6 +35,52 @@ void on_status(const lcm::ReceiveBuffer* rb, const std::string&,
     (*latest)[s.name] = s;
 }
 
+void on_explore(const lcm::ReceiveBuffer* rb, const std::string&, pex::explore_state_t* latest) {
+  pex::explore_state_t s{};
+  if (s.decode(rb->data, 0, static_cast<int>(rb->data_size)) == static_cast<int>(rb->data_size)) *latest = s;
+}
+
+const char* phase_name(int8_t p) {
+  switch (p) {
+    case pex::explore_state_t::PHASE_IDLE: return "IDLE";
+    case pex::explore_state_t::PHASE_SELECTING: return "SELECTING";
+    case pex::explore_state_t::PHASE_MOVING: return "MOVING";
+    case pex::explore_state_t::PHASE_DONE: return "DONE";
+    case pex::explore_state_t::PHASE_FAILED: return "FAILED";
+    default: return "?";
+  }
+}
+
+// Follows EXPLORE_STATE until the mission is DONE or FAILED or `seconds` pass,
+// printing progress every `every_s`. Exit 0 on DONE, 1 otherwise.
+int follow_mission(lcm::LCM& lcm, double seconds, double every_s) {
+  pex::explore_state_t latest{};
+  latest.phase = -1;
+  lcm.subscribeFunction(std::string(pex::runtime::channels::kExploreState), &on_explore, &latest);
+  const auto start = std::chrono::steady_clock::now();
+  auto next_print = start;
+  while (true) {
+    lcm.handleTimeout(100);
+    const auto now = std::chrono::steady_clock::now();
+    const double t = std::chrono::duration<double>(now - start).count();
+    const bool over = latest.phase == pex::explore_state_t::PHASE_DONE ||
+                      latest.phase == pex::explore_state_t::PHASE_FAILED;
+    if (now >= next_print || over || t >= seconds) {
+      if (latest.phase < 0)
+        std::printf("%6.0f s  no EXPLORE_STATE yet\n", t);
+      else
+        std::printf("%6.0f s  %-9s explored %7.1f m2  driven %6.1f m  candidates %3d  %s\n", t,
+                    phase_name(latest.phase), latest.explored_area_m2, latest.distance_travelled_m,
+                    latest.goal_candidates, latest.status.c_str());
+      std::fflush(stdout);
+      next_print = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             std::chrono::duration<double>(every_s));
+    }
+    if (over) return latest.phase == pex::explore_state_t::PHASE_DONE ? 0 : 1;
+    if (t >= seconds) return 1;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -45,6 +93,10 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", seconds, "how long to listen")->check(CLI::PositiveNumber);
   app.add_option("--expect", expect, "daemon names that must be OK (exit 1 otherwise)");
   app.add_flag("--counters", counters, "also print each daemon's own counters");
+  double mission_s = 0.0;
+  app.add_option("--follow-mission", mission_s,
+                 "instead: follow EXPLORE_STATE until DONE/FAILED or this many seconds (exit 0 on DONE)")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
 
   lcm::LCM lcm(url);
@@ -52,6 +104,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-status: cannot open LCM at '%s'\n", url.c_str());
     return 1;
   }
+  if (mission_s > 0) return follow_mission(lcm, mission_s, 5.0);
   std::map<std::string, pex::daemon_status_t> latest;
   lcm.subscribeFunction(std::string(pex::runtime::channels::kDaemonStatus), &on_status, &latest);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
