@@ -11,7 +11,7 @@ WORLD=${WORLD:-two_rooms}
 MISSION_S=${MISSION_S:-300}
 SPEED=${SPEED:-1}
 OUT=${OUT:-out}
-BIN=build/bin
+BIN=${BIN:-build/bin}
 [ -f "worlds/$WORLD.wkt" ] || { echo "demo: no world worlds/$WORLD.wkt" >&2; exit 64; }
 mkdir -p "$OUT"
 
