@@ -58,4 +58,13 @@ inline double distance_to_ring(const Point& p, const std::vector<Point>& ring) {
   return best;
 }
 
+// C-space options of a bare disk robot: no margin, no simplification.
+inline CSpaceOptions disk(double radius_m) {
+  CSpaceOptions o;
+  o.robot_radius_m = radius_m;
+  o.clearance_margin_m = 0.0;
+  o.simplify_epsilon_m = 0.0;
+  return o;
+}
+
 }  // namespace pex::planning::testing

@@ -14,14 +14,8 @@ using E = mapping::EdgeType;
 using testing::rectangle;
 using testing::rectangle_hole;
 using testing::typed_polygon;
+using testing::disk;
 
-CSpaceOptions disk(double radius_m) {
-  CSpaceOptions o;
-  o.robot_radius_m = radius_m;
-  o.clearance_margin_m = 0.0;
-  o.simplify_epsilon_m = 0.0;
-  return o;
-}
 
 // Every leg of the path stays in the C-space, and every point along it keeps
 // `clearance` from the walls given.
