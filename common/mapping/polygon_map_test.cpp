@@ -79,6 +79,57 @@ TEST(PolygonMap, TwoScansOfARoomMakeOneRoomWithWallsAsObstacles) {
   EXPECT_EQ(map.failed_tile_updates(), 0);
 }
 
+// The free stretch of the horizontal line y across the doorway [x0, x1]
+// (the piece containing the door's middle), or {nan, nan} when blocked.
+std::pair<double, double> doorway_opening(const TypedMultiPolygon& map, double x0, double x1, double y) {
+  bg::model::linestring<Point> line{{x0 - 1.0, y}, {x1 + 1.0, y}};
+  bg::model::multi_linestring<bg::model::linestring<Point>> pieces;
+  bg::intersection(line, geometry_of(map), pieces);
+  const double mid = 0.5 * (x0 + x1);
+  for (const auto& piece : pieces) {
+    if (piece.size() < 2) continue;
+    const double a = std::min(piece.front().x(), piece.back().x());
+    const double b = std::max(piece.front().x(), piece.back().x());
+    if (a <= mid && mid <= b) return {a, b};
+  }
+  return {std::nan(""), std::nan("")};
+}
+
+// A 1 m door in a thin wall (the office world's corridor walls), seen from
+// typical poses in the room below it: the planning map must leave the doorway
+// open to its true width minus at most a few centimetres per jamb (the band
+// reaches only obstacle_inner_m into the free side, and ends flat at the
+// wall's end).
+TEST(PolygonMap, DoorwayStaysAsWideAsTheDoor) {
+  std::vector<testing::Wall> walls;
+  // Room [0, 8] x [0, 8.5] below a corridor y in [8.5, 11.5] (as in
+  // worlds/office.wkt); 1 m doors at x in [3.5, 4.5] in both corridor walls.
+  auto wall = [&](double ax, double ay, double bx, double by) { walls.push_back({Point(ax, ay), Point(bx, by)}); };
+  wall(0, 0, 8, 0), wall(8, 0, 8, 8.5), wall(0, 0, 0, 20), wall(8, 11.5, 8, 20), wall(0, 20, 8, 20);
+  for (double y : {8.5, 11.5}) wall(0, y, 3.5, y), wall(4.5, y, 12, y);
+  // Typical poses: in the room, in the corridor, and close to the jambs
+  // (where the wall is seen at short range and near normal incidence).
+  const std::vector<Pose2> poses{{2.0, 4.0, 1.2},  {4.0, 5.0, 1.57}, {6.0, 6.0, 2.0},  {4.0, 7.0, 1.57},
+                                 {4.5, 8.0, 0.0},  {3.5, 8.0, 3.14}, {5.5, 9.5, 0.0},  {3.5, 9.0, 5.5},
+                                 {5.0, 9.0, 3.14}, {2.0, 10.0, 0.0}, {6.0, 10.0, 3.14}};
+  std::mt19937_64 rng(3);
+  PolygonMap map;
+  for (const auto& pose : poses) {
+    // The simulated LMS111's range noise (config/sim.toml).
+    const auto r = map.insert(scan_at(walls, pose, 0.012, rng));
+    EXPECT_TRUE(r.ok) << r.error;
+  }
+  const auto planning = map.planning_map();
+  ASSERT_TRUE(planning.ok) << planning.error;
+  const double inner = map.options().obstacle_inner_m;
+  for (double y : {8.45, 8.5, 8.55}) {
+    const auto [a, b] = doorway_opening(planning.polygons, 3.5, 4.5, y);
+    std::printf("doorway at y = %.2f: jambs %.3f / %.3f, width %.3f m\n", y, a, b, b - a);
+    EXPECT_LT(a, 3.5 + inner + 0.03) << "y = " << y;
+    EXPECT_GT(b, 4.5 - inner - 0.03) << "y = " << y;
+  }
+}
+
 TEST(PolygonMap, CopiesShareUntouchedTiles) {
   std::vector<testing::Wall> walls;
   testing::add_box(walls, 0, 0, 40, 6);

@@ -35,6 +35,50 @@ Line fit_line(const std::vector<Point>& points, std::size_t first, std::size_t l
   return line;
 }
 
+// Root-mean-square and largest orthogonal distance of points[first..last] from
+// their least-squares line.
+struct LineResidual {
+  double rms = 0.0;
+  double max = 0.0;
+};
+LineResidual line_residual(const std::vector<Point>& points, std::size_t first, std::size_t last) {
+  const Line line = fit_line(points, first, last);
+  LineResidual r;
+  double sum = 0.0;
+  for (std::size_t i = first; i <= last; ++i) {
+    const double d = (points[i].x() - line.cx) * line.dy - (points[i].y() - line.cy) * line.dx;
+    sum += d * d;
+    r.max = std::max(r.max, std::abs(d));
+  }
+  r.rms = std::sqrt(sum / static_cast<double>(last - first + 1));
+  return r;
+}
+
+// The merge step of split-and-merge: RDP splits at single noisy returns (with
+// range noise near the tolerance, a densely sampled straight wall becomes a
+// zigzag of short edges across the wall). A kept vertex is dropped while the
+// points of its two segments together still fit one line: RMS residual at most
+// max_rms (noise), and no point farther than max_dev from it (a real corner,
+// even one with a short arm, has points far off the merged line); the
+// cheapest vertex goes first.
+void merge_collinear(const std::vector<Point>& points, double max_rms, double max_dev,
+                     std::vector<std::size_t>& kept) {
+  if (max_rms <= 0.0) return;
+  while (kept.size() > 2) {
+    std::size_t best = 0;
+    double best_rms = max_rms;
+    for (std::size_t j = 1; j + 1 < kept.size(); ++j) {
+      const LineResidual r = line_residual(points, kept[j - 1], kept[j + 1]);
+      if (r.rms <= best_rms && r.max <= max_dev) {
+        best = j;
+        best_rms = r.rms;
+      }
+    }
+    if (best == 0) return;
+    kept.erase(kept.begin() + static_cast<std::ptrdiff_t>(best));
+  }
+}
+
 Point project(const Line& line, const Point& p) {
   const double t = (p.x() - line.cx) * line.dx + (p.y() - line.cy) * line.dy;
   return Point(line.cx + t * line.dx, line.cy + t * line.dy);
@@ -59,6 +103,7 @@ std::vector<Point> cluster_polyline(const std::vector<Point>& points, int level,
   std::vector<std::size_t> kept;
   for (std::size_t i = 0; i < points.size(); ++i)
     if (keep[i]) kept.push_back(i);
+  merge_collinear(points, o.merge_max_rms_m, o.merge_max_deviation_m, kept);
   std::vector<Point> out;
   out.reserve(kept.size());
   if (level == 1 || !o.least_squares_refit) {

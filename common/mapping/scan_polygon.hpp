@@ -41,6 +41,16 @@ struct ScanPolygonOptions {
   double break_sigma_m = 0.01;
   // RDP tolerance for cluster polylines.
   double rdp_epsilon_m = 0.03;
+  // Merge step after RDP: a vertex is dropped while the returns of its two
+  // segments fit one line with an RMS residual of at most merge_max_rms_m
+  // (0 = off). Range noise makes RDP split a straight wall at single noisy
+  // returns into short edges across the wall; at a wall's end (a door jamb)
+  // their obstacle band reached obstacle_outer_m into the doorway.
+  double merge_max_rms_m = 0.02;
+  // ... and no return lies farther than this from the merged line, which keeps
+  // real corners whose short arm barely moves the RMS. 0.06 m is 5 sigma of the
+  // LMS1xx's ~12 mm range noise: noise alone almost never exceeds it.
+  double merge_max_deviation_m = 0.06;
   // Least-squares refit of each RDP segment; a vertex from intersecting two
   // fitted lines that moves farther than refit_max_shift_m from its RDP point
   // (nearly parallel lines) keeps the RDP point instead.

@@ -40,6 +40,9 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.scan.break_lambda_rad = scan.get<double>("break_lambda_rad", o.scan.break_lambda_rad, runtime::in_range(0.01, 1.5));
   o.scan.break_sigma_m = scan.get<double>("break_sigma_m", o.scan.break_sigma_m, non_negative<double>());
   o.scan.rdp_epsilon_m = scan.get<double>("rdp_epsilon_m", o.scan.rdp_epsilon_m, non_negative<double>());
+  o.scan.merge_max_rms_m = scan.get<double>("merge_max_rms_m", o.scan.merge_max_rms_m, non_negative<double>());
+  o.scan.merge_max_deviation_m =
+      scan.get<double>("merge_max_deviation_m", o.scan.merge_max_deviation_m, non_negative<double>());
   o.scan.least_squares_refit = scan.get<bool>("least_squares_refit", o.scan.least_squares_refit);
   o.scan.refit_max_shift_m = scan.get<double>("refit_max_shift_m", o.scan.refit_max_shift_m, non_negative<double>());
   o.scan.free_arc_step_rad = scan.get<double>("free_arc_step_rad", o.scan.free_arc_step_rad, runtime::in_range(0.001, 1.0));
