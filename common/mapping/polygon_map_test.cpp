@@ -246,13 +246,7 @@ TEST(PolygonMapProperty, RandomScansKeepEveryMapValid) {
     ASSERT_TRUE(unsimplified.ok) << unsimplified.error;
     std::int64_t mismatches = 0, edges = 0;
     for_each_edge(unsimplified.polygons, [&](const Point& a, const Point& b, EdgeType t) {
-      EdgeType best_type = E::kFrontier;
-      double best = std::numeric_limits<double>::infinity();
-      bool any = false;
-      for (const auto& e : inputs) {
-        const double p = edge_match_penalty(a, b, e.a, e.b);
-        if (!any || better_match(p, e.type, best, best_type)) best = p, best_type = e.type, any = true;
-      }
+      EdgeType best_type = testing::brute_force_type(a, b, inputs);
       if (best_type == E::kBorder) best_type = E::kFrontier;  // merge() turns strays into frontier
       ++edges;
       if (best_type != t) ++mismatches;

@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "mapping/edge_reassignment.hpp"
 #include "mapping/scan_polygon.hpp"
 
 namespace pex::mapping::testing {
@@ -99,6 +100,24 @@ inline std::vector<Wall> rock_field(double w, double h, double spacing_m, std::m
     }
   }
   return walls;
+}
+
+// The reassignment oracle: the type of the input edge with the least penalty
+// for output edge (a, b), scoring every input edge (no index), with the same
+// tie rule as EdgeTypeIndex. kFrontier when there are no inputs.
+inline EdgeType brute_force_type(const Point& a, const Point& b, const std::vector<EdgeTypeIndex::Edge>& inputs) {
+  EdgeType best_type = EdgeType::kFrontier;
+  double best = std::numeric_limits<double>::infinity();
+  bool any = false;
+  for (const auto& e : inputs) {
+    const double p = edge_match_penalty(a, b, e.a, e.b);
+    if (!any || better_match(p, e.type, best, best_type)) {
+      best = p;
+      best_type = e.type;
+      any = true;
+    }
+  }
+  return best_type;
 }
 
 }  // namespace pex::mapping::testing

@@ -121,13 +121,7 @@ TEST(TypedUnion, RandomScanUnionsAgreeWithBruteForceOracle) {
     for_each_edge(map, [&](const Point& a, const Point& b, EdgeType t) { inputs.push_back({a, b, t}); });
     for_each_edge(scan.polygon, [&](const Point& a, const Point& b, EdgeType t) { inputs.push_back({a, b, t}); });
     for_each_edge(result.polygons, [&](const Point& a, const Point& b, EdgeType t) {
-      EdgeType best_type = E::kFrontier;
-      double best = std::numeric_limits<double>::infinity();
-      bool any = false;
-      for (const auto& e : inputs) {
-        const double p = edge_match_penalty(a, b, e.a, e.b);
-        if (!any || better_match(p, e.type, best, best_type)) best = p, best_type = e.type, any = true;
-      }
+      EdgeType best_type = testing::brute_force_type(a, b, inputs);
       ++edges;
       if (best_type != t) ++mismatches;
     });
