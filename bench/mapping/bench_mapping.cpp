@@ -163,7 +163,7 @@ int main(int argc, char** argv) {
   Fixture& f = fixture(10000, true);
   std::size_t stored_vertices = 0;
   for (const auto& [key, tile] : f.map.tiles())
-    stored_vertices += vertex_count(tile->free) + vertex_count(tile->obstacles) + vertex_count(tile->planning);
+    stored_vertices += vertex_count(tile->free) + vertex_count(tile->obstacles) + vertex_count(tile->planning());
   const double bytes = static_cast<double>(f.map.memory_bytes());
   const double grid_bytes = f.explored_area_m2 / (0.05 * 0.05);
   std::printf("# 10k map: %zu tiles, %.0f bytes, %zu stored vertices, explored %.0f m2, grid %.0f bytes\n",

@@ -139,6 +139,94 @@ MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double oute
   return band;
 }
 
+Tile::Tile(Box box_in, TypedMultiPolygon free_in, TypedMultiPolygon obstacles_in,
+           std::shared_ptr<const TypedMultiPolygon> last_good_planning, PlanningOptions options)
+    : box(box_in),
+      free(std::move(free_in)),
+      obstacles(std::move(obstacles_in)),
+      options_(options),
+      fallback_(std::move(last_good_planning)) {}
+
+const TypedMultiPolygon& Tile::planning() const {
+  const std::lock_guard lock(mutex_);
+  if (!planning_) compute_planning();
+  return *planning_;  // never replaced once set, so the reference stays good
+}
+
+bool Tile::planning_computed() const {
+  const std::lock_guard lock(mutex_);
+  return planning_ != nullptr;
+}
+
+bool Tile::planning_failed() const {
+  planning();
+  const std::lock_guard lock(mutex_);
+  return !error_.empty();
+}
+
+std::string Tile::planning_error() const {
+  planning();
+  const std::lock_guard lock(mutex_);
+  return error_;
+}
+
+std::shared_ptr<const TypedMultiPolygon> Tile::last_good_planning() const {
+  const std::lock_guard lock(mutex_);
+  // Not computed yet: pass on this tile's own fallback rather than keep this
+  // version alive (a chain of never-read versions would hold every old tile
+  // of a particle's lineage).
+  if (!planning_ || !error_.empty()) return fallback_;
+  return planning_;
+}
+
+std::size_t Tile::memory_bytes() const {
+  std::size_t bytes = sizeof(Tile) + mapping::memory_bytes(free) + mapping::memory_bytes(obstacles);
+  const std::lock_guard lock(mutex_);
+  if (planning_) bytes += mapping::memory_bytes(*planning_);
+  else if (fallback_) bytes += mapping::memory_bytes(*fallback_);
+  return bytes;
+}
+
+void Tile::compute_planning() const {
+  auto fail = [this](std::string why) {
+    error_ = std::move(why);
+    planning_ = fallback_ ? fallback_ : std::make_shared<const TypedMultiPolygon>();
+  };
+  TypedMultiPolygon planning;
+  if (obstacles.empty()) {
+    planning = free;
+    // Without obstacles every free edge is a frontier (borders stay).
+    for (auto& p : planning)
+      for (auto& ring : p.edge_types)
+        for (auto& t : ring)
+          if (t != EdgeType::kBorder) t = EdgeType::kFrontier;
+  } else {
+    TypedOpOptions typed;
+    typed.assign_edge_types = options_.assign_edge_types;
+    typed.validate = false;  // validated once below, after RDP
+    typed.border_box = box;
+    auto difference = typed_difference(free, obstacles, EdgeType::kFrontier, EdgeType::kObstacle, typed);
+    if (!difference.ok) {
+      fail(difference.error);
+    } else {
+      // A difference lies between (free - obstacles) and free.
+      const double a_free = area(free), a_diff = area(difference.polygons);
+      if (a_diff > a_free + 1e-6 || a_diff < a_free - area(obstacles) - 1e-6) {
+        fail("difference area out of bounds");
+      } else {
+        planning = std::move(difference.polygons);
+        std::string why;
+        if (!simplify_and_validate(planning, options_.simplify_epsilon_m, why))
+          fail("planning layer invalid: " + why);
+      }
+    }
+  }
+  if (error_.empty()) {
+    planning_ = std::make_shared<const TypedMultiPolygon>(std::move(planning));
+    fallback_.reset();  // superseded
+  }
+}
+
 PolygonMap::PolygonMap(PolygonMapOptions options) : options_(options) {}
 
 Box PolygonMap::tile_box(const TileKey& key) const {
@@ -248,6 +336,7 @@ InsertResult PolygonMap::insert(const TypedPolygon& scan) {
   }
 
   // Phase 2: update the tiles, each from its pieces.
+  const Tile::PlanningOptions planning_options{options_.simplify_epsilon_m, options_.assign_edge_types};
   for (auto& piece : pieces) {
     {  // (one tile)
       const TileKey& key = piece.key;
@@ -260,8 +349,7 @@ InsertResult PolygonMap::insert(const TypedPolygon& scan) {
 
       const auto found = tiles_.find(key);
       const Tile* old = found == tiles_.end() ? nullptr : found->second.get();
-      auto next = std::make_shared<Tile>();
-      next->box = box;
+      TypedMultiPolygon free, obstacles;
       if (old && !old->free.empty()) {
         auto merged = typed_union(old->free, piece.free, tile_options);
         if (!merged.ok) { fail_tile(merged.error); continue; }
@@ -273,9 +361,9 @@ InsertResult PolygonMap::insert(const TypedPolygon& scan) {
         }
         result.reassign.edges += merged.reassign.edges;
         result.reassign.candidates += merged.reassign.candidates;
-        next->free = std::move(merged.polygons);
+        free = std::move(merged.polygons);
       } else {
-        next->free = std::move(piece.free);
+        free = std::move(piece.free);
       }
       if (old && !old->obstacles.empty() && !piece.band.empty()) {
         auto merged = typed_union(old->obstacles, piece.band, band_options);
@@ -285,53 +373,34 @@ InsertResult PolygonMap::insert(const TypedPolygon& scan) {
           fail_tile("obstacle union area out of bounds");
           continue;
         }
-        next->obstacles = std::move(merged.polygons);
+        obstacles = std::move(merged.polygons);
       } else {
-        next->obstacles = old && piece.band.empty() ? old->obstacles : std::move(piece.band);
+        obstacles = old && piece.band.empty() ? old->obstacles : std::move(piece.band);
       }
       const double area_before = old ? area(old->free) : 0.0;
-      const double area_after_union = area(next->free);
-      if (!simplify_and_validate(next->free, options_.simplify_epsilon_m, why) ||
-          !simplify_and_validate(next->obstacles, options_.simplify_epsilon_m, why)) {
+      const double area_after_union = area(free);
+      if (!simplify_and_validate(free, options_.simplify_epsilon_m, why) ||
+          !simplify_and_validate(obstacles, options_.simplify_epsilon_m, why)) {
         fail_tile("tile invalid after union: " + why);
         continue;
       }
-      if (next->obstacles.empty()) {
-        next->planning = next->free;
-        // Without obstacles every free edge is a frontier (borders stay).
-        for (auto& p : next->planning)
-          for (auto& ring : p.edge_types)
-            for (auto& t : ring)
-              if (t != EdgeType::kBorder) t = EdgeType::kFrontier;
-      } else {
-        auto planning = typed_difference(next->free, next->obstacles, EdgeType::kFrontier,
-                                         EdgeType::kObstacle, tile_options);
-        if (!planning.ok) { fail_tile(planning.error); continue; }
-        // A difference lies between (free - obstacles) and free.
-        const double a_free = area(next->free), a_diff = area(planning.polygons);
-        if (a_diff > a_free + 1e-6 || a_diff < a_free - area(next->obstacles) - 1e-6) {
-          fail_tile("difference area out of bounds");
-          continue;
-        }
-        result.reassign.edges += planning.reassign.edges;
-        result.reassign.candidates += planning.reassign.candidates;
-        next->planning = std::move(planning.polygons);
-        if (!simplify_and_validate(next->planning, options_.simplify_epsilon_m, why)) {
-          fail_tile("tile invalid after difference: " + why);
-          continue;
-        }
-      }
       result.free_area_before_m2 += area_before;
       result.free_area_after_union_m2 += area_after_union;
-      tiles_[key] = std::move(next);
+      tiles_[key] = std::make_shared<const Tile>(box, std::move(free), std::move(obstacles),
+                                                 old ? old->last_good_planning() : nullptr, planning_options);
     }
   }
   ++scans_inserted_;
   return result;
 }
 
-MergeResult PolygonMap::merge(TypedMultiPolygon Tile::*layer, double simplify_epsilon_m) const {
+MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
   MergeResult result;
+  auto polygons_of = [layer](const Tile& tile) -> const TypedMultiPolygon& {
+    return layer == Layer::kFree ? tile.free : tile.planning();
+  };
+  if (layer == Layer::kPlanning)
+    for (const auto& [key, tile] : tiles_) result.stale_planning_tiles += tile->planning_failed() ? 1 : 0;
   // Balanced cascade: each vertex takes part in O(log tiles) unions.
   auto cascade = [](std::vector<MultiPolygon> work) {
     while (work.size() > 1) {
@@ -359,7 +428,7 @@ MergeResult PolygonMap::merge(TypedMultiPolygon Tile::*layer, double simplify_ep
     EdgeTypeIndex index;
     for (const auto& [key, tile] : tiles_) {
       MultiPolygon touching;
-      for (const auto& polygon : (*tile).*layer) {
+      for (const auto& polygon : polygons_of(*tile)) {
         bool on_border = attempt > 0;
         for (const auto& ring : polygon.edge_types)
           on_border = on_border || std::find(ring.begin(), ring.end(), EdgeType::kBorder) != ring.end();
@@ -405,10 +474,10 @@ MergeResult PolygonMap::merge(TypedMultiPolygon Tile::*layer, double simplify_ep
 }
 
 MergeResult PolygonMap::free_space(std::optional<double> simplify_epsilon_m) const {
-  return merge(&Tile::free, simplify_epsilon_m.value_or(options_.simplify_epsilon_m));
+  return merge(Layer::kFree, simplify_epsilon_m.value_or(options_.simplify_epsilon_m));
 }
 MergeResult PolygonMap::planning_map(std::optional<double> simplify_epsilon_m) const {
-  return merge(&Tile::planning, simplify_epsilon_m.value_or(options_.simplify_epsilon_m));
+  return merge(Layer::kPlanning, simplify_epsilon_m.value_or(options_.simplify_epsilon_m));
 }
 
 std::size_t PolygonMap::free_vertex_count() const {
@@ -419,7 +488,7 @@ std::size_t PolygonMap::free_vertex_count() const {
 
 std::size_t PolygonMap::planning_vertex_count() const {
   std::size_t n = 0;
-  for (const auto& [key, tile] : tiles_) n += vertex_count(tile->planning);
+  for (const auto& [key, tile] : tiles_) n += vertex_count(tile->planning());
   return n;
 }
 
@@ -431,11 +500,7 @@ double PolygonMap::free_area_m2() const {
 
 std::size_t PolygonMap::memory_bytes() const {
   std::size_t bytes = 0;
-  for (const auto& [key, tile] : tiles_) {
-    bytes += sizeof(Tile) + 64;  // tile, map node and control block
-    bytes += mapping::memory_bytes(tile->free) + mapping::memory_bytes(tile->obstacles) +
-             mapping::memory_bytes(tile->planning);
-  }
+  for (const auto& [key, tile] : tiles_) bytes += 64 + tile->memory_bytes();  // + map node and control block
   return bytes;
 }
 

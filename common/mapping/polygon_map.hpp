@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
@@ -42,11 +43,53 @@ struct PolygonMapOptions {
   bool assign_edge_types = true;
 };
 
-struct Tile {
+// One square of the map. An insert writes free and obstacles; the planning
+// layer (free minus obstacles) is derived from them on first use and kept.
+// Why lazily: only a map that is published or planned on needs it, and with
+// one map per SLAM particle most tile versions are never read before the next
+// insert replaces them (the difference was a third of an insert's cost).
+// Thread-safe: a tile shared by several particle maps may be asked for its
+// planning layer from several threads; it is computed once.
+class Tile {
+ public:
+  struct PlanningOptions {
+    double simplify_epsilon_m = 0.0;
+    bool assign_edge_types = true;
+  };
+  // `last_good_planning`: the newest planning layer computed for an earlier
+  // version of this tile (null if none); planning() falls back to it if the
+  // difference fails, so a failure keeps the last good state.
+  Tile(Box box, TypedMultiPolygon free, TypedMultiPolygon obstacles,
+       std::shared_ptr<const TypedMultiPolygon> last_good_planning, PlanningOptions options);
+  Tile(const Tile&) = delete;
+  Tile& operator=(const Tile&) = delete;
+
   Box box;
   TypedMultiPolygon free;       // obstacle / frontier / border
   TypedMultiPolygon obstacles;  // obstacle / border
-  TypedMultiPolygon planning;   // free minus obstacles: frontier / obstacle / border
+
+  // Free minus obstacles: frontier / obstacle / border. Computed on the first call.
+  const TypedMultiPolygon& planning() const;
+  // Computed already (planning() costs nothing), and whether that failed:
+  // then planning() is the last good layer (or empty) and planning_error() says why.
+  bool planning_computed() const;
+  bool planning_failed() const;
+  std::string planning_error() const;
+  // For the next version of this tile: this tile's planning layer if it has
+  // been computed and is its own, else the one this tile would fall back to.
+  std::shared_ptr<const TypedMultiPolygon> last_good_planning() const;
+  // Heap bytes of the layers (the planning layer once computed, fallback included).
+  std::size_t memory_bytes() const;
+
+ private:
+  // Caller holds mutex_.
+  void compute_planning() const;
+
+  PlanningOptions options_;
+  mutable std::mutex mutex_;  // guards the members below
+  mutable std::shared_ptr<const TypedMultiPolygon> fallback_;  // released once computed
+  mutable std::shared_ptr<const TypedMultiPolygon> planning_;  // null until computed
+  mutable std::string error_;  // empty unless the difference failed
 };
 
 struct InsertResult {
@@ -66,6 +109,9 @@ struct MergeResult {
   std::string error;
   TypedMultiPolygon polygons;
   std::int64_t stray_border_edges = 0;  // tile-border edges left after merging (typed frontier)
+  // Tiles whose planning layer could not be derived from their free and
+  // obstacle layers: they took part with their last good planning layer.
+  std::int64_t stale_planning_tiles = 0;
 };
 
 // The obstacle band of a scan polygon: each maximal chain of obstacle edges
@@ -87,7 +133,8 @@ class PolygonMap {
   MergeResult free_space(std::optional<double> simplify_epsilon_m = std::nullopt) const;
   MergeResult planning_map(std::optional<double> simplify_epsilon_m = std::nullopt) const;
 
-  // Sums over tiles (tile-border vertices included).
+  // Sums over tiles (tile-border vertices included). planning_vertex_count()
+  // derives the planning layer of every tile that has not got it yet.
   std::size_t free_vertex_count() const;
   std::size_t planning_vertex_count() const;
   double free_area_m2() const;
@@ -104,7 +151,8 @@ class PolygonMap {
 
  private:
   Box tile_box(const TileKey& key) const;
-  MergeResult merge(TypedMultiPolygon Tile::*layer, double simplify_epsilon_m) const;
+  enum class Layer { kFree, kPlanning };
+  MergeResult merge(Layer layer, double simplify_epsilon_m) const;
 
   PolygonMapOptions options_;
   std::map<TileKey, std::shared_ptr<const Tile>> tiles_;

@@ -216,7 +216,7 @@ TEST(PolygonMapProperty, RandomScansKeepEveryMapValid) {
       std::string why;
       ASSERT_TRUE(is_valid(tile->free, &why)) << "scan " << k << " free: " << why;
       ASSERT_TRUE(is_valid(tile->obstacles, &why)) << "scan " << k << " obstacles: " << why;
-      ASSERT_TRUE(is_valid(tile->planning, &why)) << "scan " << k << " planning: " << why;
+      ASSERT_TRUE(is_valid(tile->planning(), &why)) << "scan " << k << " planning: " << why;
     }
     if ((k + 1) % 500 != 0) continue;
     // A merge either gives a valid map or an explicit error (the daemon then

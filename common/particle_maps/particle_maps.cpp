@@ -116,8 +116,7 @@ std::size_t ParticleMaps::memory_bytes() const {
              m.tiles().size() * (sizeof(mapping::PolygonMap::TileKey) + 2 * sizeof(void*) + 32);
     for (const auto& [key, tile] : m.tiles()) {
       if (!seen.insert(tile.get()).second) continue;
-      bytes += sizeof(mapping::Tile) + mapping::memory_bytes(tile->free) +
-               mapping::memory_bytes(tile->obstacles) + mapping::memory_bytes(tile->planning);
+      bytes += tile->memory_bytes();
     }
   }
   return bytes;
