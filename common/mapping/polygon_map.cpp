@@ -81,19 +81,34 @@ bool valid_layer(const TypedMultiPolygon& layer, std::string& why) {
   return bg::is_valid(geometry_of(layer), why);
 }
 
-// RDP then one validity check; if the simplified layer is invalid, the
-// unsimplified one is checked and kept. False if neither is valid.
+// RDP then one validity check of the whole layer. If RDP made the layer
+// invalid (rare), RDP again polygon by polygon, keeping each polygon it would
+// break, and check once more; then the unsimplified layer. False if none is valid.
 bool simplify_and_validate(TypedMultiPolygon& layer, double epsilon_m, std::string& why) {
   if (epsilon_m > 0.0) {
-    TypedMultiPolygon simplified = simplify_typed(layer, epsilon_m);
-    if (valid_layer(simplified, why)) {
-      layer = std::move(simplified);
-      return true;
+    for (const bool check_each_polygon : {false, true}) {
+      TypedMultiPolygon simplified = simplify_typed(layer, epsilon_m, check_each_polygon);
+      if (valid_layer(simplified, why)) {
+        layer = std::move(simplified);
+        return true;
+      }
     }
   }
   return valid_layer(layer, why);
 }
 
+// The same for all but the last `unchanged_tail` polygons, which are kept as
+// they are (simplified and checked when they were made).
+bool simplify_and_validate(TypedMultiPolygon& layer, std::size_t unchanged_tail, double epsilon_m,
+                           std::string& why) {
+  if (unchanged_tail == 0) return simplify_and_validate(layer, epsilon_m, why);
+  const auto split = layer.end() - static_cast<std::ptrdiff_t>(unchanged_tail);
+  TypedMultiPolygon changed(std::make_move_iterator(layer.begin()), std::make_move_iterator(split));
+  if (!changed.empty() && !simplify_and_validate(changed, epsilon_m, why)) return false;
+  changed.insert(changed.end(), std::make_move_iterator(split), std::make_move_iterator(layer.end()));
+  layer = std::move(changed);
+  return true;
+}
 
 }  // namespace
 
@@ -349,38 +364,46 @@ InsertResult PolygonMap::insert(const TypedPolygon& scan) {
 
       const auto found = tiles_.find(key);
       const Tile* old = found == tiles_.end() ? nullptr : found->second.get();
-      TypedMultiPolygon free, obstacles;
-      if (old && !old->free.empty()) {
-        auto merged = typed_union(old->free, piece.free, tile_options);
-        if (!merged.ok) { fail_tile(merged.error); continue; }
+      // One layer: old ∪ piece. Returns false (tile failed) on an error or an
+      // area out of bounds; `unchanged` = polygons at the end kept as they were.
+      auto unite = [&](const TypedMultiPolygon* old_layer, TypedMultiPolygon& piece_layer,
+                       const TypedOpOptions& op_options, const char* what, TypedMultiPolygon& out,
+                       std::size_t& unchanged) {
+        unchanged = 0;
+        if (!old_layer || old_layer->empty()) {
+          out = std::move(piece_layer);
+          return true;
+        }
+        auto merged = typed_union(*old_layer, piece_layer, op_options);
+        if (!merged.ok) {
+          fail_tile(std::string(what) + ": " + merged.error);
+          return false;
+        }
         // A union lies between the larger input and the sum of both.
-        const double a_old = area(old->free), a_new = area(piece.free), a_union = area(merged.polygons);
+        const double a_old = area(*old_layer), a_new = area(piece_layer), a_union = area(merged.polygons);
         if (a_union < std::max(a_old, a_new) - 1e-6 || a_union > a_old + a_new + 1e-6) {
-          fail_tile("union area out of bounds");
-          continue;
+          fail_tile(std::string(what) + ": union area out of bounds");
+          return false;
         }
         result.reassign.edges += merged.reassign.edges;
         result.reassign.candidates += merged.reassign.candidates;
-        free = std::move(merged.polygons);
-      } else {
-        free = std::move(piece.free);
-      }
-      if (old && !old->obstacles.empty() && !piece.band.empty()) {
-        auto merged = typed_union(old->obstacles, piece.band, band_options);
-        if (!merged.ok) { fail_tile(merged.error); continue; }
-        const double a_old = area(old->obstacles), a_new = area(piece.band), a_union = area(merged.polygons);
-        if (a_union < std::max(a_old, a_new) - 1e-6 || a_union > a_old + a_new + 1e-6) {
-          fail_tile("obstacle union area out of bounds");
-          continue;
-        }
-        obstacles = std::move(merged.polygons);
-      } else {
-        obstacles = old && piece.band.empty() ? old->obstacles : std::move(piece.band);
-      }
+        out = std::move(merged.polygons);
+        unchanged = merged.unchanged_tail;
+        return true;
+      };
+      TypedMultiPolygon free, obstacles;
+      std::size_t free_unchanged = 0, obstacles_unchanged = 0;
+      if (!unite(old ? &old->free : nullptr, piece.free, tile_options, "free", free, free_unchanged) ||
+          !unite(old ? &old->obstacles : nullptr, piece.band, band_options, "obstacles", obstacles,
+                 obstacles_unchanged))
+        continue;
       const double area_before = old ? area(old->free) : 0.0;
       const double area_after_union = area(free);
-      if (!simplify_and_validate(free, options_.simplify_epsilon_m, why) ||
-          !simplify_and_validate(obstacles, options_.simplify_epsilon_m, why)) {
+      // Only what the union produced is simplified and checked: the polygons
+      // it passed through were valid in the old tile, and their boxes meet no
+      // new piece, so they stay disjoint from the rest.
+      if (!simplify_and_validate(free, free_unchanged, options_.simplify_epsilon_m, why) ||
+          !simplify_and_validate(obstacles, obstacles_unchanged, options_.simplify_epsilon_m, why)) {
         fail_tile("tile invalid after union: " + why);
         continue;
       }

@@ -91,34 +91,50 @@ TypedMultiPolygon assign_types(const MultiPolygon& geometry, const EdgeTypeIndex
 
 TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
                           const TypedOpOptions& options) {
-  // Only the polygons of `a` whose boxes meet b's box take part; the others
-  // are disjoint from b and pass through unchanged (with their types).
-  Box b_box;
-  bg::assign_inverse(b_box);
-  for (const auto& p : b) bg::expand(b_box, bg::return_envelope<Box>(p.geometry));
-  TypedMultiPolygon involved, untouched;
-  for (const auto& p : a) {
-    if (bg::disjoint(bg::return_envelope<Box>(p.geometry), b_box)) {
-      untouched.push_back(p);
-    } else {
-      involved.push_back(p);
+  auto boxes_of = [](const TypedMultiPolygon& polygons) {
+    std::vector<Box> boxes;
+    boxes.reserve(polygons.size());
+    for (const auto& p : polygons) boxes.push_back(bg::return_envelope<Box>(p.geometry));
+    return boxes;
+  };
+  auto meets_any = [](const Box& box, const std::vector<Box>& boxes, const std::vector<char>* only) {
+    for (std::size_t k = 0; k < boxes.size(); ++k)
+      if ((!only || (*only)[k]) && !bg::disjoint(box, boxes[k])) return true;
+    return false;
+  };
+  const std::vector<Box> a_boxes = boxes_of(a), b_boxes = boxes_of(b);
+  std::vector<char> a_involved(a.size()), b_involved(b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) a_involved[i] = meets_any(a_boxes[i], b_boxes, nullptr);
+  for (std::size_t j = 0; j < b.size(); ++j) b_involved[j] = meets_any(b_boxes[j], a_boxes, &a_involved);
+  TypedMultiPolygon a_part, b_part;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a_involved[i]) a_part.push_back(a[i]);
+  for (std::size_t j = 0; j < b.size(); ++j)
+    if (b_involved[j]) b_part.push_back(b[j]);
+  TypedOpResult result{true, {}, {}, {}, 0};
+  if (!a_part.empty()) {
+    MultiPolygon geometry;
+    try {
+      bg::union_(geometry_of(a_part), geometry_of(b_part), geometry);
+    } catch (const std::exception& e) {
+      return TypedOpResult{false, std::string("union failed: ") + e.what(), {}, {}, 0};
     }
+    EdgeTypeIndex index;
+    if (options.assign_edge_types && !options.uniform_type) {
+      index.add(a_part);
+      index.add(b_part);
+      index.build();
+    }
+    result = finish(std::move(geometry), index, kClipSearchRadius, options);
+    if (!result.ok) return result;
   }
-  MultiPolygon geometry;
-  try {
-    bg::union_(geometry_of(involved), geometry_of(b), geometry);
-  } catch (const std::exception& e) {
-    return TypedOpResult{false, std::string("union failed: ") + e.what(), {}, {}};
-  }
-  EdgeTypeIndex index;
-  if (options.assign_edge_types && !options.uniform_type) {
-    index.add(involved);
-    index.add(b);
-    index.build();
-  }
-  auto result = finish(std::move(geometry), index, kClipSearchRadius, options);
-  if (result.ok)
-    for (auto& p : untouched) result.polygons.push_back(std::move(p));
+  for (std::size_t j = 0; j < b.size(); ++j)
+    if (!b_involved[j]) result.polygons.push_back(b[j]);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (!a_involved[i]) {
+      result.polygons.push_back(a[i]);
+      ++result.unchanged_tail;
+    }
   return result;
 }
 
@@ -129,7 +145,7 @@ TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolyg
   try {
     bg::difference(geometry_of(a), geometry_of(b), geometry);
   } catch (const std::exception& e) {
-    return TypedOpResult{false, std::string("difference failed: ") + e.what(), {}, {}};
+    return TypedOpResult{false, std::string("difference failed: ") + e.what(), {}, {}, 0};
   }
   EdgeTypeIndex index;
   if (options.assign_edge_types) {
@@ -164,7 +180,7 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
     try {
       bg::intersection(polygon.geometry, box, geometry);
     } catch (const std::exception& e) {
-      return TypedOpResult{false, std::string("clip failed: ") + e.what(), {}, {}};
+      return TypedOpResult{false, std::string("clip failed: ") + e.what(), {}, {}, 0};
     }
     EdgeTypeIndex index;
     if (options.assign_edge_types && !options.uniform_type) {
@@ -189,7 +205,7 @@ TypedOpResult typed_offset(const TypedMultiPolygon& polygons, double distance_m,
                bs::side_straight(), bs::join_round(points_per_circle), bs::end_round(points_per_circle),
                bs::point_circle(points_per_circle));
   } catch (const std::exception& e) {
-    return TypedOpResult{false, std::string("offset failed: ") + e.what(), {}, {}};
+    return TypedOpResult{false, std::string("offset failed: ") + e.what(), {}, {}, 0};
   }
   EdgeTypeIndex index;
   if (options.assign_edge_types) {

@@ -30,9 +30,17 @@ struct TypedOpResult {
   std::string error;          // why not ok: Boost threw, or the output is invalid
   TypedMultiPolygon polygons;
   ReassignStats reassign;
+  // typed_union only: the last `unchanged_tail` polygons are polygons of `a`
+  // that took no part (their boxes meet no polygon of b), returned as they
+  // were, so a caller that knew them valid need not check them again.
+  std::size_t unchanged_tail = 0;
 };
 
 // Union of a and b; each output edge keeps the type of its source edge.
+// Both must be valid (interior-disjoint polygons). Only polygons whose boxes
+// meet a polygon of the other side go through the overlay; the others are
+// disjoint from everything and are copied (b's after the overlay's output,
+// a's at the end: see unchanged_tail).
 TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
                           const TypedOpOptions& options = {});
 

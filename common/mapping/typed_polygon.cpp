@@ -220,7 +220,8 @@ void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t l
   }
 }
 
-TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsilon_m) {
+TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsilon_m,
+                                 bool check_each_polygon) {
   if (epsilon_m <= 0.0) return polygons;
   TypedMultiPolygon out;
   out.reserve(polygons.size());
@@ -248,7 +249,7 @@ TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsil
       out.push_back(polygon);
       continue;
     }
-    if (bg::is_valid(simplified.geometry)) {
+    if (!check_each_polygon || bg::is_valid(simplified.geometry)) {
       out.push_back(std::move(simplified));
     } else {
       out.push_back(polygon);

@@ -91,7 +91,10 @@ void for_each_edge(const TypedMultiPolygon& polygons, Fn&& fn) {
 // end points fixed, so an obstacle edge is never merged with a frontier edge.
 // A simplification that would make a polygon invalid is not applied to that
 // polygon (it is kept as it was). epsilon_m <= 0 returns the input unchanged.
-TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsilon_m);
+// check_each_polygon = false skips that per-polygon check, for callers that
+// check the whole result anyway (PolygonMap: is_valid is the costliest step).
+TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsilon_m,
+                                 bool check_each_polygon = true);
 
 // Indices of the points RDP keeps from points[first..last] (both kept).
 void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t last,
