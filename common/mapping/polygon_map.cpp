@@ -242,6 +242,20 @@ void Tile::compute_planning() const {
   }
 }
 
+PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options) {
+  PreparedScan prepared;
+  try {
+    prepared.band = obstacle_band(scan, options.obstacle_inner_m, options.obstacle_outer_m);
+    std::string why;
+    if (!bg::is_valid(prepared.band, why)) prepared.band_error = "obstacle band invalid: " + why;
+  } catch (const std::exception& e) {
+    prepared.band_error = std::string("obstacle band failed: ") + e.what();
+  }
+  if (!prepared.band_error.empty()) prepared.band.clear();
+  prepared.polygon = std::move(scan);
+  return prepared;
+}
+
 PolygonMap::PolygonMap(PolygonMapOptions options) : options_(options) {}
 
 Box PolygonMap::tile_box(const TileKey& key) const {
@@ -250,7 +264,10 @@ Box PolygonMap::tile_box(const TileKey& key) const {
              Point(grid_line(key.first + 1, s, o), grid_line(key.second + 1, s, o)));
 }
 
-InsertResult PolygonMap::insert(const TypedPolygon& scan) {
+InsertResult PolygonMap::insert(const TypedPolygon& scan) { return insert(prepare_scan(scan, options_)); }
+
+InsertResult PolygonMap::insert(const PreparedScan& prepared) {
+  const TypedPolygon& scan = prepared.polygon;
   InsertResult result;
   result.ok = true;
   auto fail_tile = [&](const std::string& why) {
@@ -268,17 +285,8 @@ InsertResult PolygonMap::insert(const TypedPolygon& scan) {
   const double s = options_.tile_size_m;
   MultiPolygon scan_geometry{scan.geometry};
   split_at_grid(scan_geometry, s, options_.tile_origin_m);
-  MultiPolygon band;
-  try {
-    band = obstacle_band(scan, options_.obstacle_inner_m, options_.obstacle_outer_m);
-  } catch (const std::exception& e) {
-    band.clear();
-    fail_tile(std::string("obstacle band failed: ") + e.what());
-  }
-  if (!bg::is_valid(band, why)) {
-    fail_tile("obstacle band invalid: " + why);
-    band.clear();
-  }
+  if (!prepared.band_error.empty()) fail_tile(prepared.band_error);
+  MultiPolygon band = prepared.band;
   split_at_grid(band, s, options_.tile_origin_m);
   // The scan's own edges type the clipped pieces: the split points lie on them.
   TypedOpOptions typed;

@@ -119,6 +119,18 @@ struct MergeResult {
 // `outer_m` to its right, with flat ends and round joins.
 MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m);
 
+// A scan polygon and its obstacle band, ready to insert. The band depends on
+// the scan alone and moves with it, so the per-particle maps of SLAM build it
+// once per scan in the sensor frame and move both to every particle's pose.
+struct PreparedScan {
+  TypedPolygon polygon;
+  MultiPolygon band;
+  std::string band_error;  // not empty: no band could be built (the scan goes in without one)
+};
+// Builds the band with the map options' obstacle_inner_m / obstacle_outer_m
+// and checks it (bg::is_valid).
+PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options);
+
 class PolygonMap {
  public:
   explicit PolygonMap(PolygonMapOptions options = {});
@@ -127,6 +139,8 @@ class PolygonMap {
   // whose update fails or yields an invalid polygon keeps its last good state;
   // the failure is counted and the rest of the scan still goes in.
   InsertResult insert(const TypedPolygon& scan);
+  // The same with the band already built (prepare_scan, moved rigidly).
+  InsertResult insert(const PreparedScan& scan);
 
   // The merged maps (cost grows with the whole map: call at publication rate),
   // simplified with options().simplify_epsilon_m unless another is given.

@@ -16,7 +16,8 @@ Pose2 compose(const Pose2& a, const Pose2& b) {
   return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, std::remainder(a.theta + b.theta, 2.0 * M_PI)};
 }
 
-mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const Pose2& pose) {
+namespace {
+void move_polygon(mapping::Polygon& polygon, const Pose2& pose) {
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
   auto move = [&](mapping::Ring& ring) {
     for (auto& p : ring) {
@@ -24,9 +25,21 @@ mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const Po
       p = mapping::Point(pose.x + c * x - s * y, pose.y + s * x + c * y);
     }
   };
+  move(polygon.outer());
+  for (auto& inner : polygon.inners()) move(inner);
+}
+}  // namespace
+
+mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const Pose2& pose) {
   mapping::TypedPolygon out = polygon;
-  move(out.geometry.outer());
-  for (auto& inner : out.geometry.inners()) move(inner);
+  move_polygon(out.geometry, pose);
+  return out;
+}
+
+mapping::PreparedScan transformed(const mapping::PreparedScan& scan, const Pose2& pose) {
+  mapping::PreparedScan out = scan;
+  move_polygon(out.polygon.geometry, pose);
+  for (auto& polygon : out.band) move_polygon(polygon, pose);
   return out;
 }
 
@@ -54,9 +67,12 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
     }
   }
 
-  // The scan's polygon once, in the sensor frame; each particle gets a moved copy.
+  // The scan's polygon and obstacle band once, in the sensor frame; each
+  // particle gets a moved copy.
   const mapping::ScanPolygonResult local =
       mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, Pose2{}, scan_options);
+  const mapping::PreparedScan prepared =
+      local.ok ? mapping::prepare_scan(local.polygon, options_.map) : mapping::PreparedScan{};
 
   std::vector<mapping::PolygonMap> next;
   next.reserve(particles.size());
@@ -78,7 +94,7 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
     for (std::size_t k = worker; k < to_insert.size(); k += workers) {
       const std::size_t i = to_insert[k];
       const auto result =
-          next[i].insert(transformed(local.polygon, compose(particles[i].pose, scan.sensor_in_base)));
+          next[i].insert(transformed(prepared, compose(particles[i].pose, scan.sensor_in_base)));
       failed[i] = result.ok ? 0 : 1;
     }
   };

@@ -51,6 +51,7 @@ struct UpdateResult {
 // pose.theta, then translation). Validity is preserved up to rounding; the map
 // validates every tile it writes anyway.
 mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const mapping::Pose2& pose);
+mapping::PreparedScan transformed(const mapping::PreparedScan& scan, const mapping::Pose2& pose);
 
 // a ∘ b: pose b given in the frame of pose a.
 mapping::Pose2 compose(const mapping::Pose2& a, const mapping::Pose2& b);

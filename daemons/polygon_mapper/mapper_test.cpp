@@ -185,13 +185,16 @@ TEST(MapperSlam, BestParticleSwitchPublishesTheNewBestMapBuiltAlongItsTrajectory
   EXPECT_EQ(mapper.counters().best_switches, 1);
   EXPECT_EQ(mapper.counters().slam_updates, 3);
 
-  // The published map equals a map built from scratch along particle 1's trajectory.
+  // The published map equals a map built from scratch along particle 1's
+  // trajectory (scan polygon and band built in the sensor frame and moved, as
+  // the particle maps do).
   mapping::PolygonMap oracle(slam_options().map);
   for (std::size_t g = 0; g < xs.size(); ++g) {
     const auto poly = mapping::scan_to_polygon(scans[g].ranges, scans[g].angle_min, scans[g].angle_increment,
-                                               {xs[g], 5.6, 0.0}, mapping::ScanPolygonOptions{});
+                                               {}, mapping::ScanPolygonOptions{});
     ASSERT_TRUE(poly.ok);
-    oracle.insert(poly.polygon);
+    oracle.insert(particle_maps::transformed(mapping::prepare_scan(poly.polygon, oracle.options()),
+                                             {xs[g], 5.6, 0.0}));
   }
   const auto expected = oracle.planning_map();
   ASSERT_TRUE(expected.ok);
