@@ -3,6 +3,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "mapping/typed_ops.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 
@@ -106,11 +107,37 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   std::vector<char> a_involved(a.size()), b_involved(b.size());
   for (std::size_t i = 0; i < a.size(); ++i) a_involved[i] = meets_any(a_boxes[i], b_boxes, nullptr);
   for (std::size_t j = 0; j < b.size(); ++j) b_involved[j] = meets_any(b_boxes[j], a_boxes, &a_involved);
+  // Holes of a's polygons whose boxes meet no polygon of b stay holes of the
+  // output polygon that contains them: they are set aside and put back after
+  // the overlay, which then sees only the holes near b (in a map, most of a
+  // tile's obstacles are far from a new scan).
+  struct AsideHole {
+    Ring ring;
+    std::vector<EdgeType> types;
+  };
+  std::vector<AsideHole> aside;
   TypedMultiPolygon a_part, b_part;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (a_involved[i]) a_part.push_back(a[i]);
   for (std::size_t j = 0; j < b.size(); ++j)
     if (b_involved[j]) b_part.push_back(b[j]);
+  std::vector<Box> b_part_boxes;
+  for (std::size_t j = 0; j < b.size(); ++j)
+    if (b_involved[j]) b_part_boxes.push_back(b_boxes[j]);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!a_involved[i]) continue;
+    const TypedPolygon& p = a[i];
+    TypedPolygon kept{Polygon{}, {p.edge_types[0]}};
+    kept.geometry.outer() = p.geometry.outer();
+    for (std::size_t k = 0; k < p.geometry.inners().size(); ++k) {
+      const Ring& hole = p.geometry.inners()[k];
+      if (meets_any(bg::return_envelope<Box>(hole), b_part_boxes, nullptr)) {
+        kept.geometry.inners().push_back(hole);
+        kept.edge_types.push_back(p.edge_types[1 + k]);
+      } else {
+        aside.push_back({hole, p.edge_types[1 + k]});
+      }
+    }
+    a_part.push_back(std::move(kept));
+  }
   TypedOpResult result{true, {}, {}, {}, 0};
   if (!a_part.empty()) {
     MultiPolygon geometry;
@@ -127,6 +154,24 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
     }
     result = finish(std::move(geometry), index, kClipSearchRadius, options);
     if (!result.ok) return result;
+    for (auto& hole : aside) {
+      // A point just left of the hole's first edge (holes run clockwise, the
+      // free side is on the left) lies inside exactly one output polygon.
+      std::size_t e = 0;  // the first edge of non-zero length
+      while (e + 2 < hole.ring.size() && bg::equals(hole.ring[e], hole.ring[e + 1])) ++e;
+      const Point& p0 = hole.ring[e];
+      const Point& p1 = hole.ring[e + 1];
+      const double dx = p1.x() - p0.x(), dy = p1.y() - p0.y(), len = std::hypot(dx, dy);
+      if (len == 0.0) return TypedOpResult{false, "union: a hole set aside is degenerate", {}, {}, 0};
+      const double step = std::min(1e-6, 0.25 * len) / len;
+      const Point probe(0.5 * (p0.x() + p1.x()) - dy * step, 0.5 * (p0.y() + p1.y()) + dx * step);
+      auto home = std::find_if(result.polygons.begin(), result.polygons.end(),
+                               [&](const TypedPolygon& out) { return bg::within(probe, out.geometry); });
+      if (home == result.polygons.end())
+        return TypedOpResult{false, "union: a hole set aside has no polygon to return to", {}, {}, 0};
+      home->geometry.inners().push_back(std::move(hole.ring));
+      home->edge_types.push_back(std::move(hole.types));
+    }
   }
   for (std::size_t j = 0; j < b.size(); ++j)
     if (!b_involved[j]) result.polygons.push_back(b[j]);
