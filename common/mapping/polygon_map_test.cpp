@@ -50,6 +50,53 @@ TEST(SplitAtGrid, InsertsCrossingsExactlyOnGridLines) {
   EXPECT_TRUE(bg::is_valid(m));
 }
 
+TypedPolygon square(double x0, double y0, double x1, double y1, EdgeType type) {
+  TypedPolygon p;
+  p.geometry.outer() = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}};
+  p.edge_types = {{type, type, type, type}};
+  return p;
+}
+
+// The planning layer is derived on first use: free minus obstacles, with the
+// free map's edges as frontiers and the band's as obstacles.
+TEST(Tile, PlanningLayerIsFreeMinusObstaclesComputedOnFirstUse) {
+  const Box box(Point(0, 0), Point(8, 8));
+  const Tile tile(box, {square(1, 1, 7, 7, E::kObstacle)}, {square(3, 3, 4, 4, E::kObstacle)}, nullptr,
+                  {0.01, true});
+  EXPECT_FALSE(tile.planning_computed());
+  const TypedMultiPolygon& planning = tile.planning();
+  EXPECT_TRUE(tile.planning_computed());
+  EXPECT_FALSE(tile.planning_failed());
+  ASSERT_EQ(planning.size(), 1u);
+  EXPECT_NEAR(area(planning), 36.0 - 1.0, 1e-9);
+  ASSERT_EQ(planning[0].edge_types.size(), 2u);  // the room and the pillar's hole
+  for (EdgeType t : planning[0].edge_types[0]) EXPECT_EQ(t, E::kFrontier);
+  for (EdgeType t : planning[0].edge_types[1]) EXPECT_EQ(t, E::kObstacle);
+  EXPECT_EQ(&tile.planning(), &planning);  // kept, not recomputed
+}
+
+// A difference that fails its checks leaves the newest planning layer computed
+// for an earlier version of the tile in place, and says so. Versions never
+// read in between are skipped, not kept alive.
+TEST(Tile, FailedPlanningFallsBackToTheLastGoodLayer) {
+  const Box box(Point(0, 0), Point(8, 8));
+  const Tile good(box, {square(1, 1, 7, 7, E::kObstacle)}, {square(3, 3, 4, 4, E::kObstacle)}, nullptr,
+                  {0.01, true});
+  ASSERT_FALSE(good.planning_failed());
+  const Tile unread(box, {square(1, 1, 7.5, 7, E::kObstacle)}, {square(3, 3, 4, 4, E::kObstacle)},
+                    good.last_good_planning(), {0.01, true});
+  // An obstacle ring the wrong way round (clockwise: negative area) puts the
+  // difference outside its area bounds.
+  TypedPolygon clockwise = square(2, 2, 5, 5, E::kObstacle);
+  bg::reverse(clockwise.geometry);
+  const Tile bad(box, {square(1, 1, 7.5, 7.5, E::kObstacle)}, {clockwise}, unread.last_good_planning(),
+                 {0.01, true});
+  EXPECT_TRUE(bad.planning_failed()) << "area " << area(bad.planning());
+  EXPECT_FALSE(bad.planning_error().empty());
+  EXPECT_EQ(&bad.planning(), &good.planning());  // the last good layer itself
+  EXPECT_FALSE(unread.planning_computed());
+}
+
 TEST(PolygonMap, TwoScansOfARoomMakeOneRoomWithWallsAsObstacles) {
   std::vector<testing::Wall> walls;
   testing::add_box(walls, 0, 0, 12, 5);

@@ -55,6 +55,37 @@ TEST(TypedUnion, OutputEdgesKeepTheTypeOfTheEdgeTheyLieOn) {
   EXPECT_NEAR(edge_length(result.polygons, E::kObstacle), 4 + 2 + 4, 1e-9);
 }
 
+// Holes far from b are set aside during the overlay and put back: the result
+// is the same point set as the plain union of everything, every hole keeps its
+// types, and a polygon of `a` far from b passes through untouched.
+TEST(TypedUnion, FarHolesAndFarPolygonsComeBackUnchanged) {
+  TypedPolygon room = rect(0, 0, 20, 10, {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  for (double x = 2; x < 19; x += 3) {  // six pillars as holes (clockwise)
+    Ring hole{{x, 4}, {x, 5}, {x + 1, 5}, {x + 1, 4}, {x, 4}};
+    room.geometry.inners().push_back(hole);
+    room.edge_types.push_back({E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  }
+  const auto island = rect(30, 0, 32, 2, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
+  // b overlaps the room's right end (and the last pillar) and sticks out.
+  const auto b = rect(16, 3, 24, 6, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
+  const auto result = typed_union({room, island}, {b});
+  ASSERT_TRUE(result.ok) << result.error;
+  std::string why;
+  ASSERT_TRUE(is_valid(result.polygons, &why)) << why;
+  EXPECT_EQ(result.unchanged_tail, 1u);
+  EXPECT_TRUE(bg::equals(result.polygons.back().geometry, island.geometry));
+  MultiPolygon plain;
+  bg::union_(geometry_of({room, island}), geometry_of({b}), plain);
+  EXPECT_NEAR(area(result.polygons), bg::area(plain), 1e-9);
+  MultiPolygon symmetric_difference;
+  bg::sym_difference(geometry_of(result.polygons), plain, symmetric_difference);
+  EXPECT_NEAR(bg::area(symmetric_difference), 0.0, 1e-9);
+  ASSERT_EQ(result.polygons.size(), 2u);
+  EXPECT_EQ(result.polygons[0].geometry.inners().size(), 5u);  // b swallowed the pillar at 17..18
+  for (std::size_t k = 0; k < result.polygons[0].geometry.inners().size(); ++k)
+    for (EdgeType t : result.polygons[0].edge_types[1 + k]) EXPECT_EQ(t, E::kObstacle);
+}
+
 TEST(TypedDifference, EdgesFromTheSubtrahendAreObstacles) {
   const auto free_space = rect(0, 0, 10, 10, {E::kObstacle, E::kObstacle, E::kFrontier, E::kFrontier});
   const auto obstacle = rect(4, 4, 6, 6, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});

@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
       node.counter("scan_polygon_errors") = c.scan_polygon_errors;
       node.counter("failed_tile_updates") = c.failed_tile_updates;
       node.counter("merge_failures") = c.merge_failures;
+      node.counter("stale_planning_tiles") = c.stale_planning_tiles;
       node.counter("slam_updates") = c.slam_updates;
       node.counter("updates_without_scan") = c.updates_without_scan;
       node.counter("best_switches") = c.best_switches;

@@ -280,6 +280,7 @@ pex::polygon_map_t to_message(const mapping::TypedMultiPolygon& polygons) {
 std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
   if (dirty_) {
     const auto merged = map().planning_map();
+    counters_.stale_planning_tiles = merged.stale_planning_tiles;
     if (merged.ok) {
       message_ = to_message(merged.polygons);
       dirty_ = false;

@@ -69,6 +69,9 @@ struct MapperCounters {
   std::int64_t scan_polygon_errors = 0;
   std::int64_t failed_tile_updates = 0;
   std::int64_t merge_failures = 0;
+  // Tiles of the last published map whose planning layer could not be
+  // derived (they show their last good planning layer).
+  std::int64_t stale_planning_tiles = 0;
   std::int64_t slam_updates = 0;          // slam: updates applied
   std::int64_t updates_without_scan = 0;  // slam: updates whose scan never arrived
   std::int64_t best_switches = 0;         // slam: the best particle changed
