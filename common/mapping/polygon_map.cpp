@@ -484,6 +484,7 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
     TypedOpOptions options;
     options.assign_edge_types = options_.assign_edge_types;
     TypedMultiPolygon merged = assign_types(geometry, index, 1e-6, options, nullptr);
+    const std::size_t inside_count = inside.size();
     for (auto& polygon : inside) merged.push_back(std::move(polygon));
     std::int64_t strays = 0;
     for (auto& p : merged)
@@ -493,8 +494,13 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
             t = EdgeType::kFrontier;
             ++strays;
           }
-    // One check of the whole result (after RDP, or without it if RDP broke it).
-    if (!simplify_and_validate(merged, simplify_epsilon_m, why)) continue;
+    // One check of the whole result (after RDP, or without it if RDP broke
+    // it), except the polygons that lie inside their tiles: those were
+    // simplified and checked with their tile, and lie in their tile's box,
+    // apart from everything else. With another RDP tolerance than the tiles'
+    // they are simplified and checked like the rest.
+    const std::size_t unchanged = simplify_epsilon_m == options_.simplify_epsilon_m ? inside_count : 0;
+    if (!simplify_and_validate(merged, unchanged, simplify_epsilon_m, why)) continue;
     result.polygons = std::move(merged);
     result.stray_border_edges = strays;
     result.ok = true;
