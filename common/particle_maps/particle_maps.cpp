@@ -1,6 +1,7 @@
 #include "particle_maps/particle_maps.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <set>
@@ -90,8 +91,11 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   }
   // The inserts: each touches its own map only, so they can run side by side.
   std::vector<char> failed(particles.size(), 0);
-  auto work = [&](std::size_t worker, std::size_t workers) {
-    for (std::size_t k = worker; k < to_insert.size(); k += workers) {
+  // Inserts differ in cost (a particle's scan may touch more tiles), so each
+  // worker takes the next one as it is free rather than a fixed share.
+  std::atomic<std::size_t> next_insert{0};
+  auto work = [&] {
+    for (std::size_t k; (k = next_insert.fetch_add(1)) < to_insert.size();) {
       const std::size_t i = to_insert[k];
       const auto result =
           next[i].insert(transformed(prepared, compose(particles[i].pose, scan.sensor_in_base)));
@@ -101,8 +105,8 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   const std::size_t workers =
       std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(options_.threads), to_insert.size()));
   std::vector<std::thread> pool;
-  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work, w, workers);
-  work(0, workers);
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
   for (auto& t : pool) t.join();
   for (std::size_t i = 0; i < particles.size(); ++i)
     if (copy_of[i] != i) next[i] = next[copy_of[i]];
