@@ -76,7 +76,9 @@ Fixture& fixture(std::size_t vertices, bool typed) {
   return *slot;
 }
 
-void insert_benchmark(benchmark::State& state, bool typed) {
+// with_planning: the insert and then the planning layer of the tiles it
+// replaced (what publishing the map right after this insert would add).
+void insert_benchmark(benchmark::State& state, bool typed, bool with_planning = false) {
   Fixture& f = fixture(static_cast<std::size_t>(state.range(0)), typed);
   if (f.next_scans.empty()) {
     state.SkipWithError("the rock field was explored before the map reached the size");
@@ -90,6 +92,7 @@ void insert_benchmark(benchmark::State& state, bool typed) {
     state.ResumeTiming();
     auto result = copy.insert(scan);
     benchmark::DoNotOptimize(result);
+    if (with_planning) benchmark::DoNotOptimize(copy.planning_vertex_count());
     state.PauseTiming();
     {
       PolygonMap discard = std::move(copy);  // tile release outside the timing
@@ -102,6 +105,7 @@ void insert_benchmark(benchmark::State& state, bool typed) {
 
 void BM_InsertTyped(benchmark::State& state) { insert_benchmark(state, true); }
 void BM_InsertPlain(benchmark::State& state) { insert_benchmark(state, false); }
+void BM_InsertTypedThenPlanning(benchmark::State& state) { insert_benchmark(state, true, true); }
 
 void BM_ScanToPolygon(benchmark::State& state) {
   std::mt19937_64 rng(1);
@@ -127,6 +131,8 @@ BENCHMARK(BM_ScanToPolygon)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_InsertTyped)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond)
     ->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_InsertPlain)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond)
+    ->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_InsertTypedThenPlanning)->Arg(1000)->Unit(benchmark::kMillisecond)
     ->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_MergePlanningMap)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
