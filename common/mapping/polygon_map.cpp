@@ -452,13 +452,28 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
   // away from most of the map). Boost 1.74's validity depends on the extent
   // it rescales to, so two polygons valid at tile scale can be "invalid" at
   // map scale: then attempt 1 merges everything, attempt 2 in reverse order.
+  //
+  // Holes strictly inside their tile's box cannot meet another tile's polygons
+  // either: in attempt 0 they are set aside, the rest goes through the
+  // cascade, and they are put back into the polygon that contains them after
+  // the check. They were simplified and checked with their tile, so only when
+  // this merge simplifies with the tiles' own tolerance (or not at all).
   std::string why;
+  const bool tiles_tolerance =
+      simplify_epsilon_m == options_.simplify_epsilon_m || simplify_epsilon_m <= 0.0;
   for (int attempt = 0; attempt < 3; ++attempt) {
     std::vector<MultiPolygon> parts;
     TypedMultiPolygon inside;
+    std::vector<TypedRing> aside;
     EdgeTypeIndex index;
     for (const auto& [key, tile] : tiles_) {
       MultiPolygon touching;
+      const Box& box = tile->box;
+      auto strictly_inside = [&box](const Ring& ring) {
+        const Box e = bg::return_envelope<Box>(ring);
+        return e.min_corner().x() > box.min_corner().x() && e.min_corner().y() > box.min_corner().y() &&
+               e.max_corner().x() < box.max_corner().x() && e.max_corner().y() < box.max_corner().y();
+      };
       for (const auto& polygon : polygons_of(*tile)) {
         bool on_border = attempt > 0;
         for (const auto& ring : polygon.edge_types)
@@ -467,8 +482,24 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
           inside.push_back(polygon);
           continue;
         }
-        touching.push_back(polygon.geometry);
-        index.add(polygon);
+        if (attempt > 0 || !tiles_tolerance) {
+          touching.push_back(polygon.geometry);
+          index.add(polygon);
+          continue;
+        }
+        TypedPolygon kept{Polygon{}, {polygon.edge_types[0]}};
+        kept.geometry.outer() = polygon.geometry.outer();
+        for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k) {
+          const Ring& hole = polygon.geometry.inners()[k];
+          if (strictly_inside(hole)) {
+            aside.push_back({hole, polygon.edge_types[1 + k]});
+          } else {
+            kept.geometry.inners().push_back(hole);
+            kept.edge_types.push_back(polygon.edge_types[1 + k]);
+          }
+        }
+        touching.push_back(kept.geometry);
+        index.add(kept);
       }
       if (!touching.empty()) parts.push_back(std::move(touching));
     }
@@ -501,6 +532,12 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
     // they are simplified and checked like the rest.
     const std::size_t unchanged = simplify_epsilon_m == options_.simplify_epsilon_m ? inside_count : 0;
     if (!simplify_and_validate(merged, unchanged, simplify_epsilon_m, why)) continue;
+    // The holes set aside: inside their tile's box, where the merged map is
+    // the tile's own polygon, so they sit in it as they sat in the tile.
+    if (!put_back_holes(merged, std::move(aside))) {
+      why = "a hole set aside has no polygon to return to";
+      continue;
+    }
     result.polygons = std::move(merged);
     result.stray_border_edges = strays;
     result.ok = true;

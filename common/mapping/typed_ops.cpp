@@ -90,6 +90,64 @@ TypedMultiPolygon assign_types(const MultiPolygon& geometry, const EdgeTypeIndex
   return out;
 }
 
+namespace {
+// Even-odd crossing test: independent of the ring's orientation (holes are
+// stored clockwise in the counter-clockwise ring type).
+bool inside_ring(const Point& p, const Ring& ring) {
+  bool inside = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Point& a = ring[i];
+    const Point& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
+      inside = !inside;
+  }
+  return inside;
+}
+}  // namespace
+
+bool put_back_holes(TypedMultiPolygon& polygons, std::vector<TypedRing> holes) {
+  if (holes.empty()) return true;
+  std::vector<Box> boxes;
+  std::vector<double> areas;
+  boxes.reserve(polygons.size());
+  areas.reserve(polygons.size());
+  for (const auto& p : polygons) {
+    boxes.push_back(bg::return_envelope<Box>(p.geometry.outer()));
+    areas.push_back(std::abs(bg::area(p.geometry.outer())));
+  }
+  std::vector<std::vector<Box>> hole_boxes(polygons.size());  // filled when first needed
+  for (auto& hole : holes) {
+    if (hole.ring.size() < 4) return false;
+    std::size_t e = 0;  // the first edge of non-zero length
+    while (e + 2 < hole.ring.size() && bg::equals(hole.ring[e], hole.ring[e + 1])) ++e;
+    const Point& p0 = hole.ring[e];
+    const Point& p1 = hole.ring[e + 1];
+    const double dx = p1.x() - p0.x(), dy = p1.y() - p0.y(), len = std::hypot(dx, dy);
+    if (len == 0.0) return false;
+    const double step = std::min(1e-6, 0.25 * len) / len;
+    const Point probe(0.5 * (p0.x() + p1.x()) - dy * step, 0.5 * (p0.y() + p1.y()) + dx * step);
+    std::size_t home = polygons.size();
+    for (std::size_t k = 0; k < polygons.size(); ++k) {
+      if (!bg::covered_by(probe, boxes[k])) continue;
+      if (home != polygons.size() && areas[k] >= areas[home]) continue;
+      if (inside_ring(probe, polygons[k].geometry.outer())) home = k;
+    }
+    if (home == polygons.size()) return false;
+    // Inside the innermost outer ring but in one of its holes: the hole
+    // belongs to no polygon (its source was not in the union).
+    auto& inners = polygons[home].geometry.inners();
+    auto& boxes_of_inners = hole_boxes[home];
+    while (boxes_of_inners.size() < inners.size())
+      boxes_of_inners.push_back(bg::return_envelope<Box>(inners[boxes_of_inners.size()]));
+    for (std::size_t k = 0; k < inners.size(); ++k)
+      if (bg::covered_by(probe, boxes_of_inners[k]) && inside_ring(probe, inners[k])) return false;
+    inners.push_back(std::move(hole.ring));
+    polygons[home].edge_types.push_back(std::move(hole.types));
+  }
+  return true;
+}
+
 TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
                           const TypedOpOptions& options) {
   auto boxes_of = [](const TypedMultiPolygon& polygons) {
@@ -111,11 +169,7 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   // output polygon that contains them: they are set aside and put back after
   // the overlay, which then sees only the holes near b (in a map, most of a
   // tile's obstacles are far from a new scan).
-  struct AsideHole {
-    Ring ring;
-    std::vector<EdgeType> types;
-  };
-  std::vector<AsideHole> aside;
+  std::vector<TypedRing> aside;
   TypedMultiPolygon a_part, b_part;
   for (std::size_t j = 0; j < b.size(); ++j)
     if (b_involved[j]) b_part.push_back(b[j]);
@@ -154,24 +208,8 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
     }
     result = finish(std::move(geometry), index, kClipSearchRadius, options);
     if (!result.ok) return result;
-    for (auto& hole : aside) {
-      // A point just left of the hole's first edge (holes run clockwise, the
-      // free side is on the left) lies inside exactly one output polygon.
-      std::size_t e = 0;  // the first edge of non-zero length
-      while (e + 2 < hole.ring.size() && bg::equals(hole.ring[e], hole.ring[e + 1])) ++e;
-      const Point& p0 = hole.ring[e];
-      const Point& p1 = hole.ring[e + 1];
-      const double dx = p1.x() - p0.x(), dy = p1.y() - p0.y(), len = std::hypot(dx, dy);
-      if (len == 0.0) return TypedOpResult{false, "union: a hole set aside is degenerate", {}, {}, 0};
-      const double step = std::min(1e-6, 0.25 * len) / len;
-      const Point probe(0.5 * (p0.x() + p1.x()) - dy * step, 0.5 * (p0.y() + p1.y()) + dx * step);
-      auto home = std::find_if(result.polygons.begin(), result.polygons.end(),
-                               [&](const TypedPolygon& out) { return bg::within(probe, out.geometry); });
-      if (home == result.polygons.end())
-        return TypedOpResult{false, "union: a hole set aside has no polygon to return to", {}, {}, 0};
-      home->geometry.inners().push_back(std::move(hole.ring));
-      home->edge_types.push_back(std::move(hole.types));
-    }
+    if (!put_back_holes(result.polygons, std::move(aside)))
+      return TypedOpResult{false, "union: a hole set aside has no polygon to return to", {}, {}, 0};
   }
   for (std::size_t j = 0; j < b.size(); ++j)
     if (!b_involved[j]) result.polygons.push_back(b[j]);

@@ -69,6 +69,20 @@ TypedMultiPolygon assign_types(const MultiPolygon& geometry, const EdgeTypeIndex
                                double search_radius_m, const TypedOpOptions& options,
                                ReassignStats* stats);
 
+// A hole taken out of its polygon while the polygon goes through an overlay
+// that cannot reach it (typed_union, PolygonMap's merge), with its edge types.
+struct TypedRing {
+  Ring ring;
+  std::vector<EdgeType> types;
+};
+
+// Puts each hole back into the polygon that contains it: the smallest one
+// whose outer ring covers a point just inside the hole (left of its first
+// edge; holes run clockwise). Outer rings are nested or disjoint, so the
+// smallest is the innermost. False (polygons unchanged from that hole on) if
+// a hole has no such polygon or is degenerate.
+bool put_back_holes(TypedMultiPolygon& polygons, std::vector<TypedRing> holes);
+
 // Sets coordinates within 1e-9 m of the box's sides exactly onto them, so
 // neighbouring tiles share bit-identical border vertices.
 void snap_to_box(MultiPolygon& geometry, const Box& box);

@@ -86,6 +86,29 @@ TEST(TypedUnion, FarHolesAndFarPolygonsComeBackUnchanged) {
     for (EdgeType t : result.polygons[0].edge_types[1 + k]) EXPECT_EQ(t, E::kObstacle);
 }
 
+// Holes go back into the innermost polygon around them: an island inside a
+// hole of the room takes the hole that lies in the island.
+TEST(PutBackHoles, EachHoleGoesIntoTheInnermostPolygonAroundIt) {
+  TypedPolygon room = rect(0, 0, 20, 20, {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  room.geometry.inners().push_back(Ring{{5, 5}, {5, 15}, {15, 15}, {15, 5}, {5, 5}});  // a courtyard
+  room.edge_types.push_back({E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  const auto island = rect(7, 7, 13, 13, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
+  TypedMultiPolygon polygons{room, island};
+  auto hole = [](double x0, double y0, double x1, double y1) {  // clockwise
+    return TypedRing{Ring{{x0, y0}, {x0, y1}, {x1, y1}, {x1, y0}, {x0, y0}},
+                     {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier}};
+  };
+  ASSERT_TRUE(put_back_holes(polygons, {hole(1, 1, 2, 2), hole(9, 9, 10, 10)}));
+  ASSERT_EQ(polygons[0].geometry.inners().size(), 2u);  // the courtyard and (1,1)-(2,2)
+  ASSERT_EQ(polygons[1].geometry.inners().size(), 1u);  // (9,9)-(10,10)
+  EXPECT_EQ(polygons[1].edge_types[1], (std::vector<EdgeType>{E::kObstacle, E::kFrontier, E::kObstacle,
+                                                              E::kFrontier}));
+  std::string why;
+  EXPECT_TRUE(is_valid(polygons, &why)) << why;
+  // A hole in the courtyard (outside every polygon) has no home.
+  EXPECT_FALSE(put_back_holes(polygons, {hole(6, 6, 6.5, 6.5)}));
+}
+
 TEST(TypedDifference, EdgesFromTheSubtrahendAreObstacles) {
   const auto free_space = rect(0, 0, 10, 10, {E::kObstacle, E::kObstacle, E::kFrontier, E::kFrontier});
   const auto obstacle = rect(4, 4, 6, 6, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
