@@ -38,6 +38,19 @@ struct Fixture {
   PolygonMap map;
   std::vector<TypedPolygon> next_scans;  // scans not yet in the map, at its frontier
   double explored_area_m2 = 0.0;
+  bool filled = false;
+
+  // Grows the map until its planning map has `target_vertices`; keeps the
+  // scans after that for timing.
+  void take(TypedPolygon scan, std::size_t target_vertices) {
+    if (filled) {
+      next_scans.push_back(std::move(scan));
+      return;
+    }
+    map.insert(scan);
+    filled = map.planning_vertex_count() >= target_vertices;
+    explored_area_m2 = map.free_area_m2();
+  }
 };
 
 // Drives a lawnmower path through a rock field until the planning map has at
@@ -53,7 +66,6 @@ std::unique_ptr<Fixture> build(std::size_t target_vertices, bool typed) {
   options.assign_edge_types = typed;
   fixture->map = PolygonMap(options);
   const auto o = scan_options();
-  bool filled = false;
   int row = 0;
   for (double y = 1.0; y < side - 1.0 && fixture->next_scans.size() < 32; y += 3.0, ++row) {
     for (double s = 1.0; s < side - 1.0 && fixture->next_scans.size() < 32; s += 1.5) {
@@ -61,16 +73,9 @@ std::unique_ptr<Fixture> build(std::size_t target_vertices, bool typed) {
       const Pose2 pose{x, y, row % 2 == 0 ? 0.0 : 3.14159};
       auto scan = scan_to_polygon(testing::cast_scan(walls, pose, kSpec), kSpec.angle_min,
                                   kSpec.angle_increment, pose, o);
-      if (!scan.ok) continue;
-      if (filled) {
-        fixture->next_scans.push_back(std::move(scan.polygon));
-      } else {
-        fixture->map.insert(scan.polygon);
-        filled = fixture->map.planning_vertex_count() >= target_vertices;
-      }
+      if (scan.ok) fixture->take(std::move(scan.polygon), target_vertices);
     }
   }
-  fixture->explored_area_m2 = fixture->map.free_area_m2();
   return fixture;
 }
 
@@ -92,7 +97,6 @@ std::unique_ptr<Fixture> build_intel(std::size_t target_vertices) {
   if (!in) return fixture;  // no data: the benchmark reports an error
   const auto log = pex::evaluation::parse_carmen_log(in);
   const ScanPolygonOptions options;
-  bool filled = false;
   std::optional<Pose2> last;
   for (const auto& laser : log.lasers) {
     if (fixture->next_scans.size() >= 32) break;
@@ -105,15 +109,8 @@ std::unique_ptr<Fixture> build_intel(std::size_t target_vertices) {
     for (auto& r : ranges)
       if (r >= laser.max_range_m) r = std::numeric_limits<float>::infinity();  // no return
     auto scan = scan_to_polygon(ranges, laser.angle_min_rad, laser.angle_increment_rad, pose, options);
-    if (!scan.ok) continue;
-    if (filled) {
-      fixture->next_scans.push_back(std::move(scan.polygon));
-    } else {
-      fixture->map.insert(scan.polygon);
-      filled = fixture->map.planning_vertex_count() >= target_vertices;
-    }
+    if (scan.ok) fixture->take(std::move(scan.polygon), target_vertices);
   }
-  fixture->explored_area_m2 = fixture->map.free_area_m2();
   return fixture;
 }
 

@@ -487,17 +487,7 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
           index.add(polygon);
           continue;
         }
-        TypedPolygon kept{Polygon{}, {polygon.edge_types[0]}};
-        kept.geometry.outer() = polygon.geometry.outer();
-        for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k) {
-          const Ring& hole = polygon.geometry.inners()[k];
-          if (strictly_inside(hole)) {
-            aside.push_back({hole, polygon.edge_types[1 + k]});
-          } else {
-            kept.geometry.inners().push_back(hole);
-            kept.edge_types.push_back(polygon.edge_types[1 + k]);
-          }
-        }
+        TypedPolygon kept = without_holes(polygon, strictly_inside, aside);
         touching.push_back(kept.geometry);
         index.add(kept);
       }

@@ -178,19 +178,9 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
     if (b_involved[j]) b_part_boxes.push_back(b_boxes[j]);
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!a_involved[i]) continue;
-    const TypedPolygon& p = a[i];
-    TypedPolygon kept{Polygon{}, {p.edge_types[0]}};
-    kept.geometry.outer() = p.geometry.outer();
-    for (std::size_t k = 0; k < p.geometry.inners().size(); ++k) {
-      const Ring& hole = p.geometry.inners()[k];
-      if (meets_any(bg::return_envelope<Box>(hole), b_part_boxes, nullptr)) {
-        kept.geometry.inners().push_back(hole);
-        kept.edge_types.push_back(p.edge_types[1 + k]);
-      } else {
-        aside.push_back({hole, p.edge_types[1 + k]});
-      }
-    }
-    a_part.push_back(std::move(kept));
+    a_part.push_back(without_holes(
+        a[i], [&](const Ring& hole) { return !meets_any(bg::return_envelope<Box>(hole), b_part_boxes, nullptr); },
+        aside));
   }
   TypedOpResult result{true, {}, {}, {}, 0};
   if (!a_part.empty()) {

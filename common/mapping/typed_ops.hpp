@@ -76,6 +76,24 @@ struct TypedRing {
   std::vector<EdgeType> types;
 };
 
+// The polygon without the holes for which set_aside(ring) is true; those are
+// appended to `aside` with their types (to go back with put_back_holes).
+template <class Pred>
+TypedPolygon without_holes(const TypedPolygon& polygon, Pred&& set_aside, std::vector<TypedRing>& aside) {
+  TypedPolygon kept{Polygon{}, {polygon.edge_types[0]}};
+  kept.geometry.outer() = polygon.geometry.outer();
+  for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k) {
+    const Ring& hole = polygon.geometry.inners()[k];
+    if (set_aside(hole)) {
+      aside.push_back({hole, polygon.edge_types[1 + k]});
+    } else {
+      kept.geometry.inners().push_back(hole);
+      kept.edge_types.push_back(polygon.edge_types[1 + k]);
+    }
+  }
+  return kept;
+}
+
 // Puts each hole back into the polygon that contains it: the smallest one
 // whose outer ring covers a point just inside the hole (left of its first
 // edge; holes run clockwise). Outer rings are nested or disjoint, so the
