@@ -77,8 +77,10 @@ void split_ring(Ring& ring, double cell, double origin) {
   ring = std::move(out);
 }
 
+// The cheap sufficient test first; Boost decides what it cannot show (rings
+// touching at points, near-degenerate geometry) and says why when invalid.
 bool valid_layer(const TypedMultiPolygon& layer, std::string& why) {
-  return bg::is_valid(geometry_of(layer), why);
+  return is_clearly_valid(layer) || bg::is_valid(geometry_of(layer), why);
 }
 
 // RDP then one validity check of the whole layer. If RDP made the layer

@@ -1,5 +1,6 @@
 #include "mapping/typed_polygon.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -59,6 +60,139 @@ bool is_valid(const TypedMultiPolygon& polygons, std::string* why) {
   if (!bg::is_valid(geometry, message)) {
     if (why) *why = message;
     return false;
+  }
+  return true;
+}
+
+namespace {
+
+// Even-odd crossing test; the point is known to be off every ring's boundary.
+bool inside_ring(const Point& p, const Ring& ring) {
+  bool inside = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Point& a = ring[i];
+    const Point& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
+      inside = !inside;
+  }
+  return inside;
+}
+
+struct SweepEdge {
+  Point a, b;
+  double min_x, max_x, min_y, max_y;
+  std::uint32_t ring;   // global ring index
+  std::uint32_t index;  // edge index in its ring
+  std::uint32_t ring_edges;
+};
+
+constexpr double kClearance = 1e-9;  // m: closer than this counts as touching
+
+double cross(const Point& o, const Point& a, const Point& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+
+double segment_distance_sq(const Point& p, const Point& a, const Point& b) {
+  const double dx = b.x() - a.x(), dy = b.y() - a.y();
+  const double len2 = dx * dx + dy * dy;
+  double t = len2 > 0.0 ? ((p.x() - a.x()) * dx + (p.y() - a.y()) * dy) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  const double ex = a.x() + t * dx - p.x(), ey = a.y() + t * dy - p.y();
+  return ex * ex + ey * ey;
+}
+
+// True if the two segments are clearly apart (no crossing, no point of one
+// within kClearance of the other).
+bool clearly_apart(const SweepEdge& e, const SweepEdge& f) {
+  const double c1 = cross(e.a, e.b, f.a), c2 = cross(e.a, e.b, f.b);
+  const double c3 = cross(f.a, f.b, e.a), c4 = cross(f.a, f.b, e.b);
+  if (((c1 > 0 && c2 < 0) || (c1 < 0 && c2 > 0)) && ((c3 > 0 && c4 < 0) || (c3 < 0 && c4 > 0)))
+    return false;  // proper crossing
+  const double d2 = kClearance * kClearance;
+  return segment_distance_sq(f.a, e.a, e.b) > d2 && segment_distance_sq(f.b, e.a, e.b) > d2 &&
+         segment_distance_sq(e.a, f.a, f.b) > d2 && segment_distance_sq(e.b, f.a, f.b) > d2;
+}
+
+}  // namespace
+
+bool is_clearly_valid(const TypedMultiPolygon& polygons) {
+  std::vector<const Ring*> rings;
+  std::vector<SweepEdge> edges;
+  for (const auto& polygon : polygons) {
+    const std::size_t first_ring = rings.size();
+    rings.push_back(&polygon.geometry.outer());
+    for (const auto& inner : polygon.geometry.inners()) rings.push_back(&inner);
+    for (std::size_t r = first_ring; r < rings.size(); ++r) {
+      const Ring& ring = *rings[r];
+      if (ring.size() < 4 || !bg::equals(ring.front(), ring.back())) return false;
+      // Orientation: outer counter-clockwise (positive), holes clockwise.
+      double twice_area = 0.0;
+      for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+        const Point &a = ring[i], &b = ring[i + 1];
+        if (!std::isfinite(a.x()) || !std::isfinite(a.y())) return false;
+        if (a.x() == b.x() && a.y() == b.y()) return false;
+        twice_area += a.x() * b.y() - b.x() * a.y();
+        edges.push_back({a, b, std::min(a.x(), b.x()), std::max(a.x(), b.x()), std::min(a.y(), b.y()),
+                         std::max(a.y(), b.y()), static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(i),
+                         static_cast<std::uint32_t>(ring.size() - 1)});
+      }
+      if ((r == first_ring) != (twice_area > 0.0)) return false;
+    }
+  }
+  // Sweep over x: every pair of edges whose boxes overlap (with clearance).
+  std::sort(edges.begin(), edges.end(), [](const SweepEdge& l, const SweepEdge& r) { return l.min_x < r.min_x; });
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    const SweepEdge& e = edges[i];
+    for (std::size_t j = i + 1; j < edges.size() && edges[j].min_x <= e.max_x + kClearance; ++j) {
+      const SweepEdge& f = edges[j];
+      if (f.min_y > e.max_y + kClearance || f.max_y < e.min_y - kClearance) continue;
+      if (e.ring == f.ring) {
+        const std::uint32_t n = e.ring_edges;
+        const bool f_follows = (e.index + 1) % n == f.index, e_follows = (f.index + 1) % n == e.index;
+        if (f_follows || e_follows) {
+          // Consecutive edges: they share one vertex; the other ends must be
+          // clear of the other edge (no spike, no fold back onto it).
+          const SweepEdge& first = f_follows ? e : f;
+          const SweepEdge& second = f_follows ? f : e;
+          const double d2 = kClearance * kClearance;
+          if (segment_distance_sq(second.b, first.a, first.b) <= d2 ||
+              segment_distance_sq(first.a, second.a, second.b) <= d2)
+            return false;
+          continue;
+        }
+      }
+      if (!clearly_apart(e, f)) return false;
+    }
+  }
+  // No ring meets another, so rings are nested or apart; one vertex decides.
+  std::size_t r0 = 0;
+  std::vector<std::pair<std::size_t, std::size_t>> polygon_rings;  // [first, last) per polygon
+  for (const auto& polygon : polygons) {
+    polygon_rings.push_back({r0, r0 + 1 + polygon.geometry.inners().size()});
+    r0 = polygon_rings.back().second;
+  }
+  std::vector<Box> boxes(rings.size());
+  for (std::size_t r = 0; r < rings.size(); ++r) boxes[r] = bg::return_envelope<Box>(*rings[r]);
+  auto inside = [&](std::size_t ring, const Point& p) {
+    return bg::covered_by(p, boxes[ring]) && inside_ring(p, *rings[ring]);
+  };
+  for (std::size_t k = 0; k < polygon_rings.size(); ++k) {
+    const auto [first, last] = polygon_rings[k];
+    for (std::size_t h = first + 1; h < last; ++h) {
+      if (!inside(first, rings[h]->front())) return false;  // hole outside its outer ring
+      for (std::size_t g = first + 1; g < last; ++g)
+        if (g != h && inside(g, rings[h]->front())) return false;  // hole in a hole
+    }
+    // Another polygon inside this one must sit in one of its holes.
+    for (std::size_t m = 0; m < polygon_rings.size(); ++m) {
+      if (m == k) continue;
+      const Point& p = rings[polygon_rings[m].first]->front();
+      if (!inside(first, p)) continue;
+      bool in_hole = false;
+      for (std::size_t h = first + 1; h < last && !in_hole; ++h) in_hole = inside(h, p);
+      if (!in_hole) return false;
+    }
   }
   return true;
 }

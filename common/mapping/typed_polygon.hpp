@@ -55,6 +55,18 @@ bool types_match_rings(const TypedMultiPolygon& polygons);
 bool is_valid(const TypedPolygon& polygon, std::string* why = nullptr);
 bool is_valid(const TypedMultiPolygon& polygons, std::string* why = nullptr);
 
+// A sufficient test of validity, several times cheaper than bg::is_valid:
+// true only when every ring is closed, has at least 3 distinct vertices, no
+// repeated consecutive point and the right orientation, no two edges of any
+// rings come within 1e-9 m of each other except consecutive edges at their
+// shared vertex (no crossing, no touching, no spike), every hole lies inside
+// its own outer ring and outside its siblings, and no polygon lies inside
+// another except inside one of its holes. Such a multi-polygon is valid by
+// OGC's rules. false means "not shown": the caller asks bg::is_valid, which
+// also accepts rings touching at points. Used where validity is checked on
+// every insert (PolygonMap); tests keep bg::is_valid (is_valid above).
+bool is_clearly_valid(const TypedMultiPolygon& polygons);
+
 // Number of distinct vertices (a closed ring of n + 1 points counts n).
 std::size_t vertex_count(const Polygon& polygon);
 std::size_t vertex_count(const MultiPolygon& polygons);

@@ -1,5 +1,8 @@
 #include "mapping/typed_polygon.hpp"
 
+#include <cmath>
+#include <random>
+
 #include <gtest/gtest.h>
 
 namespace pex::mapping {
@@ -77,6 +80,86 @@ TEST(TypedPolygon, UniformTypeCoversHoles) {
   ASSERT_TRUE(is_valid(typed));
   EXPECT_EQ(vertex_count(typed), 8u);
   EXPECT_DOUBLE_EQ(edge_length(typed, E::kObstacle), 48.0);
+}
+
+// is_clearly_valid is a shortcut in front of bg::is_valid: whatever it
+// accepts, Boost must accept too. Random rings (star-shaped: simple; random
+// order: mostly self-crossing), holes at random (inside, crossing, outside,
+// touching), several polygons (apart, overlapping, islands in holes), and
+// spikes, wrong orientation, repeated points.
+TEST(ClearValidity, WhatItAcceptsBoostAccepts) {
+  std::mt19937_64 rng(2024);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  auto ring_around = [&](double cx, double cy, double r, int n, bool star, bool clockwise) {
+    std::vector<double> angles(n);
+    for (int i = 0; i < n; ++i) angles[i] = 2 * M_PI * (star ? (i + 0.8 * u(rng)) / n : u(rng));
+    Ring ring;
+    for (int i = 0; i < n; ++i) {
+      const double a = clockwise ? -angles[i] : angles[i];
+      const double rr = r * (0.5 + 0.5 * u(rng));
+      ring.push_back(Point(cx + rr * std::cos(a), cy + rr * std::sin(a)));
+    }
+    // Sometimes a vertex exactly on another edge, a spike or a repeated point.
+    const double roll = u(rng);
+    if (roll < 0.05 && n > 3) ring[2] = Point(0.5 * (ring[0].x() + ring[1].x()), 0.5 * (ring[0].y() + ring[1].y()));
+    else if (roll < 0.10 && n > 3) ring[2] = ring[0];
+    else if (roll < 0.15) ring.insert(ring.begin() + 1, ring[1]);
+    ring.push_back(ring.front());
+    return ring;
+  };
+  int accepted = 0, boost_valid = 0, stars_accepted = 0, stars = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    TypedMultiPolygon polygons;
+    const int count = 1 + static_cast<int>(3 * u(rng));
+    const bool star = u(rng) < 0.7;
+    for (int k = 0; k < count; ++k) {
+      TypedPolygon p;
+      const double cx = 10 * u(rng), cy = 10 * u(rng), r = 1 + 4 * u(rng);
+      p.geometry.outer() = ring_around(cx, cy, r, 3 + static_cast<int>(12 * u(rng)), star, u(rng) < 0.05);
+      const int holes = static_cast<int>(3 * u(rng));
+      for (int h = 0; h < holes; ++h)
+        p.geometry.inners().push_back(ring_around(cx + r * (u(rng) - 0.5), cy + r * (u(rng) - 0.5),
+                                                  0.05 + 0.4 * r * u(rng), 3 + static_cast<int>(6 * u(rng)), true,
+                                                  u(rng) < 0.95));
+      for (const auto* ring = &p.geometry.outer(); ring; ring = nullptr)
+        p.edge_types.push_back(std::vector<EdgeType>(ring->size() - 1, E::kObstacle));
+      for (const auto& inner : p.geometry.inners()) p.edge_types.push_back(std::vector<EdgeType>(inner.size() - 1, E::kFrontier));
+      polygons.push_back(std::move(p));
+    }
+    const bool clear = is_clearly_valid(polygons);
+    const bool valid = bg::is_valid(geometry_of(polygons));
+    if (clear) ++accepted;
+    if (valid) ++boost_valid;
+    if (star && count == 1 && polygons[0].geometry.inners().empty()) {
+      ++stars;
+      stars_accepted += clear ? 1 : 0;
+    }
+    ASSERT_TRUE(!clear || valid) << "trial " << trial << ": accepted, but Boost says invalid: "
+                                 << bg::wkt(geometry_of(polygons));
+  }
+  std::printf("clearly valid %d, Boost valid %d of 4000; simple star rings accepted %d of %d\n", accepted,
+              boost_valid, stars_accepted, stars);
+  // It must also be useful: most valid inputs are shown valid without Boost.
+  EXPECT_GT(accepted, boost_valid * 3 / 4);
+}
+
+// Rings that touch at a point are valid for Boost but not "clearly" valid:
+// they are left to Boost. Islands in holes are clearly valid.
+TEST(ClearValidity, TouchingRingsAreLeftToBoost) {
+  // A hole touching the outer ring at one point: valid for Boost, "not shown" here.
+  TypedPolygon p = make({{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  p.geometry.inners().push_back(Ring{{0, 2}, {1, 3}, {1, 1}, {0, 2}});
+  p.edge_types.push_back({E::kObstacle, E::kObstacle, E::kObstacle});
+  EXPECT_TRUE(bg::is_valid(p.geometry));
+  EXPECT_FALSE(is_clearly_valid({p}));
+  // The same hole moved off the outer ring is clearly valid.
+  p.geometry.inners()[0] = Ring{{0.5, 2}, {1, 3}, {1, 1}, {0.5, 2}};
+  EXPECT_TRUE(is_clearly_valid({p}));
+  // An island inside that hole is fine; one across the hole's edge is not.
+  TypedPolygon island = make({{0.8, 1.8}, {0.9, 1.8}, {0.9, 2.2}, {0.8, 2.2}}, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
+  EXPECT_TRUE(is_clearly_valid({p, island}));
+  TypedPolygon across = make({{2, 2}, {3, 2}, {3, 3}, {2, 3}}, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
+  EXPECT_FALSE(is_clearly_valid({p, across}));  // inside p, not in a hole: overlaps it
 }
 
 }  // namespace
