@@ -90,22 +90,6 @@ TypedMultiPolygon assign_types(const MultiPolygon& geometry, const EdgeTypeIndex
   return out;
 }
 
-namespace {
-// Even-odd crossing test: independent of the ring's orientation (holes are
-// stored clockwise in the counter-clockwise ring type).
-bool inside_ring(const Point& p, const Ring& ring) {
-  bool inside = false;
-  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-    const Point& a = ring[i];
-    const Point& b = ring[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
-      inside = !inside;
-  }
-  return inside;
-}
-}  // namespace
-
 bool put_back_holes(TypedMultiPolygon& polygons, std::vector<TypedRing> holes) {
   if (holes.empty()) return true;
   std::vector<Box> boxes;

@@ -64,9 +64,6 @@ bool is_valid(const TypedMultiPolygon& polygons, std::string* why) {
   return true;
 }
 
-namespace {
-
-// Even-odd crossing test; the point is known to be off every ring's boundary.
 bool inside_ring(const Point& p, const Ring& ring) {
   bool inside = false;
   for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
@@ -78,6 +75,8 @@ bool inside_ring(const Point& p, const Ring& ring) {
   }
   return inside;
 }
+
+namespace {
 
 struct SweepEdge {
   Point a, b;

@@ -55,6 +55,11 @@ bool types_match_rings(const TypedMultiPolygon& polygons);
 bool is_valid(const TypedPolygon& polygon, std::string* why = nullptr);
 bool is_valid(const TypedMultiPolygon& polygons, std::string* why = nullptr);
 
+// Even-odd (crossing number) point-in-ring test, independent of the ring's
+// orientation (holes are stored clockwise in the counter-clockwise ring
+// type). For points known to be off the ring's boundary.
+bool inside_ring(const Point& p, const Ring& ring);
+
 // A sufficient test of validity, several times cheaper than bg::is_valid:
 // true only when every ring is closed, has at least 3 distinct vertices, no
 // repeated consecutive point and the right orientation, no two edges of any
