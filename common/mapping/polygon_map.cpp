@@ -451,9 +451,9 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
   };
   // Attempt 0: only polygons with an edge on their tile's border are merged;
   // the others lie inside their tile and pass through (fast, and keeps Boost
-  // away from most of the map). Boost 1.74's validity depends on the extent
-  // it rescales to, so two polygons valid at tile scale can be "invalid" at
-  // map scale: then attempt 1 merges everything, attempt 2 in reverse order.
+  // away from most of the map). If that result is invalid, attempt 1 merges
+  // everything, attempt 2 in reverse order (with Boost's rescaling, which is
+  // off now, two polygons valid at tile scale could be "invalid" at map scale).
   //
   // Holes strictly inside their tile's box cannot meet another tile's polygons
   // either: in attempt 0 they are set aside, the rest goes through the

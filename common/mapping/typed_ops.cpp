@@ -155,11 +155,12 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   // tile's obstacles are far from a new scan).
   std::vector<TypedRing> aside;
   TypedMultiPolygon a_part, b_part;
-  for (std::size_t j = 0; j < b.size(); ++j)
-    if (b_involved[j]) b_part.push_back(b[j]);
   std::vector<Box> b_part_boxes;
-  for (std::size_t j = 0; j < b.size(); ++j)
-    if (b_involved[j]) b_part_boxes.push_back(b_boxes[j]);
+  for (std::size_t j = 0; j < b.size(); ++j) {
+    if (!b_involved[j]) continue;
+    b_part.push_back(b[j]);
+    b_part_boxes.push_back(b_boxes[j]);
+  }
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!a_involved[i]) continue;
     a_part.push_back(without_holes(
