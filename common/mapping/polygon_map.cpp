@@ -249,7 +249,9 @@ PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options) {
   try {
     prepared.band = obstacle_band(scan, options.obstacle_inner_m, options.obstacle_outer_m);
     std::string why;
-    if (!bg::is_valid(prepared.band, why)) prepared.band_error = "obstacle band invalid: " + why;
+    if (!is_clearly_valid(with_uniform_type(prepared.band, EdgeType::kObstacle)) &&
+        !bg::is_valid(prepared.band, why))
+      prepared.band_error = "obstacle band invalid: " + why;
   } catch (const std::exception& e) {
     prepared.band_error = std::string("obstacle band failed: ") + e.what();
   }
@@ -313,9 +315,10 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
 
   // Phase 1: clip the scan and its band to every tile it meets. The tiles
   // partition the plane, so the pieces' areas must add up to the whole: this
-  // catches Boost overlay failures on degenerate contacts (a polygon touching
-  // a tile only at its corner has given the whole box back). A scan whose
-  // pieces do not add up is refused and the map stays as it was.
+  // catches overlay failures on degenerate contacts (Boost, touching a tile
+  // only at its corner, has given the whole box back). If our edge overlay's
+  // pieces do not add up, Boost's overlay clips again; a scan whose pieces
+  // still do not add up is refused and the map stays as it was.
   struct Piece {
     TileKey key;
     Box box;
@@ -323,34 +326,45 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
     TypedMultiPolygon band;
   };
   std::vector<Piece> pieces;
-  double free_sum = 0.0, band_sum = 0.0;
-  for (auto i = i0; i <= i1; ++i) {
-    for (auto j = j0; j <= j1; ++j) {
-      const TileKey key{i, j};
-      const Box box = tile_box(key);
-      TypedOpOptions tile_options = typed;
-      tile_options.border_box = box;
-      auto clip_free = typed_clip(scan_split, box, tile_options);
-      TypedOpOptions band_options = tile_options;
-      band_options.uniform_type = EdgeType::kObstacle;
-      TypedOpResult clip_band{true, {}, {}, {}};
-      if (!band_typed.empty()) clip_band = typed_clip(band_typed, box, band_options);
-      if (!clip_free.ok || !clip_band.ok) {
-        result.ok = false;
-        result.error = !clip_free.ok ? clip_free.error : clip_band.error;
-        ++failed_tile_updates_;
-        ++result.tiles_failed;
-        return result;
-      }
-      if (clip_free.polygons.empty() && clip_band.polygons.empty()) continue;
-      free_sum += area(clip_free.polygons);
-      band_sum += area(clip_band.polygons);
-      pieces.push_back({key, box, std::move(clip_free.polygons), std::move(clip_band.polygons)});
-    }
-  }
   const double scan_area = bg::area(scan.geometry), band_area = bg::area(band);
-  if (std::abs(free_sum - scan_area) > 1e-6 * std::max(1.0, scan_area) ||
-      std::abs(band_sum - band_area) > 1e-6 * std::max(1.0, band_area)) {
+  for (const bool boost : {false, true}) {
+    pieces.clear();
+    double free_sum = 0.0, band_sum = 0.0;
+    int fallbacks = 0;
+    for (auto i = i0; i <= i1; ++i) {
+      for (auto j = j0; j <= j1; ++j) {
+        const TileKey key{i, j};
+        const Box box = tile_box(key);
+        TypedOpOptions tile_options = typed;
+        tile_options.border_box = box;
+        tile_options.boost_overlay = boost;
+        auto clip_free = typed_clip(scan_split, box, tile_options);
+        TypedOpOptions band_options = tile_options;
+        band_options.uniform_type = EdgeType::kObstacle;
+        TypedOpResult clip_band{true, {}, {}, {}, 0, 0};
+        if (!band_typed.empty()) clip_band = typed_clip(band_typed, box, band_options);
+        fallbacks += clip_free.boost_fallbacks + clip_band.boost_fallbacks;
+        if (!clip_free.ok || !clip_band.ok) {
+          result.ok = false;
+          result.error = !clip_free.ok ? clip_free.error : clip_band.error;
+          ++failed_tile_updates_;
+          ++result.tiles_failed;
+          return result;
+        }
+        if (clip_free.polygons.empty() && clip_band.polygons.empty()) continue;
+        free_sum += area(clip_free.polygons);
+        band_sum += area(clip_band.polygons);
+        pieces.push_back({key, box, std::move(clip_free.polygons), std::move(clip_band.polygons)});
+      }
+    }
+    result.boost_fallbacks += fallbacks;
+    if (std::abs(free_sum - scan_area) <= 1e-6 * std::max(1.0, scan_area) &&
+        std::abs(band_sum - band_area) <= 1e-6 * std::max(1.0, band_area))
+      break;
+    if (!boost) {
+      ++result.boost_fallbacks;
+      continue;
+    }
     result.ok = false;
     result.error = "clipping to tiles does not conserve area (scan " + std::to_string(scan_area) + " vs " +
                    std::to_string(free_sum) + " m2, band " + std::to_string(band_area) + " vs " +
@@ -374,49 +388,65 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
 
       const auto found = tiles_.find(key);
       const Tile* old = found == tiles_.end() ? nullptr : found->second.get();
-      // One layer: old ∪ piece. Returns false (tile failed) on an error or an
-      // area out of bounds; `unchanged` = polygons at the end kept as they were.
-      auto unite = [&](const TypedMultiPolygon* old_layer, TypedMultiPolygon& piece_layer,
-                       const TypedOpOptions& op_options, const char* what, TypedMultiPolygon& out,
-                       std::size_t& unchanged) {
-        unchanged = 0;
+      // One layer: old ∪ piece, simplified and checked. Returns false (tile
+      // failed) on an error, an area out of bounds or an invalid result. If
+      // our edge overlay made the result that failed, Boost's overlay gets a
+      // second try.
+      auto update_layer = [&](const TypedMultiPolygon* old_layer, TypedMultiPolygon& piece_layer,
+                              TypedOpOptions op_options, const char* what, TypedMultiPolygon& out,
+                              double& area_after_union) {
         if (!old_layer || old_layer->empty()) {
           out = std::move(piece_layer);
+          area_after_union = area(out);
+          if (simplify_and_validate(out, options_.simplify_epsilon_m, why)) return true;
+          fail_tile(std::string(what) + " invalid: " + why);
+          return false;
+        }
+        for (const bool boost : {false, true}) {
+          op_options.boost_overlay = boost;
+          auto merged = typed_union(*old_layer, piece_layer, op_options);
+          result.boost_fallbacks += merged.boost_fallbacks;
+          const bool can_retry = !boost && merged.boost_fallbacks == 0;
+          auto retry_or_fail = [&](const std::string& why_failed) {
+            if (can_retry) {
+              ++result.boost_fallbacks;
+              return false;
+            }
+            fail_tile(std::string(what) + ": " + why_failed);
+            return true;
+          };
+          if (!merged.ok) {
+            if (retry_or_fail(merged.error)) return false;
+            continue;
+          }
+          // A union lies between the larger input and the sum of both.
+          const double a_old = area(*old_layer), a_new = area(piece_layer), a_union = area(merged.polygons);
+          if (a_union < std::max(a_old, a_new) - 1e-6 || a_union > a_old + a_new + 1e-6) {
+            if (retry_or_fail("union area out of bounds")) return false;
+            continue;
+          }
+          // Only what the union produced is simplified and checked: the
+          // polygons it passed through were valid in the old tile, and their
+          // boxes meet no new piece, so they stay disjoint from the rest.
+          if (!simplify_and_validate(merged.polygons, merged.unchanged_tail, options_.simplify_epsilon_m, why)) {
+            if (retry_or_fail("invalid after union: " + why)) return false;
+            continue;
+          }
+          result.reassign.edges += merged.reassign.edges;
+          result.reassign.candidates += merged.reassign.candidates;
+          out = std::move(merged.polygons);
+          area_after_union = a_union;
           return true;
         }
-        auto merged = typed_union(*old_layer, piece_layer, op_options);
-        if (!merged.ok) {
-          fail_tile(std::string(what) + ": " + merged.error);
-          return false;
-        }
-        // A union lies between the larger input and the sum of both.
-        const double a_old = area(*old_layer), a_new = area(piece_layer), a_union = area(merged.polygons);
-        if (a_union < std::max(a_old, a_new) - 1e-6 || a_union > a_old + a_new + 1e-6) {
-          fail_tile(std::string(what) + ": union area out of bounds");
-          return false;
-        }
-        result.reassign.edges += merged.reassign.edges;
-        result.reassign.candidates += merged.reassign.candidates;
-        out = std::move(merged.polygons);
-        unchanged = merged.unchanged_tail;
-        return true;
+        return false;
       };
       TypedMultiPolygon free, obstacles;
-      std::size_t free_unchanged = 0, obstacles_unchanged = 0;
-      if (!unite(old ? &old->free : nullptr, piece.free, tile_options, "free", free, free_unchanged) ||
-          !unite(old ? &old->obstacles : nullptr, piece.band, band_options, "obstacles", obstacles,
-                 obstacles_unchanged))
+      double area_after_union = 0.0, obstacles_area = 0.0;
+      if (!update_layer(old ? &old->free : nullptr, piece.free, tile_options, "free", free, area_after_union) ||
+          !update_layer(old ? &old->obstacles : nullptr, piece.band, band_options, "obstacles", obstacles,
+                        obstacles_area))
         continue;
       const double area_before = old ? area(old->free) : 0.0;
-      const double area_after_union = area(free);
-      // Only what the union produced is simplified and checked: the polygons
-      // it passed through were valid in the old tile, and their boxes meet no
-      // new piece, so they stay disjoint from the rest.
-      if (!simplify_and_validate(free, free_unchanged, options_.simplify_epsilon_m, why) ||
-          !simplify_and_validate(obstacles, obstacles_unchanged, options_.simplify_epsilon_m, why)) {
-        fail_tile("tile invalid after union: " + why);
-        continue;
-      }
       result.free_area_before_m2 += area_before;
       result.free_area_after_union_m2 += area_after_union;
       tiles_[key] = std::make_shared<const Tile>(box, std::move(free), std::move(obstacles),
@@ -424,6 +454,7 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
     }
   }
   ++scans_inserted_;
+  boost_fallbacks_ += result.boost_fallbacks;
   return result;
 }
 

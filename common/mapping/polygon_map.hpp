@@ -102,6 +102,9 @@ struct InsertResult {
   double free_area_before_m2 = 0.0;
   double free_area_after_union_m2 = 0.0;
   ReassignStats reassign;
+  // Overlays redone with Boost.Geometry because our edge overlay failed or
+  // its result failed a check (typed_ops.hpp, edge_overlay.hpp).
+  int boost_fallbacks = 0;
 };
 
 struct MergeResult {
@@ -128,7 +131,7 @@ struct PreparedScan {
   std::string band_error;  // not empty: no band could be built (the scan goes in without one)
 };
 // Builds the band with the map options' obstacle_inner_m / obstacle_outer_m
-// and checks it (bg::is_valid).
+// and checks it (is_clearly_valid, else bg::is_valid).
 PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options);
 
 class PolygonMap {
@@ -157,6 +160,8 @@ class PolygonMap {
   std::size_t memory_bytes() const;
   std::int64_t scans_inserted() const { return scans_inserted_; }
   std::int64_t failed_tile_updates() const { return failed_tile_updates_; }
+  // Overlays of inserts that fell back to Boost.Geometry (InsertResult).
+  std::int64_t boost_fallbacks() const { return boost_fallbacks_; }
   const PolygonMapOptions& options() const { return options_; }
 
   using TileKey = std::pair<std::int32_t, std::int32_t>;
@@ -172,6 +177,7 @@ class PolygonMap {
   std::map<TileKey, std::shared_ptr<const Tile>> tiles_;
   std::int64_t scans_inserted_ = 0;
   std::int64_t failed_tile_updates_ = 0;
+  std::int64_t boost_fallbacks_ = 0;
 };
 
 // Splits every edge where it crosses a grid line x = origin_m + k * cell_m or

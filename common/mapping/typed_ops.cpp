@@ -35,6 +35,46 @@ TypedOpResult finish(MultiPolygon geometry, const EdgeTypeIndex& index, double s
   return result;
 }
 
+TypedOpResult failed(std::string why) {
+  TypedOpResult result;
+  result.error = std::move(why);
+  return result;
+}
+
+// Our edge overlay (edge_overlay.hpp) unless the caller asked for Boost's:
+// true with `result` filled when it succeeded (and, if options.validate, its
+// output is valid); false, with result.boost_fallbacks counted when it was
+// tried, tells the caller to use Boost.Geometry.
+bool edge_overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+                  const TypedOpOptions& options, TypedOpResult& result) {
+  if (options.boost_overlay) return false;
+  OverlayResult r = overlay(a, b, op, options.border_box);
+  std::string why;
+  if (r.ok && options.validate && !is_clearly_valid(r.polygons) && !bg::is_valid(geometry_of(r.polygons), why))
+    r.ok = false;
+  if (!r.ok) {
+    ++result.boost_fallbacks;
+    return false;
+  }
+  if (!options.assign_edge_types || options.uniform_type) {  // as assign_types types them
+    const EdgeType plain = options.uniform_type.value_or(EdgeType::kFrontier);
+    auto retype = [&](const Ring& ring, std::vector<EdgeType>& types) {
+      for (std::size_t i = 0; i + 1 < ring.size(); ++i)
+        types[i] = options.border_box && on_same_box_side(ring[i], ring[i + 1], *options.border_box)
+                       ? EdgeType::kBorder
+                       : plain;
+    };
+    for (auto& polygon : r.polygons) {
+      retype(polygon.geometry.outer(), polygon.edge_types[0]);
+      for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
+        retype(polygon.geometry.inners()[k], polygon.edge_types[1 + k]);
+    }
+  }
+  result.polygons = std::move(r.polygons);
+  result.ok = true;
+  return true;
+}
+
 }  // namespace
 
 void snap_to_box(MultiPolygon& geometry, const Box& box) {
@@ -167,24 +207,28 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
         a[i], [&](const Ring& hole) { return !meets_any(bg::return_envelope<Box>(hole), b_part_boxes, nullptr); },
         aside));
   }
-  TypedOpResult result{true, {}, {}, {}, 0};
+  TypedOpResult result{true, {}, {}, {}, 0, 0};
   if (!a_part.empty()) {
-    MultiPolygon geometry;
-    try {
-      bg::union_(geometry_of(a_part), geometry_of(b_part), geometry);
-    } catch (const std::exception& e) {
-      return TypedOpResult{false, std::string("union failed: ") + e.what(), {}, {}, 0};
+    if (!edge_overlay(a_part, b_part, OverlayOp::kUnion, options, result)) {
+      MultiPolygon geometry;
+      try {
+        bg::union_(geometry_of(a_part), geometry_of(b_part), geometry);
+      } catch (const std::exception& e) {
+        return failed(std::string("union failed: ") + e.what());
+      }
+      EdgeTypeIndex index;
+      if (options.assign_edge_types && !options.uniform_type) {
+        index.add(a_part);
+        index.add(b_part);
+        index.build();
+      }
+      const int fallbacks = result.boost_fallbacks;
+      result = finish(std::move(geometry), index, kClipSearchRadius, options);
+      result.boost_fallbacks = fallbacks;
+      if (!result.ok) return result;
     }
-    EdgeTypeIndex index;
-    if (options.assign_edge_types && !options.uniform_type) {
-      index.add(a_part);
-      index.add(b_part);
-      index.build();
-    }
-    result = finish(std::move(geometry), index, kClipSearchRadius, options);
-    if (!result.ok) return result;
     if (!put_back_holes(result.polygons, std::move(aside)))
-      return TypedOpResult{false, "union: a hole set aside has no polygon to return to", {}, {}, 0};
+      return failed("union: a hole set aside has no polygon to return to");
   }
   for (std::size_t j = 0; j < b.size(); ++j)
     if (!b_involved[j]) result.polygons.push_back(b[j]);
@@ -203,7 +247,7 @@ TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolyg
   try {
     bg::difference(geometry_of(a), geometry_of(b), geometry);
   } catch (const std::exception& e) {
-    return TypedOpResult{false, std::string("difference failed: ") + e.what(), {}, {}, 0};
+    return failed(std::string("difference failed: ") + e.what());
   }
   EdgeTypeIndex index;
   if (options.assign_edge_types) {
@@ -224,6 +268,10 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
   // copied with its types, only the ones crossing a side are clipped (a
   // multi-polygon's parts are disjoint, so their pieces are too).
   const double margin = 1e-6;
+  const TypedPolygon box_polygon = with_uniform_type(
+      MultiPolygon{Polygon{{box.min_corner(), Point(box.max_corner().x(), box.min_corner().y()), box.max_corner(),
+                            Point(box.min_corner().x(), box.max_corner().y()), box.min_corner()}}},
+      EdgeType::kBorder)[0];
   const Box inner(Point(box.min_corner().x() + margin, box.min_corner().y() + margin),
                   Point(box.max_corner().x() - margin, box.max_corner().y() - margin));
   for (const auto& polygon : polygons) {
@@ -234,19 +282,23 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
       result.polygons.push_back(polygon);
       continue;
     }
-    MultiPolygon geometry;
-    try {
-      bg::intersection(polygon.geometry, box, geometry);
-    } catch (const std::exception& e) {
-      return TypedOpResult{false, std::string("clip failed: ") + e.what(), {}, {}, 0};
+    TypedOpResult piece;
+    if (!edge_overlay({polygon}, {box_polygon}, OverlayOp::kIntersection, clip_options, piece)) {
+      result.boost_fallbacks += piece.boost_fallbacks;
+      MultiPolygon geometry;
+      try {
+        bg::intersection(polygon.geometry, box, geometry);
+      } catch (const std::exception& e) {
+        return failed(std::string("clip failed: ") + e.what());
+      }
+      EdgeTypeIndex index;
+      if (options.assign_edge_types && !options.uniform_type) {
+        index.add(polygon);
+        index.build();
+      }
+      piece = finish(std::move(geometry), index, kClipSearchRadius, clip_options);
+      if (!piece.ok) return piece;
     }
-    EdgeTypeIndex index;
-    if (options.assign_edge_types && !options.uniform_type) {
-      index.add(polygon);
-      index.build();
-    }
-    auto piece = finish(std::move(geometry), index, kClipSearchRadius, clip_options);
-    if (!piece.ok) return piece;
     result.reassign.edges += piece.reassign.edges;
     result.reassign.candidates += piece.reassign.candidates;
     for (auto& p : piece.polygons) result.polygons.push_back(std::move(p));
@@ -263,7 +315,7 @@ TypedOpResult typed_offset(const TypedMultiPolygon& polygons, double distance_m,
                bs::side_straight(), bs::join_round(points_per_circle), bs::end_round(points_per_circle),
                bs::point_circle(points_per_circle));
   } catch (const std::exception& e) {
-    return TypedOpResult{false, std::string("offset failed: ") + e.what(), {}, {}, 0};
+    return failed(std::string("offset failed: ") + e.what());
   }
   EdgeTypeIndex index;
   if (options.assign_edge_types) {

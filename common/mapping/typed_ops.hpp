@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "mapping/edge_overlay.hpp"
 #include "mapping/edge_reassignment.hpp"
 #include "mapping/typed_polygon.hpp"
 
@@ -23,6 +24,11 @@ struct TypedOpOptions {
   // turns it off for intermediate results and checks each tile once at the
   // end of an insert instead (validity checks cost as much as the overlay).
   bool validate = true;
+  // typed_union and typed_clip compute the geometry with our edge overlay
+  // (edge_overlay.hpp) and fall back to Boost.Geometry's overlay when it fails
+  // or (with `validate`) its result is not valid. true: Boost only (the
+  // caller's own retry after its check failed; the benchmark's comparison).
+  bool boost_overlay = false;
 };
 
 struct TypedOpResult {
@@ -34,6 +40,8 @@ struct TypedOpResult {
   // that took no part (their boxes meet no polygon of b), returned as they
   // were, so a caller that knew them valid need not check them again.
   std::size_t unchanged_tail = 0;
+  // Overlays that fell back from our edge overlay to Boost.Geometry's.
+  int boost_fallbacks = 0;
 };
 
 // Union of a and b; each output edge keeps the type of its source edge.

@@ -1,0 +1,204 @@
+#include "mapping/edge_overlay.hpp"
+
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mapping/scan_polygon.hpp"
+#include "mapping/test_support.hpp"
+
+namespace pex::mapping {
+namespace {
+
+using E = EdgeType;
+
+TypedPolygon rect(double x0, double y0, double x1, double y1, EdgeType type = E::kFrontier) {
+  TypedPolygon p;
+  p.geometry.outer() = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}};
+  p.edge_types.push_back(std::vector<EdgeType>(4, type));
+  return p;
+}
+
+void add_hole(TypedPolygon& p, double x0, double y0, double x1, double y1, EdgeType type = E::kObstacle) {
+  p.geometry.inners().push_back(Ring{{x0, y0}, {x0, y1}, {x1, y1}, {x1, y0}, {x0, y0}});  // clockwise
+  p.edge_types.push_back(std::vector<EdgeType>(4, type));
+}
+
+// The oracle: Boost.Geometry's union or intersection of the same geometry.
+MultiPolygon boost_overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op) {
+  MultiPolygon out;
+  if (op == OverlayOp::kUnion)
+    bg::union_(geometry_of(a), geometry_of(b), out);
+  else
+    bg::intersection(geometry_of(a), geometry_of(b), out);
+  return out;
+}
+
+double boundary_distance(const Point& p, const MultiPolygon& polygons) {
+  double d = std::numeric_limits<double>::infinity();
+  for (const auto& polygon : polygons) {
+    d = std::min(d, static_cast<double>(bg::distance(p, polygon.outer())));
+    for (const auto& inner : polygon.inners()) d = std::min(d, static_cast<double>(bg::distance(p, inner)));
+  }
+  return d;
+}
+
+// The result is valid, is the oracle's point set (symmetric difference of no
+// area) and every edge lies on an input edge of its type.
+void expect_matches_boost(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+                          const OverlayResult& r) {
+  ASSERT_TRUE(r.ok) << r.error;
+  std::string why;
+  ASSERT_TRUE(is_valid(r.polygons, &why)) << why;
+  const MultiPolygon expected = boost_overlay(a, b, op);
+  const double scale = std::max(1.0, bg::area(expected));
+  EXPECT_NEAR(area(r.polygons), bg::area(expected), 1e-9 * scale);
+  // Same point set: sampled points are inside both or outside both, but for
+  // points on a boundary. (Boost's sym_difference of two equal inputs is not
+  // reliable enough to be the oracle here.)
+  const MultiPolygon ours = geometry_of(r.polygons);
+  Box envelope;
+  bg::envelope(expected, envelope);
+  if (!ours.empty()) bg::expand(envelope, bg::return_envelope<Box>(ours));
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> ux(envelope.min_corner().x(), envelope.max_corner().x());
+  std::uniform_real_distribution<double> uy(envelope.min_corner().y(), envelope.max_corner().y());
+  int disagreements = 0;
+  for (int k = 0; k < (expected.empty() ? 0 : 2000); ++k) {
+    const Point s(ux(rng), uy(rng));
+    if (bg::covered_by(s, ours) != bg::covered_by(s, expected) &&
+        boundary_distance(s, expected) > 1e-7)
+      ++disagreements;
+  }
+  EXPECT_EQ(disagreements, 0) << "op " << int(op) << "\nours " << bg::wkt(ours) << "\nboost " << bg::wkt(expected);
+  for_each_edge(r.polygons, [&](const Point& p, const Point& q, EdgeType t) {
+    bool found = false;
+    auto look = [&](const Point& u, const Point& v, EdgeType s) {
+      if (s == t && bg::distance(p, Segment(u, v)) < 1e-8 && bg::distance(q, Segment(u, v)) < 1e-8) found = true;
+    };
+    for_each_edge(a, look);
+    for_each_edge(b, look);
+    EXPECT_TRUE(found) << "edge " << bg::wkt(p) << " " << bg::wkt(q) << " typed " << to_string(t)
+                       << " lies on no input edge of that type";
+  });
+}
+
+TEST(EdgeOverlay, OverlappingRectanglesKeepTheirEdgeTypes) {
+  const TypedMultiPolygon a{rect(0, 0, 4, 4, E::kObstacle)}, b{rect(2, 1, 6, 3, E::kFrontier)};
+  const auto u = overlay(a, b, OverlayOp::kUnion);
+  expect_matches_boost(a, b, OverlayOp::kUnion, u);
+  EXPECT_NEAR(edge_length(u.polygons, E::kObstacle), 16.0 - 2.0, 1e-12);
+  EXPECT_NEAR(edge_length(u.polygons, E::kFrontier), 2 + 2 + 2, 1e-12);
+  const auto i = overlay(a, b, OverlayOp::kIntersection);
+  expect_matches_boost(a, b, OverlayOp::kIntersection, i);
+  EXPECT_NEAR(area(i.polygons), 4.0, 1e-12);
+}
+
+// Tiles and their pieces share whole edges along tile borders: pieces that
+// overlap in the same direction are kept once, in opposite directions dropped.
+TEST(EdgeOverlay, SharedAndOverlappingEdges) {
+  const TypedMultiPolygon left{rect(0, 0, 2, 2)}, right{rect(2, 0, 4, 2, E::kObstacle)};
+  const auto side_by_side = overlay(left, right, OverlayOp::kUnion);
+  expect_matches_boost(left, right, OverlayOp::kUnion, side_by_side);
+  ASSERT_EQ(side_by_side.polygons.size(), 1u);
+  const TypedMultiPolygon lower{rect(0, 0, 4, 2)}, taller{rect(1, 0, 3, 3, E::kObstacle)};
+  const auto same_base = overlay(lower, taller, OverlayOp::kUnion);  // bottoms overlap, same direction
+  expect_matches_boost(lower, taller, OverlayOp::kUnion, same_base);
+  // The shared bottom piece (1..3) is kept once, with the more specific type.
+  EXPECT_NEAR(edge_length(same_base.polygons, E::kObstacle), 2 + 1 + 2 + 1, 1e-12);
+  const auto itself = overlay(lower, lower, OverlayOp::kUnion);
+  expect_matches_boost(lower, lower, OverlayOp::kUnion, itself);
+  EXPECT_EQ(vertex_count(itself.polygons), 4u);
+  const auto clip = overlay(taller, lower, OverlayOp::kIntersection);
+  expect_matches_boost(taller, lower, OverlayOp::kIntersection, clip);
+}
+
+TEST(EdgeOverlay, RingsThatTouchAtAPointStaySeparate) {
+  const TypedMultiPolygon a{rect(0, 0, 1, 1)}, b{rect(1, 1, 2, 2)};
+  const auto r = overlay(a, b, OverlayOp::kUnion);
+  expect_matches_boost(a, b, OverlayOp::kUnion, r);
+  EXPECT_EQ(r.polygons.size(), 2u);
+}
+
+TEST(EdgeOverlay, HolesIslandsAndContainment) {
+  TypedPolygon room = rect(0, 0, 10, 10);
+  add_hole(room, 2, 2, 4, 4);
+  add_hole(room, 6, 6, 8, 8);
+  const TypedMultiPolygon a{room};
+  // b fills one hole exactly, overlaps the other, and has a hole of its own.
+  TypedPolygon patch = rect(5, 5, 9, 9);
+  add_hole(patch, 5.5, 5.5, 5.8, 5.8);
+  const TypedMultiPolygon b{rect(2, 2, 4, 4, E::kObstacle), patch};
+  expect_matches_boost(a, b, OverlayOp::kUnion, overlay(a, b, OverlayOp::kUnion));
+  expect_matches_boost(a, b, OverlayOp::kIntersection, overlay(a, b, OverlayOp::kIntersection));
+  // An island inside a hole stays an island; b inside a's interior changes nothing.
+  const TypedMultiPolygon island{rect(2.5, 2.5, 3.5, 3.5)}, inner{rect(1, 5, 2, 6)};
+  const auto with_island = overlay(a, island, OverlayOp::kUnion);
+  expect_matches_boost(a, island, OverlayOp::kUnion, with_island);
+  EXPECT_EQ(with_island.polygons.size(), 2u);
+  const auto unchanged = overlay(a, inner, OverlayOp::kUnion);
+  expect_matches_boost(a, inner, OverlayOp::kUnion, unchanged);
+  EXPECT_EQ(vertex_count(unchanged.polygons), vertex_count(a));
+  const TypedMultiPolygon none;
+  EXPECT_NEAR(area(overlay(a, none, OverlayOp::kUnion).polygons), area(a), 1e-12);
+  EXPECT_TRUE(overlay(a, none, OverlayOp::kIntersection).polygons.empty());
+}
+
+TEST(EdgeOverlay, BorderBoxSidesAreTypedBorder) {
+  const TypedMultiPolygon scan{rect(-1, 1, 3, 2, E::kObstacle)};
+  const Box box(Point(0, 0), Point(8, 8));
+  TypedMultiPolygon tile{rect(0, 0, 8, 8, E::kBorder)};
+  const auto r = overlay(scan, tile, OverlayOp::kIntersection, box);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_NEAR(area(r.polygons), 3.0, 1e-12);
+  EXPECT_NEAR(edge_length(r.polygons, E::kBorder), 1.0, 1e-12);
+  EXPECT_NEAR(edge_length(r.polygons, E::kObstacle), 7.0, 1e-12);
+}
+
+// Real shapes: unions of scan polygons in random rooms (many vertices, near
+// parallel walls, shared end points) against Boost, and their pieces in
+// random boxes.
+TEST(EdgeOverlay, RandomScanMapsAgreeWithBoost) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const testing::ScanSpec spec;
+  ScanPolygonOptions options;
+  options.range_max_m = spec.range_max_m;
+  int cases = 0, failed = 0;
+  for (int room = 0; room < 6; ++room) {
+    const auto walls = testing::random_room(20, 14, 15, rng);
+    TypedMultiPolygon map;
+    for (int k = 0; k < 40; ++k) {
+      const Pose2 pose{2 + 16 * u(rng), 2 + 10 * u(rng), 6.28 * u(rng)};
+      const auto scan = scan_to_polygon(testing::cast_scan(walls, pose, spec, 0.01, &rng), spec.angle_min,
+                                        spec.angle_increment, pose, options);
+      ASSERT_TRUE(scan.ok) << scan.error;
+      const TypedMultiPolygon b{scan.polygon};
+      const auto r = overlay(map, b, OverlayOp::kUnion);
+      ++cases;
+      if (!r.ok) {
+        ++failed;
+        continue;
+      }
+      expect_matches_boost(map, b, OverlayOp::kUnion, r);
+      if (::testing::Test::HasFailure()) return;
+      const double x = 20 * u(rng), y = 14 * u(rng);
+      const TypedMultiPolygon box{rect(x - 3, y - 3, x + 3, y + 3, E::kBorder)};
+      const auto clip = overlay(r.polygons, box, OverlayOp::kIntersection);
+      ++cases;
+      if (!clip.ok) {
+        ++failed;
+        continue;
+      }
+      expect_matches_boost(r.polygons, box, OverlayOp::kIntersection, clip);
+      if (::testing::Test::HasFailure()) return;
+      map = r.polygons;
+    }
+  }
+  EXPECT_EQ(cases, 480);
+  EXPECT_EQ(failed, 0);
+}
+
+}  // namespace
+}  // namespace pex::mapping
