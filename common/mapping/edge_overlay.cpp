@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <unordered_map>
 
 #include "mapping/typed_ops.hpp"
 
@@ -118,17 +117,20 @@ bool on_same_box_side(const Point& a, const Point& b, const Box& box) {
          (a.y() == lo.y() && b.y() == lo.y()) || (a.y() == hi.y() && b.y() == hi.y());
 }
 
+// The working state of one overlay. Its buffers keep their capacity from
+// call to call (one per thread, see overlay()): allocation was a fifth of the
+// cost of small overlays.
 class Overlay {
  public:
-  Overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b) {
+  OverlayResult run(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+                    const std::optional<Box>& border_box) {
+    clear();
     add_side(a, 0);
+    sort_a_points();
     add_side(b, 1);
-  }
-
-  OverlayResult run(OverlayOp op, const std::optional<Box>& border_box) {
-    snap_b_onto_a();
     find_splits();
     make_pieces();
+    index_incidence();
     mark_coincident();
     classify(op);
     return link(border_box);
@@ -137,7 +139,9 @@ class Overlay {
  private:
   std::vector<InputEdge> edges_;
   std::vector<InputRing> rings_;
+  std::vector<Point> a_points_;  // a's vertices by x, for snapping b's
   std::vector<Split> splits_;
+  std::vector<std::uint32_t> cell_start_, cell_fill_, cell_edges_;  // b's edges by grid cell
   std::vector<Point> vertices_;
   std::vector<std::uint8_t> vertex_sides_;  // bit s: a piece of side s starts or ends here
   // Open-addressing table of vertex ids by exact coordinates (a hash map
@@ -145,13 +149,37 @@ class Overlay {
   std::vector<std::uint32_t> vertex_table_;
   std::uint64_t vertex_mask_ = 0;
   std::vector<Piece> pieces_;
+  std::vector<std::uint32_t> incident_start_, incident_;  // pieces by vertex (either end)
+  std::vector<std::uint32_t> out_start_, out_, out_fill_;  // kept pieces by start vertex
+  std::vector<char> used_;
+
+  void clear() {
+    edges_.clear();
+    rings_.clear();
+    a_points_.clear();
+    splits_.clear();
+    vertices_.clear();
+    vertex_sides_.clear();
+    pieces_.clear();
+  }
 
   void add_side(const TypedMultiPolygon& polygons, std::uint8_t side) {
     auto add_ring = [&](const Ring& ring, const std::vector<EdgeType>& types) {
       InputRing r{side, static_cast<std::uint32_t>(edges_.size()), 0, 0, 0, 0, 0, 0, 0};
+      r.min_x = r.min_y = std::numeric_limits<double>::infinity();
+      r.max_x = r.max_y = -std::numeric_limits<double>::infinity();
+      Point p = snapped(ring.front(), side);
       for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
-        if (bg::equals(ring[i], ring[i + 1])) continue;
-        edges_.push_back({ring[i], ring[i + 1], types[i], side, 0, 0, 0, 0});
+        const Point q = snapped(ring[i + 1], side);
+        if (bg::equals(p, q)) continue;  // repeated, or b's edge collapsed by snapping
+        InputEdge e{p, q, types[i], side, std::min(p.x(), q.x()), std::max(p.x(), q.x()),
+                    std::min(p.y(), q.y()), std::max(p.y(), q.y())};
+        r.min_x = std::min(r.min_x, e.min_x);
+        r.max_x = std::max(r.max_x, e.max_x);
+        r.min_y = std::min(r.min_y, e.min_y);
+        r.max_y = std::max(r.max_y, e.max_y);
+        edges_.push_back(e);
+        p = q;
       }
       r.last_edge = static_cast<std::uint32_t>(edges_.size());
       if (r.last_edge > r.first_edge) rings_.push_back(r);
@@ -163,77 +191,79 @@ class Overlay {
     }
   }
 
-  // b's vertices within kEps of a vertex of a take its coordinates, so that
-  // near-coincident vertices become one; b's edges that collapse are dropped.
-  void snap_b_onto_a() {
-    std::vector<Point> a_points;
-    for (const auto& e : edges_)
-      if (e.side == 0) a_points.push_back(e.p);
-    std::sort(a_points.begin(), a_points.end(), [](const Point& l, const Point& r) { return l.x() < r.x(); });
-    auto snap = [&](Point& p) {
-      auto it = std::lower_bound(a_points.begin(), a_points.end(), p.x() - kEps,
-                                 [](const Point& l, double x) { return l.x() < x; });
-      for (; it != a_points.end() && it->x() <= p.x() + kEps; ++it) {
-        if (std::abs(it->y() - p.y()) <= kEps && std::hypot(it->x() - p.x(), it->y() - p.y()) <= kEps) {
-          p = *it;
-          return;
-        }
-      }
-    };
-    std::vector<InputEdge> kept;
-    kept.reserve(edges_.size());
-    for (auto& ring : rings_) {
-      const auto first = static_cast<std::uint32_t>(kept.size());
-      for (std::uint32_t k = ring.first_edge; k < ring.last_edge; ++k) {
-        InputEdge e = edges_[k];
-        if (e.side == 1) {
-          snap(e.p);
-          snap(e.q);
-          if (bg::equals(e.p, e.q)) continue;
-        }
-        e.min_x = std::min(e.p.x(), e.q.x());
-        e.max_x = std::max(e.p.x(), e.q.x());
-        e.min_y = std::min(e.p.y(), e.q.y());
-        e.max_y = std::max(e.p.y(), e.q.y());
-        kept.push_back(e);
-      }
-      ring.first_edge = first;
-      ring.last_edge = static_cast<std::uint32_t>(kept.size());
-      ring.min_x = ring.min_y = std::numeric_limits<double>::infinity();
-      ring.max_x = ring.max_y = -std::numeric_limits<double>::infinity();
-      for (std::uint32_t k = ring.first_edge; k < ring.last_edge; ++k) {
-        ring.min_x = std::min(ring.min_x, kept[k].min_x);
-        ring.max_x = std::max(ring.max_x, kept[k].max_x);
-        ring.min_y = std::min(ring.min_y, kept[k].min_y);
-        ring.max_y = std::max(ring.max_y, kept[k].max_y);
-      }
-    }
-    edges_ = std::move(kept);
+  void sort_a_points() {
+    for (const auto& e : edges_) a_points_.push_back(e.p);
+    std::sort(a_points_.begin(), a_points_.end(), [](const Point& l, const Point& r) { return l.x() < r.x(); });
   }
 
-  // Sweep over x: each edge meets the edges of the other side whose x and y
-  // ranges overlap its own (within kEps).
+  // b's vertices within kEps of a vertex of a take its coordinates, so that
+  // near-coincident vertices become one.
+  Point snapped(const Point& p, std::uint8_t side) const {
+    if (side == 0) return p;
+    auto it = std::lower_bound(a_points_.begin(), a_points_.end(), p.x() - kEps,
+                               [](const Point& l, double x) { return l.x() < x; });
+    for (; it != a_points_.end() && it->x() <= p.x() + kEps; ++it)
+      if (std::abs(it->y() - p.y()) <= kEps && std::hypot(it->x() - p.x(), it->y() - p.y()) <= kEps) return *it;
+    return p;
+  }
+
+  // Each edge of a meets the edges of b whose boxes overlap its own (within
+  // kEps), found through a uniform grid over both: b's edges are listed in
+  // the cells their boxes cover, and a pair is tested only in the cell that
+  // holds the lower-left corner of the two boxes' overlap, so once.
   void find_splits() {
-    std::vector<std::uint32_t> order(edges_.size());
-    for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::sort(order.begin(), order.end(), [&](std::uint32_t l, std::uint32_t r) {
-      return edges_[l].min_x < edges_[r].min_x || (edges_[l].min_x == edges_[r].min_x && l < r);
-    });
-    std::vector<std::uint32_t> active[2];
-    for (const std::uint32_t k : order) {
-      const InputEdge& e = edges_[k];
-      auto& others = active[1 - e.side];
-      for (std::size_t m = 0; m < others.size();) {
-        const InputEdge& f = edges_[others[m]];
-        if (f.max_x < e.min_x - kEps) {  // left behind by the sweep
-          others[m] = others.back();
-          others.pop_back();
-          continue;
-        }
-        if (f.max_y >= e.min_y - kEps && f.min_y <= e.max_y + kEps) meet(edges_, k, others[m], splits_);
-        ++m;
+    double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
+    double max_x = -min_x, max_y = -min_x;
+    std::size_t b_edges = 0;
+    for (const auto& e : edges_) {
+      min_x = std::min(min_x, e.min_x);
+      min_y = std::min(min_y, e.min_y);
+      max_x = std::max(max_x, e.max_x);
+      max_y = std::max(max_y, e.max_y);
+      b_edges += e.side;
+    }
+    if (b_edges == 0 || b_edges == edges_.size()) return;
+    const int n = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(edges_.size()) / 4.0)), 1, 64);
+    const double cell_x = std::max((max_x - min_x) / n, 1e-6), cell_y = std::max((max_y - min_y) / n, 1e-6);
+    auto col = [&](double x) { return std::clamp(static_cast<int>((x - min_x) / cell_x), 0, n - 1); };
+    auto row = [&](double y) { return std::clamp(static_cast<int>((y - min_y) / cell_y), 0, n - 1); };
+    cell_start_.assign(static_cast<std::size_t>(n * n + 1), 0);
+    for (int pass = 0; pass < 2; ++pass) {  // count, then fill
+      for (std::uint32_t k = 0; k < edges_.size(); ++k) {
+        const InputEdge& e = edges_[k];
+        if (e.side != 1) continue;
+        for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
+          for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) {
+            const auto cell = static_cast<std::size_t>(r * n + c);
+            if (pass == 0)
+              ++cell_start_[cell + 1];
+            else
+              cell_edges_[cell_fill_[cell]++] = k;
+          }
       }
-      active[e.side].push_back(k);
+      if (pass == 0) {
+        for (std::size_t c = 0; c + 1 < cell_start_.size(); ++c) cell_start_[c + 1] += cell_start_[c];
+        cell_edges_.resize(cell_start_.back());
+        cell_fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
+      }
+    }
+    for (std::uint32_t k = 0; k < edges_.size(); ++k) {
+      const InputEdge& e = edges_[k];
+      if (e.side != 0) continue;
+      for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
+        for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) {
+          const auto cell = static_cast<std::size_t>(r * n + c);
+          for (std::uint32_t m = cell_start_[cell]; m < cell_start_[cell + 1]; ++m) {
+            const InputEdge& f = edges_[cell_edges_[m]];
+            if (f.max_x < e.min_x - kEps || f.min_x > e.max_x + kEps || f.max_y < e.min_y - kEps ||
+                f.min_y > e.max_y + kEps)
+              continue;
+            if (c != std::max(col(e.min_x - kEps), col(f.min_x - kEps)) ||
+                r != std::max(row(e.min_y - kEps), row(f.min_y - kEps)))
+              continue;  // tested in another cell
+            meet(edges_, k, cell_edges_[m], splits_);
+          }
+        }
     }
   }
 
@@ -287,25 +317,36 @@ class Overlay {
     }
   }
 
+  // For each vertex, the pieces that start or end there.
+  void index_incidence() {
+    const std::size_t nv = vertices_.size();
+    incident_start_.assign(nv + 1, 0);
+    for (const auto& p : pieces_) {
+      ++incident_start_[p.from + 1];
+      ++incident_start_[p.to + 1];
+    }
+    for (std::size_t v = 0; v < nv; ++v) incident_start_[v + 1] += incident_start_[v];
+    incident_.resize(incident_start_.back());
+    out_fill_.assign(incident_start_.begin(), incident_start_.end() - 1);
+    for (std::uint32_t k = 0; k < pieces_.size(); ++k) {
+      incident_[out_fill_[pieces_[k].from]++] = k;
+      incident_[out_fill_[pieces_[k].to]++] = k;
+    }
+  }
+
   // Pieces of a and b with the same end points: overlapping edges.
   void mark_coincident() {
-    std::unordered_map<std::uint64_t, std::uint32_t> a_pieces;
-    auto key = [](std::uint32_t u, std::uint32_t v) {
-      return (static_cast<std::uint64_t>(std::min(u, v)) << 32) | std::max(u, v);
-    };
-    for (std::uint32_t k = 0; k < pieces_.size(); ++k) {
-      const Piece& p = pieces_[k];
-      if (p.side == 0 && (vertex_sides_[p.from] & vertex_sides_[p.to] & 2u)) a_pieces.emplace(key(p.from, p.to), k);
-    }
-    if (a_pieces.empty()) return;
     for (auto& p : pieces_) {
-      if (p.side != 1) continue;
-      const auto it = a_pieces.find(key(p.from, p.to));
-      if (it == a_pieces.end()) continue;
-      Piece& twin = pieces_[it->second];
-      const std::int8_t how = twin.from == p.from ? 1 : -1;
-      twin.coincident = p.coincident = how;
-      if (how == 1) twin.type = std::min(twin.type, p.type);
+      if (p.side != 1 || !(vertex_sides_[p.from] & vertex_sides_[p.to] & 1u)) continue;
+      for (std::uint32_t m = incident_start_[p.from]; m < incident_start_[p.from + 1]; ++m) {
+        Piece& twin = pieces_[incident_[m]];
+        if (twin.side != 0) continue;
+        const bool same = twin.from == p.from && twin.to == p.to;
+        if (!same && !(twin.from == p.to && twin.to == p.from)) continue;
+        twin.coincident = p.coincident = same ? 1 : -1;
+        if (same) twin.type = std::min(twin.type, p.type);
+        break;
+      }
     }
   }
 
@@ -328,24 +369,68 @@ class Overlay {
     return in;
   }
 
+  // Whether piece p, leaving a vertex the other side's boundary passes
+  // through, enters the other side, read off the other side's pieces at that
+  // vertex: the other side's interior is on the left of its pieces, so what
+  // lies just counter-clockwise of a piece leaving the vertex is inside and
+  // what lies just counter-clockwise of a piece arriving is outside. The
+  // first of them clockwise from p decides. nullopt: a piece of the other
+  // side has p's direction (a degenerate meeting the caller resolves with a
+  // point-in-polygon test).
+  std::optional<bool> enters_other_side(const Piece& p) const {
+    const std::uint32_t v = p.from;
+    const Point& at = vertices_[v];
+    const Point& to = vertices_[p.to];
+    const double dx = to.x() - at.x(), dy = to.y() - at.y();
+    double best = 10.0;
+    bool best_leaves = false;
+    for (std::uint32_t m = incident_start_[v]; m < incident_start_[v + 1]; ++m) {
+      const Piece& q = pieces_[incident_[m]];
+      if (q.side == p.side) continue;
+      const bool leaves = q.from == v;
+      const Point& w = vertices_[leaves ? q.to : q.from];
+      const double ex = w.x() - at.x(), ey = w.y() - at.y();
+      double angle = std::atan2(cross(ex, ey, dx, dy), ex * dx + ey * dy);  // from q's direction to p's, ccw
+      if (angle < 0.0) angle += 2.0 * M_PI;
+      if (angle == 0.0) return std::nullopt;
+      if (angle < best) {
+        best = angle;
+        best_leaves = leaves;
+      }
+    }
+    if (best > 2.0 * M_PI) return std::nullopt;
+    return best_leaves;
+  }
+
   // Along a ring, a piece is inside or outside the other side as the piece
-  // before it, unless they meet at a vertex the other side also has: only
-  // there is the midpoint test needed.
+  // before it, unless they meet at a vertex the other side's boundary passes
+  // through: there the pieces around the vertex decide. A ring that meets
+  // the other side nowhere is inside or outside as a whole (one
+  // point-in-polygon test).
   void classify(OverlayOp op) {
     for (const auto& ring : rings_) {
       const std::uint8_t other = 1 - ring.side;
+      const std::uint32_t n = ring.last_piece - ring.first_piece;
+      std::uint32_t first = 0;
+      while (first < n && !(vertex_sides_[pieces_[ring.first_piece + first].from] & (1u << other))) ++first;
+      if (first == n) first = 0;
       bool known = false, in = false;
-      for (std::uint32_t k = ring.first_piece; k < ring.last_piece; ++k) {
-        Piece& p = pieces_[k];
+      for (std::uint32_t j = 0; j < n; ++j) {
+        Piece& p = pieces_[ring.first_piece + (first + j) % n];
         if (p.coincident != 0) {
           p.keep = p.coincident > 0 && p.side == 0;
           known = false;
           continue;
         }
         if (!known || (vertex_sides_[p.from] & (1u << other))) {
-          const Point& u = vertices_[p.from];
-          const Point& v = vertices_[p.to];
-          in = inside(Point(0.5 * (u.x() + v.x()), 0.5 * (u.y() + v.y())), other);
+          std::optional<bool> enters;
+          if (vertex_sides_[p.from] & (1u << other)) enters = enters_other_side(p);
+          if (!enters) {
+            const Point& u = vertices_[p.from];
+            const Point& v = vertices_[p.to];
+            enters = inside(Point(0.5 * (u.x() + v.x()), 0.5 * (u.y() + v.y())), other);
+          }
+          in = *enters;
           known = true;
         }
         p.keep = op == OverlayOp::kUnion ? !in : in;
@@ -359,54 +444,55 @@ class Overlay {
   OverlayResult link(const std::optional<Box>& border_box) {
     OverlayResult result;
     const std::size_t nv = vertices_.size();
-    std::vector<std::uint32_t> start(nv + 1, 0);
+    out_start_.assign(nv + 1, 0);
     std::size_t kept = 0;
     for (const auto& p : pieces_)
       if (p.keep) {
-        ++start[p.from + 1];
+        ++out_start_[p.from + 1];
         ++kept;
       }
-    for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-    std::vector<std::uint32_t> out(kept), fill(start.begin(), start.end() - 1);
+    for (std::size_t v = 0; v < nv; ++v) out_start_[v + 1] += out_start_[v];
+    out_.resize(kept);
+    out_fill_.assign(out_start_.begin(), out_start_.end() - 1);
     for (std::uint32_t k = 0; k < pieces_.size(); ++k)
-      if (pieces_[k].keep) out[fill[pieces_[k].from]++] = k;
+      if (pieces_[k].keep) out_[out_fill_[pieces_[k].from]++] = k;
 
     auto next_of = [&](std::uint32_t k) -> std::uint32_t {
       const std::uint32_t v = pieces_[k].to;
-      const std::uint32_t b = start[v], e = start[v + 1];
+      const std::uint32_t b = out_start_[v], e = out_start_[v + 1];
       if (e == b) return kNone;
-      if (e == b + 1) return out[b];
+      if (e == b + 1) return out_[b];
       const Point& at = vertices_[v];
       const Point& from = vertices_[pieces_[k].from];
       const double bx = from.x() - at.x(), by = from.y() - at.y();
       std::uint32_t best = kNone;
       double best_angle = -1.0;
       for (std::uint32_t m = b; m < e; ++m) {
-        const Point& to = vertices_[pieces_[out[m]].to];
+        const Point& to = vertices_[pieces_[out_[m]].to];
         const double dx = to.x() - at.x(), dy = to.y() - at.y();
         double angle = std::atan2(cross(bx, by, dx, dy), bx * dx + by * dy);
         if (angle < 0.0) angle += 2.0 * M_PI;
         if (angle > best_angle) {
           best_angle = angle;
-          best = out[m];
+          best = out_[m];
         }
       }
       return best;
     };
 
-    std::vector<char> used(pieces_.size(), 0);
+    used_.assign(pieces_.size(), 0);
     std::vector<TypedRing> holes;
     for (std::uint32_t first = 0; first < pieces_.size(); ++first) {
-      if (!pieces_[first].keep || used[first]) continue;
+      if (!pieces_[first].keep || used_[first]) continue;
       TypedRing ring;
       std::uint32_t k = first;
       for (;;) {
-        used[k] = 1;
+        used_[k] = 1;
         ring.ring.push_back(vertices_[pieces_[k].from]);
         ring.types.push_back(pieces_[k].type);
         const std::uint32_t next = next_of(k);
         if (next == first) break;
-        if (next == kNone || used[next]) {
+        if (next == kNone || used_[next]) {
           result.error = "overlay: pieces do not link into rings";
           return result;
         }
@@ -445,7 +531,8 @@ class Overlay {
 
 OverlayResult overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
                       const std::optional<Box>& border_box) {
-  return Overlay(a, b).run(op, border_box);
+  thread_local Overlay workspace;
+  return workspace.run(a, b, op, border_box);
 }
 
 }  // namespace pex::mapping

@@ -112,6 +112,18 @@ bool simplify_and_validate(TypedMultiPolygon& layer, std::size_t unchanged_tail,
   return true;
 }
 
+// Points within kGridSnap of the point before them, but for the closing point.
+void drop_repeated_points(Ring& ring) {
+  if (ring.size() < 3) return;
+  Ring out;
+  out.reserve(ring.size());
+  for (std::size_t i = 0; i + 1 < ring.size(); ++i)
+    if (out.empty() || bg::distance(out.back(), ring[i]) > kGridSnap) out.push_back(ring[i]);
+  while (out.size() > 1 && bg::distance(out.back(), out.front()) <= kGridSnap) out.pop_back();
+  out.push_back(out.front());
+  ring = std::move(out);
+}
+
 }  // namespace
 
 void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m) {
@@ -248,6 +260,12 @@ PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options) {
   PreparedScan prepared;
   try {
     prepared.band = obstacle_band(scan, options.obstacle_inner_m, options.obstacle_outer_m);
+    // Boost's buffer leaves repeated points where a side meets a flat end;
+    // without them the band passes the cheap validity test.
+    for (auto& polygon : prepared.band) {
+      drop_repeated_points(polygon.outer());
+      for (auto& inner : polygon.inners()) drop_repeated_points(inner);
+    }
     std::string why;
     if (!is_clearly_valid(with_uniform_type(prepared.band, EdgeType::kObstacle)) &&
         !bg::is_valid(prepared.band, why))
