@@ -122,7 +122,7 @@ bool on_same_box_side(const Point& a, const Point& b, const Box& box) {
 // cost of small overlays.
 class Overlay {
  public:
-  OverlayResult run(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+  OverlayResult run(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
                     const std::optional<Box>& border_box) {
     clear();
     add_side(a, 0);
@@ -163,8 +163,11 @@ class Overlay {
     pieces_.clear();
   }
 
-  void add_side(const TypedMultiPolygon& polygons, std::uint8_t side) {
-    auto add_ring = [&](const Ring& ring, const std::vector<EdgeType>& types) {
+  void add_side(std::span<const RingRef> rings, std::uint8_t side) {
+    for (const RingRef& ref : rings) {
+      const Ring& ring = *ref.ring;
+      const std::vector<EdgeType>& types = *ref.types;
+      if (ring.size() < 2) continue;
       InputRing r{side, static_cast<std::uint32_t>(edges_.size()), 0, 0, 0, 0, 0, 0, 0};
       r.min_x = r.min_y = std::numeric_limits<double>::infinity();
       r.max_x = r.max_y = -std::numeric_limits<double>::infinity();
@@ -183,11 +186,6 @@ class Overlay {
       }
       r.last_edge = static_cast<std::uint32_t>(edges_.size());
       if (r.last_edge > r.first_edge) rings_.push_back(r);
-    };
-    for (const auto& polygon : polygons) {
-      add_ring(polygon.geometry.outer(), polygon.edge_types[0]);
-      for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
-        add_ring(polygon.geometry.inners()[k], polygon.edge_types[1 + k]);
     }
   }
 
@@ -529,10 +527,28 @@ class Overlay {
 
 }  // namespace
 
-OverlayResult overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+void add_rings(const TypedPolygon& polygon, std::vector<RingRef>& rings) {
+  rings.push_back({&polygon.geometry.outer(), &polygon.edge_types[0]});
+  for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
+    rings.push_back({&polygon.geometry.inners()[k], &polygon.edge_types[1 + k]});
+}
+
+void add_rings(const TypedMultiPolygon& polygons, std::vector<RingRef>& rings) {
+  for (const auto& polygon : polygons) add_rings(polygon, rings);
+}
+
+OverlayResult overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
                       const std::optional<Box>& border_box) {
   thread_local Overlay workspace;
   return workspace.run(a, b, op, border_box);
+}
+
+OverlayResult overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+                      const std::optional<Box>& border_box) {
+  std::vector<RingRef> a_rings, b_rings;
+  add_rings(a, a_rings);
+  add_rings(b, b_rings);
+  return overlay(a_rings, b_rings, op, border_box);
 }
 
 }  // namespace pex::mapping

@@ -20,7 +20,9 @@
 // bg::is_valid) and fall back to Boost.Geometry when it is not valid or
 // `ok` is false.
 #include <optional>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "mapping/typed_polygon.hpp"
 
@@ -43,6 +45,19 @@ struct OverlayResult {
 // inside the union (or outside the intersection) and dropped. Output edges on
 // a side of `border_box`, if given, are typed kBorder.
 OverlayResult overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+                      const std::optional<Box>& border_box = std::nullopt);
+
+// One ring of an operand, by reference: callers that pass a part of a
+// multi-polygon (some of its polygons, some of their holes) need not copy it.
+struct RingRef {
+  const Ring* ring;
+  const std::vector<EdgeType>* types;
+};
+void add_rings(const TypedPolygon& polygon, std::vector<RingRef>& rings);
+void add_rings(const TypedMultiPolygon& polygons, std::vector<RingRef>& rings);
+
+// The same on rings: a and b are the rings of valid multi-polygons.
+OverlayResult overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
                       const std::optional<Box>& border_box = std::nullopt);
 
 }  // namespace pex::mapping

@@ -35,6 +35,24 @@ TypedOpResult finish(MultiPolygon geometry, const EdgeTypeIndex& index, double s
   return result;
 }
 
+// The polygons whose rings are rings[starts[k]] .. rings[starts[k + 1] - 1]
+// (outer ring first), copied.
+TypedMultiPolygon copy_polygons(const std::vector<RingRef>& rings, const std::vector<std::size_t>& starts) {
+  TypedMultiPolygon polygons;
+  for (std::size_t k = 0; k < starts.size(); ++k) {
+    const std::size_t end = k + 1 < starts.size() ? starts[k + 1] : rings.size();
+    TypedPolygon polygon;
+    polygon.geometry.outer() = *rings[starts[k]].ring;
+    polygon.edge_types.push_back(*rings[starts[k]].types);
+    for (std::size_t r = starts[k] + 1; r < end; ++r) {
+      polygon.geometry.inners().push_back(*rings[r].ring);
+      polygon.edge_types.push_back(*rings[r].types);
+    }
+    polygons.push_back(std::move(polygon));
+  }
+  return polygons;
+}
+
 TypedOpResult failed(std::string why) {
   TypedOpResult result;
   result.error = std::move(why);
@@ -45,7 +63,7 @@ TypedOpResult failed(std::string why) {
 // true with `result` filled when it succeeded (and, if options.validate, its
 // output is valid); false, with result.boost_fallbacks counted when it was
 // tried, tells the caller to use Boost.Geometry.
-bool edge_overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
+bool edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
                   const TypedOpOptions& options, TypedOpResult& result) {
   if (options.boost_overlay) return false;
   OverlayResult r = overlay(a, b, op, options.border_box);
@@ -194,22 +212,32 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   // the overlay, which then sees only the holes near b (in a map, most of a
   // tile's obstacles are far from a new scan).
   std::vector<TypedRing> aside;
-  TypedMultiPolygon a_part, b_part;
+  std::vector<RingRef> a_rings, b_rings;  // the overlay's operands, by reference
+  std::vector<std::size_t> a_starts, b_starts;
   std::vector<Box> b_part_boxes;
   for (std::size_t j = 0; j < b.size(); ++j) {
     if (!b_involved[j]) continue;
-    b_part.push_back(b[j]);
+    b_starts.push_back(b_rings.size());
+    add_rings(b[j], b_rings);
     b_part_boxes.push_back(b_boxes[j]);
   }
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!a_involved[i]) continue;
-    a_part.push_back(without_holes(
-        a[i], [&](const Ring& hole) { return !meets_any(bg::return_envelope<Box>(hole), b_part_boxes, nullptr); },
-        aside));
+    const TypedPolygon& polygon = a[i];
+    a_starts.push_back(a_rings.size());
+    a_rings.push_back({&polygon.geometry.outer(), &polygon.edge_types[0]});
+    for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k) {
+      const Ring& hole = polygon.geometry.inners()[k];
+      if (meets_any(bg::return_envelope<Box>(hole), b_part_boxes, nullptr))
+        a_rings.push_back({&hole, &polygon.edge_types[1 + k]});
+      else
+        aside.push_back({hole, polygon.edge_types[1 + k]});
+    }
   }
   TypedOpResult result{true, {}, {}, {}, 0, 0};
-  if (!a_part.empty()) {
-    if (!edge_overlay(a_part, b_part, OverlayOp::kUnion, options, result)) {
+  if (!a_rings.empty()) {
+    if (!edge_overlay(a_rings, b_rings, OverlayOp::kUnion, options, result)) {
+      const TypedMultiPolygon a_part = copy_polygons(a_rings, a_starts), b_part = copy_polygons(b_rings, b_starts);
       MultiPolygon geometry;
       try {
         bg::union_(geometry_of(a_part), geometry_of(b_part), geometry);
@@ -268,10 +296,11 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
   // copied with its types, only the ones crossing a side are clipped (a
   // multi-polygon's parts are disjoint, so their pieces are too).
   const double margin = 1e-6;
-  const TypedPolygon box_polygon = with_uniform_type(
-      MultiPolygon{Polygon{{box.min_corner(), Point(box.max_corner().x(), box.min_corner().y()), box.max_corner(),
-                            Point(box.min_corner().x(), box.max_corner().y()), box.min_corner()}}},
-      EdgeType::kBorder)[0];
+  const Ring box_ring{box.min_corner(), Point(box.max_corner().x(), box.min_corner().y()), box.max_corner(),
+                      Point(box.min_corner().x(), box.max_corner().y()), box.min_corner()};
+  const std::vector<EdgeType> box_types(4, EdgeType::kBorder);
+  const RingRef box_rings[1] = {{&box_ring, &box_types}};
+  std::vector<RingRef> polygon_rings;
   const Box inner(Point(box.min_corner().x() + margin, box.min_corner().y() + margin),
                   Point(box.max_corner().x() - margin, box.max_corner().y() - margin));
   for (const auto& polygon : polygons) {
@@ -283,7 +312,9 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
       continue;
     }
     TypedOpResult piece;
-    if (!edge_overlay({polygon}, {box_polygon}, OverlayOp::kIntersection, clip_options, piece)) {
+    polygon_rings.clear();
+    add_rings(polygon, polygon_rings);
+    if (!edge_overlay(polygon_rings, box_rings, OverlayOp::kIntersection, clip_options, piece)) {
       result.boost_fallbacks += piece.boost_fallbacks;
       MultiPolygon geometry;
       try {
