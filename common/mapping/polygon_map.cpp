@@ -299,7 +299,7 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
     result.ok = false;
   };
   std::string why;
-  if (!is_valid(scan, &why)) {
+  if (!(types_match_rings(scan) && is_clearly_valid(std::span(&scan, 1))) && !is_valid(scan, &why)) {
     result.ok = false;
     result.error = "scan polygon invalid: " + why;
     return result;

@@ -115,7 +115,7 @@ bool clearly_apart(const SweepEdge& e, const SweepEdge& f) {
 
 }  // namespace
 
-bool is_clearly_valid(const TypedMultiPolygon& polygons) {
+bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
   std::vector<const Ring*> rings;
   std::vector<SweepEdge> edges;
   for (const auto& polygon : polygons) {
@@ -263,13 +263,6 @@ std::size_t memory_bytes(const TypedMultiPolygon& polygons) {
 
 namespace {
 
-double distance_to_line(const Point& p, const Point& a, const Point& b) {
-  const double dx = b.x() - a.x(), dy = b.y() - a.y();
-  const double length = std::hypot(dx, dy);
-  if (length <= 0.0) return std::hypot(p.x() - a.x(), p.y() - a.y());
-  return std::abs(dx * (p.y() - a.y()) - dy * (p.x() - a.x())) / length;
-}
-
 // Simplifies one closed ring given as n distinct vertices with n edge types.
 // Returns false if the ring would collapse below 3 vertices.
 bool simplify_ring(const Ring& ring, const std::vector<EdgeType>& types, double epsilon_m,
@@ -339,13 +332,19 @@ void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t l
     const auto [a, b] = stack.back();
     stack.pop_back();
     if (b <= a + 1) continue;
+    // The farthest point from the line a-b, by |cross| (the distance times
+    // the chord's length): no square root per point.
+    const Point& pa = points[a];
+    const double dx = points[b].x() - pa.x(), dy = points[b].y() - pa.y();
+    const double length = std::hypot(dx, dy);
     double worst = -1.0;
     std::size_t worst_index = a;
     for (std::size_t i = a + 1; i < b; ++i) {
-      const double d = distance_to_line(points[i], points[a], points[b]);
+      const double px = points[i].x() - pa.x(), py = points[i].y() - pa.y();
+      const double d = length > 0.0 ? std::abs(dx * py - dy * px) : std::hypot(px, py);
       if (d > worst) worst = d, worst_index = i;
     }
-    if (worst > epsilon_m) {
+    if (worst > epsilon_m * (length > 0.0 ? length : 1.0)) {
       keep[worst_index] = true;
       stack.push_back({a, worst_index});
       stack.push_back({worst_index, b});

@@ -8,6 +8,7 @@
 // free space is always on the left of an edge.
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -70,7 +71,7 @@ bool inside_ring(const Point& p, const Ring& ring);
 // OGC's rules. false means "not shown": the caller asks bg::is_valid, which
 // also accepts rings touching at points. Used where validity is checked on
 // every insert (PolygonMap); tests keep bg::is_valid (is_valid above).
-bool is_clearly_valid(const TypedMultiPolygon& polygons);
+bool is_clearly_valid(std::span<const TypedPolygon> polygons);
 
 // Number of distinct vertices (a closed ring of n + 1 points counts n).
 std::size_t vertex_count(const Polygon& polygon);

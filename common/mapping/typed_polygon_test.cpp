@@ -151,15 +151,15 @@ TEST(ClearValidity, TouchingRingsAreLeftToBoost) {
   p.geometry.inners().push_back(Ring{{0, 2}, {1, 3}, {1, 1}, {0, 2}});
   p.edge_types.push_back({E::kObstacle, E::kObstacle, E::kObstacle});
   EXPECT_TRUE(bg::is_valid(p.geometry));
-  EXPECT_FALSE(is_clearly_valid({p}));
+  EXPECT_FALSE(is_clearly_valid(TypedMultiPolygon{p}));
   // The same hole moved off the outer ring is clearly valid.
   p.geometry.inners()[0] = Ring{{0.5, 2}, {1, 3}, {1, 1}, {0.5, 2}};
-  EXPECT_TRUE(is_clearly_valid({p}));
+  EXPECT_TRUE(is_clearly_valid(TypedMultiPolygon{p}));
   // An island inside that hole is fine; one across the hole's edge is not.
   TypedPolygon island = make({{0.8, 1.8}, {0.9, 1.8}, {0.9, 2.2}, {0.8, 2.2}}, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
-  EXPECT_TRUE(is_clearly_valid({p, island}));
+  EXPECT_TRUE(is_clearly_valid(TypedMultiPolygon{p, island}));
   TypedPolygon across = make({{2, 2}, {3, 2}, {3, 3}, {2, 3}}, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
-  EXPECT_FALSE(is_clearly_valid({p, across}));  // inside p, not in a hole: overlaps it
+  EXPECT_FALSE(is_clearly_valid(TypedMultiPolygon{p, across}));  // inside p, not in a hole: overlaps it
 }
 
 }  // namespace
