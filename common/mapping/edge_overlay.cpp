@@ -128,6 +128,7 @@ class Overlay {
     add_side(a, 0);
     sort_a_points();
     add_side(b, 1);
+    set_meet_box();
     find_splits();
     make_pieces();
     index_incidence();
@@ -152,6 +153,31 @@ class Overlay {
   std::vector<std::uint32_t> incident_start_, incident_;  // pieces by vertex (either end)
   std::vector<std::uint32_t> out_start_, out_, out_fill_;  // kept pieces by start vertex
   std::vector<char> used_;
+  // Where the sides can meet: the overlap of their boxes, widened by kEps.
+  // Edges and vertices outside it meet nothing of the other side.
+  double meet_min_x_ = 0, meet_max_x_ = -1, meet_min_y_ = 0, meet_max_y_ = -1;
+
+  void set_meet_box() {
+    double box[2][4];
+    for (auto& b : box) b[0] = b[2] = std::numeric_limits<double>::infinity(), b[1] = b[3] = -b[0];
+    for (const auto& r : rings_) {
+      double* b = box[r.side];
+      b[0] = std::min(b[0], r.min_x);
+      b[1] = std::max(b[1], r.max_x);
+      b[2] = std::min(b[2], r.min_y);
+      b[3] = std::max(b[3], r.max_y);
+    }
+    meet_min_x_ = std::max(box[0][0], box[1][0]) - kEps;
+    meet_max_x_ = std::min(box[0][1], box[1][1]) + kEps;
+    meet_min_y_ = std::max(box[0][2], box[1][2]) - kEps;
+    meet_max_y_ = std::min(box[0][3], box[1][3]) + kEps;
+  }
+  bool near_meet_box(const InputEdge& e) const {
+    return e.max_x >= meet_min_x_ && e.min_x <= meet_max_x_ && e.max_y >= meet_min_y_ && e.min_y <= meet_max_y_;
+  }
+  bool in_meet_box(const Point& p) const {
+    return p.x() >= meet_min_x_ && p.x() <= meet_max_x_ && p.y() >= meet_min_y_ && p.y() <= meet_max_y_;
+  }
 
   void clear() {
     edges_.clear();
@@ -210,17 +236,8 @@ class Overlay {
   // the cells their boxes cover, and a pair is tested only in the cell that
   // holds the lower-left corner of the two boxes' overlap, so once.
   void find_splits() {
-    double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
-    double max_x = -min_x, max_y = -min_x;
-    std::size_t b_edges = 0;
-    for (const auto& e : edges_) {
-      min_x = std::min(min_x, e.min_x);
-      min_y = std::min(min_y, e.min_y);
-      max_x = std::max(max_x, e.max_x);
-      max_y = std::max(max_y, e.max_y);
-      b_edges += e.side;
-    }
-    if (b_edges == 0 || b_edges == edges_.size()) return;
+    if (meet_max_x_ < meet_min_x_ || meet_max_y_ < meet_min_y_) return;
+    const double min_x = meet_min_x_, max_x = meet_max_x_, min_y = meet_min_y_, max_y = meet_max_y_;
     const int n = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(edges_.size()) / 4.0)), 1, 64);
     const double cell_x = std::max((max_x - min_x) / n, 1e-6), cell_y = std::max((max_y - min_y) / n, 1e-6);
     auto col = [&](double x) { return std::clamp(static_cast<int>((x - min_x) / cell_x), 0, n - 1); };
@@ -229,7 +246,7 @@ class Overlay {
     for (int pass = 0; pass < 2; ++pass) {  // count, then fill
       for (std::uint32_t k = 0; k < edges_.size(); ++k) {
         const InputEdge& e = edges_[k];
-        if (e.side != 1) continue;
+        if (e.side != 1 || !near_meet_box(e)) continue;
         for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
           for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) {
             const auto cell = static_cast<std::size_t>(r * n + c);
@@ -247,7 +264,7 @@ class Overlay {
     }
     for (std::uint32_t k = 0; k < edges_.size(); ++k) {
       const InputEdge& e = edges_[k];
-      if (e.side != 0) continue;
+      if (e.side != 0 || !near_meet_box(e)) continue;
       for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
         for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) {
           const auto cell = static_cast<std::size_t>(r * n + c);
@@ -265,7 +282,11 @@ class Overlay {
     }
   }
 
+  // The id of the vertex at p. Only points in the meet box can be shared by
+  // both sides, so only they go through the table; ring neighbours pass
+  // their ids along (make_pieces).
   std::uint32_t vertex(const Point& p, std::uint8_t side) {
+    if (!in_meet_box(p)) return new_vertex(p, side);
     std::uint64_t slot = hash_of(p.x(), p.y()) & vertex_mask_;
     for (;; slot = (slot + 1) & vertex_mask_) {
       const std::uint32_t id = vertex_table_[slot];
@@ -275,11 +296,14 @@ class Overlay {
         return id;
       }
     }
-    const auto id = static_cast<std::uint32_t>(vertices_.size());
+    const std::uint32_t id = new_vertex(p, side);
     vertex_table_[slot] = id;
+    return id;
+  }
+  std::uint32_t new_vertex(const Point& p, std::uint8_t side) {
     vertices_.push_back(p);
     vertex_sides_.push_back(static_cast<std::uint8_t>(1u << side));
-    return id;
+    return static_cast<std::uint32_t>(vertices_.size() - 1);
   }
 
   void make_pieces() {
@@ -296,10 +320,11 @@ class Overlay {
     std::size_t s = 0;
     for (auto& ring : rings_) {
       ring.first_piece = static_cast<std::uint32_t>(pieces_.size());
+      const std::uint32_t ring_start = vertex(edges_[ring.first_edge].p, ring.side);
+      std::uint32_t from = ring_start;
       for (std::uint32_t k = ring.first_edge; k < ring.last_edge; ++k) {
         const InputEdge& e = edges_[k];
         while (s < splits_.size() && splits_[s].edge < k) ++s;
-        std::uint32_t from = vertex(e.p, e.side);
         Point last = e.p;
         for (; s < splits_.size() && splits_[s].edge == k; ++s) {
           const Point& p = splits_[s].point;
@@ -309,7 +334,10 @@ class Overlay {
           from = to;
           last = p;
         }
-        pieces_.push_back({from, vertex(e.q, e.side), e.type, e.side});
+        // The ring's edges are consecutive and closed: e.q starts the next.
+        const std::uint32_t to = k + 1 < ring.last_edge ? vertex(e.q, e.side) : ring_start;
+        pieces_.push_back({from, to, e.type, e.side});
+        from = to;
       }
       ring.last_piece = static_cast<std::uint32_t>(pieces_.size());
     }
