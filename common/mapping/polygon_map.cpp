@@ -63,18 +63,24 @@ void grid_crossings(const Point& p, const Point& q, double cell, double origin,
   if (swap) std::reverse(out.begin(), out.end());
 }
 
-void split_ring(Ring& ring, double cell, double origin) {
+// Splits ring's edges at grid lines; `types`, if given, is split alongside
+// (each piece keeps its edge's type).
+void split_ring(Ring& ring, std::vector<EdgeType>* types, double cell, double origin) {
   if (ring.size() < 2) return;
   Ring out;
   out.reserve(ring.size());
+  std::vector<EdgeType> out_types;
+  if (types) out_types.reserve(types->size());
   std::vector<Point> crossings;
   for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
     out.push_back(ring[i]);
     grid_crossings(ring[i], ring[i + 1], cell, origin, crossings);
     out.insert(out.end(), crossings.begin(), crossings.end());
+    if (types) out_types.insert(out_types.end(), 1 + crossings.size(), (*types)[i]);
   }
   out.push_back(ring.back());
   ring = std::move(out);
+  if (types) *types = std::move(out_types);
 }
 
 // The cheap sufficient test first; Boost decides what it cannot show (rings
@@ -128,9 +134,15 @@ void drop_repeated_points(Ring& ring) {
 
 void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m) {
   for (auto& polygon : geometry) {
-    split_ring(polygon.outer(), cell_m, origin_m);
-    for (auto& inner : polygon.inners()) split_ring(inner, cell_m, origin_m);
+    split_ring(polygon.outer(), nullptr, cell_m, origin_m);
+    for (auto& inner : polygon.inners()) split_ring(inner, nullptr, cell_m, origin_m);
   }
+}
+
+void split_at_grid(TypedPolygon& polygon, double cell_m, double origin_m) {
+  split_ring(polygon.geometry.outer(), &polygon.edge_types[0], cell_m, origin_m);
+  for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
+    split_ring(polygon.geometry.inners()[k], &polygon.edge_types[1 + k], cell_m, origin_m);
 }
 
 Chains obstacle_chains(const TypedPolygon& scan) {
@@ -401,21 +413,18 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
     return result;
   }
   const double s = options_.tile_size_m;
-  MultiPolygon scan_geometry{scan.geometry};
-  split_at_grid(scan_geometry, s, options_.tile_origin_m);
+  // The scan split at tile lines; each piece of an edge keeps the edge's type
+  // (all frontier for a map without edge types).
+  TypedMultiPolygon scan_split{scan};
+  if (!options_.assign_edge_types)
+    for (auto& types : scan_split[0].edge_types) std::fill(types.begin(), types.end(), EdgeType::kFrontier);
+  split_at_grid(scan_split[0], s, options_.tile_origin_m);
   if (!prepared.band_error.empty()) fail_tile(prepared.band_error);
   MultiPolygon band = prepared.band;
   split_at_grid(band, s, options_.tile_origin_m);
-  // The scan's own edges type the clipped pieces: the split points lie on them.
   TypedOpOptions typed;
   typed.assign_edge_types = options_.assign_edge_types;
   typed.validate = false;  // each tile is validated once, at the end
-  EdgeTypeIndex scan_index;
-  if (options_.assign_edge_types) {
-    scan_index.add(scan);
-    scan_index.build();
-  }
-  const TypedMultiPolygon scan_split = assign_types(scan_geometry, scan_index, 1e-6, typed, &result.reassign);
   const TypedMultiPolygon band_typed = with_uniform_type(band, EdgeType::kObstacle);
 
   Box envelope;

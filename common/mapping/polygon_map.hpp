@@ -197,5 +197,7 @@ class PolygonMap {
 // y = origin_m + k * cell_m, with crossing points computed from the edge alone (the same
 // bits in both neighbouring tiles), so clipping to tiles adds no new rounding.
 void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m = 0.0);
+// The same for a typed polygon: the pieces of an edge keep its type.
+void split_at_grid(TypedPolygon& polygon, double cell_m, double origin_m = 0.0);
 
 }  // namespace pex::mapping

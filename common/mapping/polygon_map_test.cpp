@@ -87,6 +87,26 @@ TEST(SplitAtGrid, InsertsCrossingsExactlyOnGridLines) {
   EXPECT_TRUE(bg::is_valid(m));
 }
 
+TEST(SplitAtGrid, PiecesOfAnEdgeKeepItsType) {
+  TypedPolygon p;
+  p.geometry.outer() = {{-1.3, -0.7}, {9.1, 0.2}, {3.3, 7.9}, {-1.3, -0.7}};
+  p.edge_types = {{E::kObstacle, E::kFrontier, E::kObstacle}};
+  const TypedPolygon before = p;
+  split_at_grid(p, 4.0);
+  ASSERT_TRUE(types_match_rings(p));
+  EXPECT_GT(p.edge_types[0].size(), 3u);
+  for_each_edge(p, [&](const Point& a, const Point& b, EdgeType t) {
+    int on = 0;
+    for_each_edge(before, [&](const Point& u, const Point& v, EdgeType s) {
+      if (bg::distance(a, Segment(u, v)) < 1e-9 && bg::distance(b, Segment(u, v)) < 1e-9) {
+        ++on;
+        EXPECT_EQ(t, s);
+      }
+    });
+    EXPECT_EQ(on, 1);
+  });
+}
+
 TypedPolygon square(double x0, double y0, double x1, double y1, EdgeType type) {
   TypedPolygon p;
   p.geometry.outer() = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}};
