@@ -253,15 +253,34 @@ std::optional<Polygon> chain_band(const Chain& chain, double inner_m, double out
 }  // namespace
 
 std::optional<MultiPolygon> direct_obstacle_band(const Chains& chains, double inner_m, double outer_m) {
-  MultiPolygon band;
+  TypedMultiPolygon band;
+  std::vector<Box> boxes;
+  TypedOpOptions union_options;
+  union_options.uniform_type = EdgeType::kObstacle;  // and validate: the union's result is checked
   for (const auto& chain : chains) {
     if (chain.size() < 2 || bg::equals(chain.front(), chain.back())) return std::nullopt;  // closed: a ring
     auto polygon = chain_band(chain, inner_m, outer_m);
     if (!polygon) return std::nullopt;
-    band.push_back(std::move(*polygon));
+    TypedPolygon typed{std::move(*polygon), {}};
+    typed.edge_types.push_back(std::vector<EdgeType>(typed.geometry.outer().size() - 1, EdgeType::kObstacle));
+    if (!is_clearly_valid(std::span(&typed, 1))) return std::nullopt;  // the chain's band folds
+    const Box box = bg::return_envelope<Box>(typed.geometry);
+    const bool meets = std::any_of(boxes.begin(), boxes.end(), [&](const Box& b) { return !bg::disjoint(b, box); });
+    if (!meets) {
+      band.push_back(std::move(typed));
+      boxes.push_back(box);
+      continue;
+    }
+    // Chains closer than the band's width (a gap in a wall, a corner): their
+    // bands overlap and are united.
+    auto united = typed_union(band, {typed}, union_options);
+    if (!united.ok) return std::nullopt;
+    band = std::move(united.polygons);
+    boxes.clear();
+    for (const auto& p : band) boxes.push_back(bg::return_envelope<Box>(p.geometry));
   }
-  if (!is_clearly_valid(with_uniform_type(band, EdgeType::kObstacle))) return std::nullopt;
-  return band;
+  if (!is_clearly_valid(band) && !bg::is_valid(geometry_of(band))) return std::nullopt;
+  return geometry_of(band);
 }
 
 MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m) {
@@ -269,8 +288,7 @@ MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double oute
   MultiPolygon band;
   if (chains.empty()) return band;
   if (auto direct = direct_obstacle_band(chains, inner_m, outer_m)) return std::move(*direct);
-  // Bands that overlap (chains closer than the band's width) or folds: Boost's
-  // buffer unions them.
+  // A closed chain, a chain whose band folds, a failed union: Boost's buffer.
   bg::buffer(chains, band, bs::distance_asymmetric<double>(inner_m, outer_m), bs::side_straight(),
              bs::join_round(kBandPointsPerCircle), bs::end_flat(), bs::point_circle(kBandPointsPerCircle));
   return band;

@@ -120,8 +120,8 @@ struct MergeResult {
 // The obstacle band of a scan polygon: each maximal chain of obstacle edges
 // buffered `inner_m` to its left (free side of a counter-clockwise ring) and
 // `outer_m` to its right, with flat ends and round joins.
-// Built directly chain by chain when the chains' bands are simple and apart
-// (is_clearly_valid), else by Boost's buffer of the chains.
+// Built directly chain by chain (direct_obstacle_band), else by Boost's
+// buffer of the chains.
 MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m);
 
 // The maximal chains of obstacle edges of a scan polygon (what the band covers).
@@ -131,8 +131,9 @@ Chains obstacle_chains(const TypedPolygon& scan);
 
 // The band built chain by chain (right offset by outer_m, left by inner_m,
 // round outer joins, flat ends): nullopt unless every chain is open, every
-// join can be built by meeting offset lines, and the chains' bands are
-// clearly valid and apart. obstacle_band falls back to Boost's buffer then.
+// join can be built by meeting offset lines and every chain's band is
+// clearly valid; bands that overlap are united (typed_union). obstacle_band
+// falls back to Boost's buffer otherwise.
 std::optional<MultiPolygon> direct_obstacle_band(const Chains& chains, double inner_m, double outer_m);
 
 // A scan polygon and its obstacle band, ready to insert. The band depends on

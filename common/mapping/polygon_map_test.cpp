@@ -69,7 +69,7 @@ TEST(ObstacleBand, DirectBandAgreesWithBoostsBuffer) {
     EXPECT_LT(bg::area(sym), 0.01 * bg::area(boost_band));
   }
   EXPECT_EQ(scans, 60);
-  EXPECT_GT(direct, 30);
+  EXPECT_GE(direct, 55);  // 58 when written: overlapping bands are united, folds go to Boost
   std::printf("direct bands: %d of %d scans\n", direct, scans);
 }
 
