@@ -47,6 +47,18 @@ struct Piece {
 
 double cross(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
 
+// A stand-in for the counter-clockwise angle from (ax, ay) to (bx, by) in
+// [0, 4): monotone in the true angle in [0, 2 pi) (only order matters to the
+// callers), 0 for the same direction, without atan2.
+double turn_order(double ax, double ay, double bx, double by) {
+  const double c = cross(ax, ay, bx, by), d = ax * bx + ay * by;
+  if (c == 0.0 && d > 0.0) return 0.0;
+  // Diamond angle of the direction (d, c) in the frame of a.
+  const double r = c / (std::abs(d) + std::abs(c));
+  if (d >= 0.0) return c >= 0.0 ? r : 4.0 + r;  // [0, 1) or (3, 4)
+  return 2.0 - r;                                // (1, 3]
+}
+
 // True if p lies on the edge's interior: within kEps of it and more than
 // kEps from both ends; t is its parameter.
 bool on_interior(const Point& p, const InputEdge& e, double& t) {
@@ -153,6 +165,7 @@ class Overlay {
   std::vector<std::uint32_t> incident_start_, incident_;  // pieces by vertex (either end)
   std::vector<std::uint32_t> out_start_, out_, out_fill_;  // kept pieces by start vertex
   std::vector<char> used_;
+  std::vector<std::uint32_t> ring_pieces_;  // the ring being linked
   // Where the sides can meet: the overlap of their boxes, widened by kEps.
   // Edges and vertices outside it meet nothing of the other side.
   double meet_min_x_ = 0, meet_max_x_ = -1, meet_min_y_ = 0, meet_max_y_ = -1;
@@ -416,15 +429,14 @@ class Overlay {
       const bool leaves = q.from == v;
       const Point& w = vertices_[leaves ? q.to : q.from];
       const double ex = w.x() - at.x(), ey = w.y() - at.y();
-      double angle = std::atan2(cross(ex, ey, dx, dy), ex * dx + ey * dy);  // from q's direction to p's, ccw
-      if (angle < 0.0) angle += 2.0 * M_PI;
+      const double angle = turn_order(ex, ey, dx, dy);  // from q's direction to p's, ccw
       if (angle == 0.0) return std::nullopt;
       if (angle < best) {
         best = angle;
         best_leaves = leaves;
       }
     }
-    if (best > 2.0 * M_PI) return std::nullopt;
+    if (best > 4.0) return std::nullopt;
     return best_leaves;
   }
 
@@ -496,8 +508,7 @@ class Overlay {
       for (std::uint32_t m = b; m < e; ++m) {
         const Point& to = vertices_[pieces_[out_[m]].to];
         const double dx = to.x() - at.x(), dy = to.y() - at.y();
-        double angle = std::atan2(cross(bx, by, dx, dy), bx * dx + by * dy);
-        if (angle < 0.0) angle += 2.0 * M_PI;
+        const double angle = turn_order(bx, by, dx, dy);
         if (angle > best_angle) {
           best_angle = angle;
           best = out_[m];
@@ -510,12 +521,11 @@ class Overlay {
     std::vector<TypedRing> holes;
     for (std::uint32_t first = 0; first < pieces_.size(); ++first) {
       if (!pieces_[first].keep || used_[first]) continue;
-      TypedRing ring;
+      ring_pieces_.clear();
       std::uint32_t k = first;
       for (;;) {
         used_[k] = 1;
-        ring.ring.push_back(vertices_[pieces_[k].from]);
-        ring.types.push_back(pieces_[k].type);
+        ring_pieces_.push_back(k);
         const std::uint32_t next = next_of(k);
         if (next == first) break;
         if (next == kNone || used_[next]) {
@@ -523,6 +533,13 @@ class Overlay {
           return result;
         }
         k = next;
+      }
+      TypedRing ring;
+      ring.ring.reserve(ring_pieces_.size() + 1);
+      ring.types.reserve(ring_pieces_.size());
+      for (const std::uint32_t piece : ring_pieces_) {
+        ring.ring.push_back(vertices_[pieces_[piece].from]);
+        ring.types.push_back(pieces_[piece].type);
       }
       ring.ring.push_back(ring.ring.front());
       if (border_box) {

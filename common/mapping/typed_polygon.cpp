@@ -116,8 +116,11 @@ bool clearly_apart(const SweepEdge& e, const SweepEdge& f) {
 }  // namespace
 
 bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
-  std::vector<const Ring*> rings;
-  std::vector<SweepEdge> edges;
+  // Scratch kept per thread: this runs on every insert and merge.
+  thread_local std::vector<const Ring*> rings;
+  thread_local std::vector<SweepEdge> edges;
+  rings.clear();
+  edges.clear();
   for (const auto& polygon : polygons) {
     const std::size_t first_ring = rings.size();
     rings.push_back(&polygon.geometry.outer());
@@ -166,12 +169,14 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
   }
   // No ring meets another, so rings are nested or apart; one vertex decides.
   std::size_t r0 = 0;
-  std::vector<std::pair<std::size_t, std::size_t>> polygon_rings;  // [first, last) per polygon
+  thread_local std::vector<std::pair<std::size_t, std::size_t>> polygon_rings;  // [first, last) per polygon
+  polygon_rings.clear();
   for (const auto& polygon : polygons) {
     polygon_rings.push_back({r0, r0 + 1 + polygon.geometry.inners().size()});
     r0 = polygon_rings.back().second;
   }
-  std::vector<Box> boxes(rings.size());
+  thread_local std::vector<Box> boxes;
+  boxes.resize(rings.size());
   for (std::size_t r = 0; r < rings.size(); ++r) boxes[r] = bg::return_envelope<Box>(*rings[r]);
   auto inside = [&](std::size_t ring, const Point& p) {
     return bg::covered_by(p, boxes[ring]) && inside_ring(p, *rings[ring]);
@@ -280,14 +285,18 @@ bool simplify_ring(const Ring& ring, const std::vector<EdgeType>& types, double 
       break;
     }
   }
-  std::vector<Point> points(n + 1);
-  std::vector<EdgeType> t(n);
+  // Scratch kept per thread (RDP runs on every tile an insert changes).
+  thread_local std::vector<Point> points;
+  thread_local std::vector<EdgeType> t;
+  thread_local std::vector<bool> keep;
+  points.resize(n + 1);
+  t.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     points[i] = ring[(start + i) % n];
     t[i] = types[(start + i) % n];
   }
   points[n] = points[0];
-  std::vector<bool> keep(n + 1, false);
+  keep.assign(n + 1, false);
   keep[0] = keep[n] = true;
   if (uniform) {
     // Anchor the farthest vertex from vertex 0 so both halves are open chains.
@@ -312,6 +321,9 @@ bool simplify_ring(const Ring& ring, const std::vector<EdgeType>& types, double 
   }
   out_ring.clear();
   out_types.clear();
+  const auto kept = static_cast<std::size_t>(std::count(keep.begin(), keep.begin() + static_cast<std::ptrdiff_t>(n), true));
+  out_ring.reserve(kept + 1);
+  out_types.reserve(kept);
   for (std::size_t i = 0; i < n; ++i) {
     if (!keep[i]) continue;
     out_ring.push_back(points[i]);
@@ -327,7 +339,8 @@ bool simplify_ring(const Ring& ring, const std::vector<EdgeType>& types, double 
 void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t last,
               double epsilon_m, std::vector<bool>& keep) {
   // Iterative (an explicit stack), since rings can have 100k vertices.
-  std::vector<std::pair<std::size_t, std::size_t>> stack{{first, last}};
+  thread_local std::vector<std::pair<std::size_t, std::size_t>> stack;
+  stack.assign(1, {first, last});
   while (!stack.empty()) {
     const auto [a, b] = stack.back();
     stack.pop_back();
