@@ -158,6 +158,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   if (!result.ok) throw std::invalid_argument("SLAM_UPDATE refused: " + result.error);
   if (!result.scan_inserted) ++counters_.scan_polygon_errors;
   counters_.failed_tile_updates += result.insert_failures;
+  counters_.boost_fallbacks += result.boost_fallbacks;
   ++counters_.slam_updates;
   ++counters_.scans_inserted;
   best_ = update.best;
@@ -236,6 +237,7 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   }
   const auto result = map_.insert(polygon.polygon);
   counters_.failed_tile_updates = map_.failed_tile_updates();
+  counters_.boost_fallbacks = map_.boost_fallbacks();
   ++counters_.scans_inserted;
   last_insert_pose_ = robot;
   last_scan_utime_ = scan.utime;

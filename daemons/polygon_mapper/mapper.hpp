@@ -68,6 +68,9 @@ struct MapperCounters {
   std::int64_t scans_without_pose = 0;
   std::int64_t scan_polygon_errors = 0;
   std::int64_t failed_tile_updates = 0;
+  // Overlays our edge overlay could not do (or whose result failed a check),
+  // redone with Boost.Geometry's (docs/mapping.md).
+  std::int64_t boost_fallbacks = 0;
   std::int64_t merge_failures = 0;
   // Tiles of the last published map whose planning layer could not be
   // derived (they show their last good planning layer).
