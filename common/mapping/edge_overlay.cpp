@@ -135,11 +135,11 @@ bool on_same_box_side(const Point& a, const Point& b, const Box& box) {
 class Overlay {
  public:
   OverlayResult run(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
-                    const std::optional<Box>& border_box) {
+                    const std::optional<Box>& border_box, const std::optional<EdgeType> (&side_types)[2]) {
     clear();
-    add_side(a, 0);
+    add_side(a, 0, side_types[0]);
     sort_a_points();
-    add_side(b, 1);
+    add_side(b, 1, side_types[1]);
     set_meet_box();
     find_splits();
     make_pieces();
@@ -202,7 +202,7 @@ class Overlay {
     pieces_.clear();
   }
 
-  void add_side(std::span<const RingRef> rings, std::uint8_t side) {
+  void add_side(std::span<const RingRef> rings, std::uint8_t side, std::optional<EdgeType> type) {
     for (const RingRef& ref : rings) {
       const Ring& ring = *ref.ring;
       const std::vector<EdgeType>& types = *ref.types;
@@ -214,7 +214,7 @@ class Overlay {
       for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
         const Point q = snapped(ring[i + 1], side);
         if (bg::equals(p, q)) continue;  // repeated, or b's edge collapsed by snapping
-        InputEdge e{p, q, types[i], side, std::min(p.x(), q.x()), std::max(p.x(), q.x()),
+        InputEdge e{p, q, type.value_or(types[i]), side, std::min(p.x(), q.x()), std::max(p.x(), q.x()),
                     std::min(p.y(), q.y()), std::max(p.y(), q.y())};
         r.min_x = std::min(r.min_x, e.min_x);
         r.max_x = std::max(r.max_x, e.max_x);
@@ -383,7 +383,7 @@ class Overlay {
         const bool same = twin.from == p.from && twin.to == p.to;
         if (!same && !(twin.from == p.to && twin.to == p.from)) continue;
         twin.coincident = p.coincident = same ? 1 : -1;
-        if (same) twin.type = std::min(twin.type, p.type);
+        twin.type = std::min(twin.type, p.type);  // used if a's piece is kept
         break;
       }
     }
@@ -456,7 +456,9 @@ class Overlay {
       for (std::uint32_t j = 0; j < n; ++j) {
         Piece& p = pieces_[ring.first_piece + (first + j) % n];
         if (p.coincident != 0) {
-          p.keep = p.coincident > 0 && p.side == 0;
+          // One copy (a's) where the piece bounds the result: same direction
+          // for union and intersection, opposite for the difference.
+          p.keep = p.side == 0 && (p.coincident > 0) == (op != OverlayOp::kDifference);
           known = false;
           continue;
         }
@@ -471,9 +473,18 @@ class Overlay {
           in = *enters;
           known = true;
         }
-        p.keep = op == OverlayOp::kUnion ? !in : in;
+        switch (op) {
+          case OverlayOp::kUnion: p.keep = !in; break;
+          case OverlayOp::kIntersection: p.keep = in; break;
+          case OverlayOp::kDifference: p.keep = p.side == 0 ? !in : in; break;
+        }
       }
     }
+    // a minus b: b's pieces inside a bound the result with a's interior on
+    // their right; turned round, the result is on their left as everywhere.
+    if (op == OverlayOp::kDifference)
+      for (auto& p : pieces_)
+        if (p.keep && p.side == 1) std::swap(p.from, p.to);
   }
 
   // Links the kept pieces into rings. At a vertex with several ways on, the
@@ -583,9 +594,9 @@ void add_rings(const TypedMultiPolygon& polygons, std::vector<RingRef>& rings) {
 }
 
 OverlayResult overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
-                      const std::optional<Box>& border_box) {
+                      const std::optional<Box>& border_box, const std::optional<EdgeType> (&side_types)[2]) {
   thread_local Overlay workspace;
-  return workspace.run(a, b, op, border_box);
+  return workspace.run(a, b, op, border_box, side_types);
 }
 
 OverlayResult overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,

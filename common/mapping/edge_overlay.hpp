@@ -28,7 +28,7 @@
 
 namespace pex::mapping {
 
-enum class OverlayOp { kUnion, kIntersection };
+enum class OverlayOp { kUnion, kIntersection, kDifference };
 
 inline constexpr double kOverlaySnap = 1e-9;
 
@@ -38,12 +38,13 @@ struct OverlayResult {
   TypedMultiPolygon polygons;
 };
 
-// a op b. Both must be valid (outer rings counter-clockwise, holes clockwise,
-// polygons interior-disjoint). Where an edge of a and an edge of b overlap in
-// the same direction the piece is kept once, with the more specific type
-// (obstacle before frontier before border); in opposite directions it is
-// inside the union (or outside the intersection) and dropped. Output edges on
-// a side of `border_box`, if given, are typed kBorder.
+// a op b (kDifference: a minus b). Both must be valid (outer rings
+// counter-clockwise, holes clockwise, polygons interior-disjoint). Where an
+// edge of a and an edge of b overlap, the piece bounds the union and the
+// intersection when they run in the same direction (kept once), the
+// difference when they run in opposite directions; kept, it takes the more
+// specific type (obstacle before frontier before border). Output edges on a
+// side of `border_box`, if given, are typed kBorder.
 OverlayResult overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op,
                       const std::optional<Box>& border_box = std::nullopt);
 
@@ -56,8 +57,11 @@ struct RingRef {
 void add_rings(const TypedPolygon& polygon, std::vector<RingRef>& rings);
 void add_rings(const TypedMultiPolygon& polygons, std::vector<RingRef>& rings);
 
-// The same on rings: a and b are the rings of valid multi-polygons.
+// The same on rings: a and b are the rings of valid multi-polygons. A type
+// given in side_types[s] replaces the types of every edge of operand s (the
+// planning map's difference: free edges frontier, obstacle edges obstacle).
 OverlayResult overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
-                      const std::optional<Box>& border_box = std::nullopt);
+                      const std::optional<Box>& border_box = std::nullopt,
+                      const std::optional<EdgeType> (&side_types)[2] = {});
 
 }  // namespace pex::mapping

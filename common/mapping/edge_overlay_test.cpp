@@ -28,10 +28,11 @@ void add_hole(TypedPolygon& p, double x0, double y0, double x1, double y1, EdgeT
 // The oracle: Boost.Geometry's union or intersection of the same geometry.
 MultiPolygon boost_overlay(const TypedMultiPolygon& a, const TypedMultiPolygon& b, OverlayOp op) {
   MultiPolygon out;
-  if (op == OverlayOp::kUnion)
-    bg::union_(geometry_of(a), geometry_of(b), out);
-  else
-    bg::intersection(geometry_of(a), geometry_of(b), out);
+  switch (op) {
+    case OverlayOp::kUnion: bg::union_(geometry_of(a), geometry_of(b), out); break;
+    case OverlayOp::kIntersection: bg::intersection(geometry_of(a), geometry_of(b), out); break;
+    case OverlayOp::kDifference: bg::difference(geometry_of(a), geometry_of(b), out); break;
+  }
   return out;
 }
 
@@ -145,6 +146,32 @@ TEST(EdgeOverlay, HolesIslandsAndContainment) {
   EXPECT_TRUE(overlay(a, none, OverlayOp::kIntersection).polygons.empty());
 }
 
+// The planning map's difference: a room minus a band along two of its walls
+// (one band edge on the wall itself, in the opposite direction) and a pillar.
+TEST(EdgeOverlay, DifferenceTakesTheSubtrahendsEdgesTurnedRound) {
+  const TypedMultiPolygon room{rect(0, 0, 10, 6, E::kFrontier)};
+  TypedMultiPolygon obstacles{rect(-0.1, -0.1, 10.1, 0.02, E::kObstacle), rect(4, 2, 5, 3, E::kObstacle)};
+  const auto r = overlay(room, obstacles, OverlayOp::kDifference);
+  expect_matches_boost(room, obstacles, OverlayOp::kDifference, r);
+  EXPECT_NEAR(area(r.polygons), 60.0 - 10 * 0.02 - 1.0, 1e-9);
+  EXPECT_NEAR(edge_length(r.polygons, E::kObstacle), 10.0 + 4.0, 1e-9);  // band's inner side, pillar
+  EXPECT_NEAR(edge_length(r.polygons, E::kFrontier), 10.0 + 2 * (6 - 0.02), 1e-9);
+  // A band edge lying on a room edge in the opposite direction bounds the
+  // difference: the room's top (x 0..10 at y 6) against a band whose bottom is y 6.
+  const TypedMultiPolygon cap{rect(2, 6, 8, 6.1, E::kObstacle)};
+  const auto capped = overlay(room, cap, OverlayOp::kDifference);
+  expect_matches_boost(room, cap, OverlayOp::kDifference, capped);
+  EXPECT_NEAR(edge_length(capped.polygons, E::kObstacle), 6.0, 1e-9);  // the shared piece: the more specific type
+  // The side types replace the operands' own (free edges frontier, band edges obstacle).
+  std::vector<RingRef> a_rings, b_rings;
+  add_rings(room, a_rings);
+  const TypedMultiPolygon pillar{rect(4, 2, 5, 3, E::kFrontier)};
+  add_rings(pillar, b_rings);
+  const auto typed = overlay(a_rings, b_rings, OverlayOp::kDifference, std::nullopt, {E::kFrontier, E::kObstacle});
+  ASSERT_TRUE(typed.ok) << typed.error;
+  EXPECT_NEAR(edge_length(typed.polygons, E::kObstacle), 4.0, 1e-12);
+}
+
 TEST(EdgeOverlay, BorderBoxSidesAreTypedBorder) {
   const TypedMultiPolygon scan{rect(-1, 1, 3, 2, E::kObstacle)};
   const Box box(Point(0, 0), Point(8, 8));
@@ -157,8 +184,8 @@ TEST(EdgeOverlay, BorderBoxSidesAreTypedBorder) {
 }
 
 // Real shapes: unions of scan polygons in random rooms (many vertices, near
-// parallel walls, shared end points) against Boost, and their pieces in
-// random boxes.
+// parallel walls, shared end points) against Boost, their pieces in random
+// boxes, and the maps minus random rectangles.
 TEST(EdgeOverlay, RandomScanMapsAgreeWithBoost) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -193,10 +220,20 @@ TEST(EdgeOverlay, RandomScanMapsAgreeWithBoost) {
       }
       expect_matches_boost(r.polygons, box, OverlayOp::kIntersection, clip);
       if (::testing::Test::HasFailure()) return;
+      // A pillar-sized band cut out of the map (the planning map's difference).
+      const TypedMultiPolygon cut{rect(x - 0.5, y - 0.3, x + 0.5, y + 0.3, E::kObstacle)};
+      const auto difference = overlay(r.polygons, cut, OverlayOp::kDifference);
+      ++cases;
+      if (!difference.ok) {
+        ++failed;
+        continue;
+      }
+      expect_matches_boost(r.polygons, cut, OverlayOp::kDifference, difference);
+      if (::testing::Test::HasFailure()) return;
       map = r.polygons;
     }
   }
-  EXPECT_EQ(cases, 480);
+  EXPECT_EQ(cases, 720);
   EXPECT_EQ(failed, 0);
 }
 

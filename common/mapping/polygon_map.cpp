@@ -360,21 +360,30 @@ void Tile::compute_planning() const {
     typed.assign_edge_types = options_.assign_edge_types;
     typed.validate = false;  // validated once below, after RDP
     typed.border_box = box;
-    auto difference = typed_difference(free, obstacles, EdgeType::kFrontier, EdgeType::kObstacle, typed);
-    if (!difference.ok) {
-      fail(difference.error);
-    } else {
-      // A difference lies between (free - obstacles) and free.
-      const double a_free = area(free), a_diff = area(difference.polygons);
-      if (a_diff > a_free + 1e-6 || a_diff < a_free - area(obstacles) - 1e-6) {
-        fail("difference area out of bounds");
+    // Our edge overlay first; if its result fails a check, Boost's overlay.
+    std::string why;
+    for (const bool boost : {false, true}) {
+      typed.boost_overlay = boost;
+      auto difference = typed_difference(free, obstacles, EdgeType::kFrontier, EdgeType::kObstacle, typed);
+      const bool can_retry = !boost && difference.boost_fallbacks == 0;
+      if (!difference.ok) {
+        why = difference.error;
       } else {
-        planning = std::move(difference.polygons);
-        std::string why;
-        if (!simplify_and_validate(planning, options_.simplify_epsilon_m, why))
-          fail("planning layer invalid: " + why);
+        // A difference lies between (free - obstacles) and free.
+        const double a_free = area(free), a_diff = area(difference.polygons);
+        if (a_diff > a_free + 1e-6 || a_diff < a_free - area(obstacles) - 1e-6) {
+          why = "difference area out of bounds";
+        } else if (!simplify_and_validate(difference.polygons, options_.simplify_epsilon_m, why)) {
+          why = "planning layer invalid: " + why;
+        } else {
+          planning = std::move(difference.polygons);
+          why.clear();
+          break;
+        }
       }
+      if (!can_retry) break;
     }
+    if (!why.empty()) fail(why);
   }
   if (error_.empty()) {
     planning_ = std::make_shared<const TypedMultiPolygon>(std::move(planning));

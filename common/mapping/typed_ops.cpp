@@ -64,9 +64,10 @@ TypedOpResult failed(std::string why) {
 // output is valid); false, with result.boost_fallbacks counted when it was
 // tried, tells the caller to use Boost.Geometry.
 bool edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
-                  const TypedOpOptions& options, TypedOpResult& result) {
+                  const TypedOpOptions& options, TypedOpResult& result,
+                  const std::optional<EdgeType> (&side_types)[2] = {}) {
   if (options.boost_overlay) return false;
-  OverlayResult r = overlay(a, b, op, options.border_box);
+  OverlayResult r = overlay(a, b, op, options.border_box, side_types);
   std::string why;
   if (r.ok && options.validate && !is_clearly_valid(r.polygons) && !bg::is_valid(geometry_of(r.polygons), why))
     r.ok = false;
@@ -268,7 +269,9 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   return result;
 }
 
-TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
+namespace {
+
+TypedOpResult boost_difference(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
                                std::optional<EdgeType> a_type, std::optional<EdgeType> b_type,
                                const TypedOpOptions& options) {
   MultiPolygon geometry;
@@ -284,6 +287,22 @@ TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolyg
     index.build();
   }
   return finish(std::move(geometry), index, kClipSearchRadius, options);
+}
+
+}  // namespace
+
+TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
+                               std::optional<EdgeType> a_type, std::optional<EdgeType> b_type,
+                               const TypedOpOptions& options) {
+  std::vector<RingRef> a_rings, b_rings;
+  add_rings(a, a_rings);
+  add_rings(b, b_rings);
+  TypedOpResult result;
+  if (edge_overlay(a_rings, b_rings, OverlayOp::kDifference, options, result, {a_type, b_type})) return result;
+  const int fallbacks = result.boost_fallbacks;
+  result = boost_difference(a, b, a_type, b_type, options);
+  result.boost_fallbacks = fallbacks;
+  return result;
 }
 
 TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,

@@ -24,7 +24,7 @@ struct TypedOpOptions {
   // turns it off for intermediate results and checks each tile once at the
   // end of an insert instead (validity checks cost as much as the overlay).
   bool validate = true;
-  // typed_union and typed_clip compute the geometry with our edge overlay
+  // typed_union, typed_clip and typed_difference compute the geometry with our edge overlay
   // (edge_overlay.hpp) and fall back to Boost.Geometry's overlay when it fails
   // or (with `validate`) its result is not valid. true: Boost only (the
   // caller's own retry after its check failed; the benchmark's comparison).
@@ -53,7 +53,8 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
                           const TypedOpOptions& options = {});
 
 // a minus b. Edges from a take `a_type` (their own type if nullopt), edges
-// from b take `b_type` (their own if nullopt). The paper's planning map is
+// from b take `b_type` (their own if nullopt); where an edge of a and one of b
+// coincide, the more specific type. The paper's planning map is
 // typed_difference(free, obstacles, kFrontier, kObstacle).
 TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolygon& b,
                                std::optional<EdgeType> a_type, std::optional<EdgeType> b_type,
