@@ -166,6 +166,14 @@ class Overlay {
   std::vector<std::uint32_t> out_start_, out_, out_fill_;  // kept pieces by start vertex
   std::vector<char> used_;
   std::vector<std::uint32_t> ring_pieces_;  // the ring being linked
+  std::vector<std::uint32_t> loop_;         // its pieces not yet emitted as a loop
+  std::vector<std::int32_t> position_;      // a vertex's place in loop_, -1 if none
+  struct Slabs {
+    bool built = false;
+    double min_y = 0, max_y = 0, height = 1;
+    std::vector<std::uint32_t> start, edges;  // edges by row
+  };
+  Slabs slabs_[2];
   // Where the sides can meet: the overlap of their boxes, widened by kEps.
   // Edges and vertices outside it meet nothing of the other side.
   double meet_min_x_ = 0, meet_max_x_ = -1, meet_min_y_ = 0, meet_max_y_ = -1;
@@ -188,11 +196,9 @@ class Overlay {
   bool near_meet_box(const InputEdge& e) const {
     return e.max_x >= meet_min_x_ && e.min_x <= meet_max_x_ && e.max_y >= meet_min_y_ && e.min_y <= meet_max_y_;
   }
-  bool in_meet_box(const Point& p) const {
-    return p.x() >= meet_min_x_ && p.x() <= meet_max_x_ && p.y() >= meet_min_y_ && p.y() <= meet_max_y_;
-  }
 
   void clear() {
+    slabs_[0].built = slabs_[1].built = false;
     edges_.clear();
     rings_.clear();
     a_points_.clear();
@@ -295,11 +301,11 @@ class Overlay {
     }
   }
 
-  // The id of the vertex at p. Only points in the meet box can be shared by
-  // both sides, so only they go through the table; ring neighbours pass
-  // their ids along (make_pieces).
+  // The id of the vertex at p: one id for one point, also where an operand
+  // touches itself (two of its rings at one point: a union can join them
+  // into one ring, which must then split there). Ring neighbours pass their
+  // ids along (make_pieces).
   std::uint32_t vertex(const Point& p, std::uint8_t side) {
-    if (!in_meet_box(p)) return new_vertex(p, side);
     std::uint64_t slot = hash_of(p.x(), p.y()) & vertex_mask_;
     for (;; slot = (slot + 1) & vertex_mask_) {
       const std::uint32_t id = vertex_table_[slot];
@@ -391,21 +397,58 @@ class Overlay {
 
   // Even-odd over every ring of `side` (its rings do not cross, so a point is
   // inside the multi-polygon when it is inside an odd number of them).
-  bool inside(const Point& m, std::uint8_t side) const {
+  // The edges are listed by horizontal slab (built on the first test of a
+  // side), so a test reads only the edges of its slab: rings that meet the
+  // other side nowhere take one test each, and merging a whole map has
+  // hundreds of them against thousands of edges.
+  bool inside(const Point& m, std::uint8_t side) {
+    Slabs& slabs = slabs_[side];
+    if (!slabs.built) build_slabs(side);
+    if (slabs.start.empty() || m.y() < slabs.min_y || m.y() > slabs.max_y) return false;
+    const auto rows = static_cast<int>(slabs.start.size() - 1);
+    const int row = std::clamp(static_cast<int>((m.y() - slabs.min_y) / slabs.height), 0, rows - 1);
     bool in = false;
-    for (const auto& ring : rings_) {
-      if (ring.side != side || m.x() < ring.min_x || m.x() > ring.max_x || m.y() < ring.min_y ||
-          m.y() > ring.max_y)
-        continue;
-      for (std::uint32_t k = ring.first_edge; k < ring.last_edge; ++k) {
-        const Point& a = edges_[k].p;
-        const Point& b = edges_[k].q;
-        if ((a.y() > m.y()) != (b.y() > m.y()) &&
-            m.x() < (b.x() - a.x()) * (m.y() - a.y()) / (b.y() - a.y()) + a.x())
-          in = !in;
-      }
+    for (std::uint32_t j = slabs.start[static_cast<std::size_t>(row)]; j < slabs.start[static_cast<std::size_t>(row) + 1];
+         ++j) {
+      const Point& a = edges_[slabs.edges[j]].p;
+      const Point& b = edges_[slabs.edges[j]].q;
+      if ((a.y() > m.y()) != (b.y() > m.y()) &&
+          m.x() < (b.x() - a.x()) * (m.y() - a.y()) / (b.y() - a.y()) + a.x())
+        in = !in;
     }
     return in;
+  }
+
+  void build_slabs(std::uint8_t side) {
+    Slabs& slabs = slabs_[side];
+    slabs.built = true;
+    slabs.start.clear();
+    slabs.edges.clear();
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    std::size_t count = 0;
+    for (const auto& e : edges_)
+      if (e.side == side) {
+        lo = std::min(lo, e.min_y);
+        hi = std::max(hi, e.max_y);
+        ++count;
+      }
+    if (count == 0) return;
+    const int rows = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(count))), 1, 256);
+    slabs.min_y = lo;
+    slabs.max_y = hi;
+    slabs.height = std::max((hi - lo) / rows, 1e-9);
+    auto row = [&](double y) { return std::clamp(static_cast<int>((y - lo) / slabs.height), 0, rows - 1); };
+    slabs.start.assign(static_cast<std::size_t>(rows) + 1, 0);
+    for (const auto& e : edges_)
+      if (e.side == side)
+        for (int r = row(e.min_y); r <= row(e.max_y); ++r) ++slabs.start[static_cast<std::size_t>(r) + 1];
+    for (std::size_t r = 0; r + 1 < slabs.start.size(); ++r) slabs.start[r + 1] += slabs.start[r];
+    slabs.edges.resize(slabs.start.back());
+    out_fill_.assign(slabs.start.begin(), slabs.start.end() - 1);
+    for (std::uint32_t k = 0; k < edges_.size(); ++k)
+      if (edges_[k].side == side)
+        for (int r = row(edges_[k].min_y); r <= row(edges_[k].max_y); ++r)
+          slabs.edges[out_fill_[static_cast<std::size_t>(r)]++] = k;
   }
 
   // Whether piece p, leaving a vertex the other side's boundary passes
@@ -529,7 +572,34 @@ class Overlay {
     };
 
     used_.assign(pieces_.size(), 0);
+    position_.assign(nv, -1);
     std::vector<TypedRing> holes;
+    // One closed loop of pieces: a polygon (counter-clockwise) or a hole.
+    auto emit = [&](std::span<const std::uint32_t> loop) {
+      TypedRing ring;
+      ring.ring.reserve(loop.size() + 1);
+      ring.types.reserve(loop.size());
+      for (const std::uint32_t piece : loop) {
+        ring.ring.push_back(vertices_[pieces_[piece].from]);
+        ring.types.push_back(pieces_[piece].type);
+      }
+      ring.ring.push_back(ring.ring.front());
+      if (border_box) {
+        for (std::size_t i = 0; i + 1 < ring.ring.size(); ++i)
+          if (on_same_box_side(ring.ring[i], ring.ring[i + 1], *border_box)) ring.types[i] = EdgeType::kBorder;
+      }
+      const double a = bg::area(ring.ring);
+      if (ring.types.size() < 3 || a == 0.0) return false;
+      if (a > 0.0) {
+        TypedPolygon polygon;
+        polygon.geometry.outer() = std::move(ring.ring);
+        polygon.edge_types.push_back(std::move(ring.types));
+        result.polygons.push_back(std::move(polygon));
+      } else {
+        holes.push_back(std::move(ring));
+      }
+      return true;
+    };
     for (std::uint32_t first = 0; first < pieces_.size(); ++first) {
       if (!pieces_[first].keep || used_[first]) continue;
       ring_pieces_.clear();
@@ -545,30 +615,28 @@ class Overlay {
         }
         k = next;
       }
-      TypedRing ring;
-      ring.ring.reserve(ring_pieces_.size() + 1);
-      ring.types.reserve(ring_pieces_.size());
+      // The sharpest left turn keeps polygons that touch at a point apart, but
+      // joins holes that touch at a point (and a hole touching its outer
+      // ring) into one ring through that point twice, which OGC forbids: such
+      // a ring is cut into its loops at every repeated vertex.
+      loop_.clear();
+      bool degenerate = false;
       for (const std::uint32_t piece : ring_pieces_) {
-        ring.ring.push_back(vertices_[pieces_[piece].from]);
-        ring.types.push_back(pieces_[piece].type);
+        const std::uint32_t v = pieces_[piece].from;
+        if (position_[v] >= 0) {
+          const auto at = static_cast<std::size_t>(position_[v]);
+          degenerate |= !emit(std::span(loop_).subspan(at));
+          for (std::size_t j = at; j < loop_.size(); ++j) position_[pieces_[loop_[j]].from] = -1;
+          loop_.resize(at);
+        }
+        position_[v] = static_cast<std::int32_t>(loop_.size());
+        loop_.push_back(piece);
       }
-      ring.ring.push_back(ring.ring.front());
-      if (border_box) {
-        for (std::size_t i = 0; i + 1 < ring.ring.size(); ++i)
-          if (on_same_box_side(ring.ring[i], ring.ring[i + 1], *border_box)) ring.types[i] = EdgeType::kBorder;
-      }
-      const double a = bg::area(ring.ring);
-      if (ring.types.size() < 3 || a == 0.0) {
+      degenerate |= !emit(loop_);
+      for (const std::uint32_t piece : loop_) position_[pieces_[piece].from] = -1;
+      if (degenerate) {
         result.error = "overlay: a degenerate ring";
         return result;
-      }
-      if (a > 0.0) {
-        TypedPolygon polygon;
-        polygon.geometry.outer() = std::move(ring.ring);
-        polygon.edge_types.push_back(std::move(ring.types));
-        result.polygons.push_back(std::move(polygon));
-      } else {
-        holes.push_back(std::move(ring));
       }
     }
     if (!put_back_holes(result.polygons, std::move(holes))) {

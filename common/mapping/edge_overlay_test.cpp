@@ -122,6 +122,33 @@ TEST(EdgeOverlay, RingsThatTouchAtAPointStaySeparate) {
   EXPECT_EQ(r.polygons.size(), 2u);
 }
 
+// Filling a courtyard but for two squares that touch at its centre leaves two
+// holes touching at a point: two rings (one ring through the point twice is
+// not valid), and so for a hole that touches the outer ring.
+TEST(EdgeOverlay, HolesThatTouchAtAPointAreSeparateRings) {
+  TypedPolygon room = rect(0, 0, 4, 4);
+  add_hole(room, 1, 1, 3, 3);
+  const TypedMultiPolygon a{room}, b{rect(1, 2, 2, 3, E::kObstacle), rect(2, 1, 3, 2, E::kObstacle)};
+  const auto r = overlay(a, b, OverlayOp::kUnion);
+  expect_matches_boost(a, b, OverlayOp::kUnion, r);
+  ASSERT_EQ(r.polygons.size(), 1u);
+  EXPECT_EQ(r.polygons[0].geometry.inners().size(), 2u);
+  EXPECT_NEAR(area(r.polygons), 16.0 - 2.0, 1e-12);
+  // A C-shaped room whose mouth a bar closes, touching the lower arm's end
+  // at one point: the mouth becomes a hole that touches the outer ring there.
+  TypedPolygon c;
+  c.geometry.outer() = {{0, 0}, {3, 0}, {3, 1}, {1, 1}, {1, 2}, {3, 2}, {3, 3}, {0, 3}, {0, 0}};
+  c.edge_types.push_back(std::vector<EdgeType>(8, E::kFrontier));
+  TypedPolygon bar;  // from (3, 1) up the mouth to the upper arm, overlapping it
+  bar.geometry.outer() = {{3, 1}, {4, 1}, {4, 2.5}, {2.5, 2.5}, {2.5, 2}, {3, 2}, {3, 1}};
+  bar.edge_types.push_back(std::vector<EdgeType>(6, E::kObstacle));
+  const TypedMultiPolygon cee{c}, closing{bar};
+  const auto closed = overlay(cee, closing, OverlayOp::kUnion);
+  expect_matches_boost(cee, closing, OverlayOp::kUnion, closed);
+  ASSERT_EQ(closed.polygons.size(), 1u);
+  EXPECT_EQ(closed.polygons[0].geometry.inners().size(), 1u);
+}
+
 TEST(EdgeOverlay, HolesIslandsAndContainment) {
   TypedPolygon room = rect(0, 0, 10, 10);
   add_hole(room, 2, 2, 4, 4);

@@ -615,42 +615,51 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
   };
   if (layer == Layer::kPlanning)
     for (const auto& [key, tile] : tiles_) result.stale_planning_tiles += tile->planning_failed() ? 1 : 0;
-  // Balanced cascade: each vertex takes part in O(log tiles) unions.
-  auto cascade = [](std::vector<MultiPolygon> work) {
+  // Balanced cascade: each vertex takes part in O(log tiles) unions. With
+  // our edge overlay the types come along; with Boost's (the fallback) they
+  // are matched afterwards. nullopt: an overlay failed.
+  auto cascade = [](std::vector<TypedMultiPolygon> work, bool boost) -> std::optional<TypedMultiPolygon> {
     while (work.size() > 1) {
-      std::vector<MultiPolygon> next;
+      std::vector<TypedMultiPolygon> next;
       next.reserve((work.size() + 1) / 2);
       for (std::size_t k = 0; k + 1 < work.size(); k += 2) {
-        MultiPolygon u;
-        bg::union_(work[k], work[k + 1], u);
-        next.push_back(std::move(u));
+        if (boost) {
+          MultiPolygon u;
+          bg::union_(geometry_of(work[k]), geometry_of(work[k + 1]), u);
+          next.push_back(with_uniform_type(u, EdgeType::kFrontier));  // typed at the end
+          continue;
+        }
+        auto u = overlay(work[k], work[k + 1], OverlayOp::kUnion);
+        if (!u.ok) return std::nullopt;
+        next.push_back(std::move(u.polygons));
       }
       if (work.size() % 2 == 1) next.push_back(std::move(work.back()));
       work = std::move(next);
     }
-    return work.empty() ? MultiPolygon{} : std::move(work.front());
+    return work.empty() ? TypedMultiPolygon{} : std::move(work.front());
   };
-  // Attempt 0: only polygons with an edge on their tile's border are merged;
-  // the others lie inside their tile and pass through (fast, and keeps Boost
-  // away from most of the map). If that result is invalid, attempt 1 merges
-  // everything, attempt 2 in reverse order (with Boost's rescaling, which is
-  // off now, two polygons valid at tile scale could be "invalid" at map scale).
+  // Attempt 0 (our edge overlay) and 1 (Boost's): only polygons with an edge
+  // on their tile's border are merged; the others lie inside their tile and
+  // pass through (fast: most of the map). If that result is invalid, attempt
+  // 2 merges everything with Boost, attempt 3 in reverse order (with Boost's
+  // rescaling, which is off now, two polygons valid at tile scale could be
+  // "invalid" at map scale).
   //
   // Holes strictly inside their tile's box cannot meet another tile's polygons
-  // either: in attempt 0 they are set aside, the rest goes through the
+  // either: in attempts 0 and 1 they are set aside, the rest goes through the
   // cascade, and they are put back into the polygon that contains them after
   // the check. They were simplified and checked with their tile, so only when
   // this merge simplifies with the tiles' own tolerance (or not at all).
   std::string why;
   const bool tiles_tolerance =
       simplify_epsilon_m == options_.simplify_epsilon_m || simplify_epsilon_m <= 0.0;
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    std::vector<MultiPolygon> parts;
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    const bool boost = attempt > 0, everything = attempt > 1;
+    std::vector<TypedMultiPolygon> parts;
     TypedMultiPolygon inside;
     std::vector<TypedRing> aside;
-    EdgeTypeIndex index;
     for (const auto& [key, tile] : tiles_) {
-      MultiPolygon touching;
+      TypedMultiPolygon touching;
       const Box& box = tile->box;
       auto strictly_inside = [&box](const Ring& ring) {
         const Box e = bg::return_envelope<Box>(ring);
@@ -658,36 +667,49 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
                e.max_corner().x() < box.max_corner().x() && e.max_corner().y() < box.max_corner().y();
       };
       for (const auto& polygon : polygons_of(*tile)) {
-        bool on_border = attempt > 0;
+        bool on_border = everything;
         for (const auto& ring : polygon.edge_types)
           on_border = on_border || std::find(ring.begin(), ring.end(), EdgeType::kBorder) != ring.end();
         if (!on_border) {
           inside.push_back(polygon);
           continue;
         }
-        if (attempt > 0 || !tiles_tolerance) {
-          touching.push_back(polygon.geometry);
-          index.add(polygon);
+        if (everything || !tiles_tolerance) {
+          touching.push_back(polygon);
           continue;
         }
-        TypedPolygon kept = without_holes(polygon, strictly_inside, aside);
-        touching.push_back(kept.geometry);
-        index.add(kept);
+        touching.push_back(without_holes(polygon, strictly_inside, aside));
       }
       if (!touching.empty()) parts.push_back(std::move(touching));
     }
-    index.build();
-    if (attempt == 2) std::reverse(parts.begin(), parts.end());
-    MultiPolygon geometry;
+    if (attempt == 3) std::reverse(parts.begin(), parts.end());
+    EdgeTypeIndex index;  // Boost's cascade: its output typed from every input edge
+    if (boost) {
+      for (const auto& part : parts) index.add(part);
+      index.build();
+    }
+    std::optional<TypedMultiPolygon> united;
     try {
-      geometry = cascade(std::move(parts));
+      united = cascade(std::move(parts), boost);
     } catch (const std::exception& e) {
       why = e.what();
       continue;
     }
-    TypedOpOptions options;
-    options.assign_edge_types = options_.assign_edge_types;
-    TypedMultiPolygon merged = assign_types(geometry, index, 1e-6, options, nullptr);
+    if (!united) {
+      why = "the edge overlay could not unite the tiles";
+      continue;
+    }
+    TypedMultiPolygon merged;
+    if (boost) {
+      TypedOpOptions options;
+      options.assign_edge_types = options_.assign_edge_types;
+      merged = assign_types(geometry_of(*united), index, 1e-6, options, nullptr);
+    } else {
+      merged = std::move(*united);
+      if (!options_.assign_edge_types)
+        for (auto& p : merged)
+          for (auto& ring : p.edge_types) std::fill(ring.begin(), ring.end(), EdgeType::kFrontier);
+    }
     const std::size_t inside_count = inside.size();
     for (auto& polygon : inside) merged.push_back(std::move(polygon));
     std::int64_t strays = 0;
