@@ -261,19 +261,22 @@ class Overlay {
     const double cell_x = std::max((max_x - min_x) / n, 1e-6), cell_y = std::max((max_y - min_y) / n, 1e-6);
     auto col = [&](double x) { return std::clamp(static_cast<int>((x - min_x) / cell_x), 0, n - 1); };
     auto row = [&](double y) { return std::clamp(static_cast<int>((y - min_y) / cell_y), 0, n - 1); };
+    // fn(cell, row, column) for every cell the edge's box (widened by kEps) covers.
+    auto for_each_cell = [&](const InputEdge& e, auto&& fn) {
+      for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
+        for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) fn(static_cast<std::size_t>(r * n + c), r, c);
+    };
     cell_start_.assign(static_cast<std::size_t>(n * n + 1), 0);
     for (int pass = 0; pass < 2; ++pass) {  // count, then fill
       for (std::uint32_t k = 0; k < edges_.size(); ++k) {
         const InputEdge& e = edges_[k];
         if (e.side != 1 || !near_meet_box(e)) continue;
-        for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
-          for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) {
-            const auto cell = static_cast<std::size_t>(r * n + c);
-            if (pass == 0)
-              ++cell_start_[cell + 1];
-            else
-              cell_edges_[cell_fill_[cell]++] = k;
-          }
+        for_each_cell(e, [&](std::size_t cell, int, int) {
+          if (pass == 0)
+            ++cell_start_[cell + 1];
+          else
+            cell_edges_[cell_fill_[cell]++] = k;
+        });
       }
       if (pass == 0) {
         for (std::size_t c = 0; c + 1 < cell_start_.size(); ++c) cell_start_[c + 1] += cell_start_[c];
@@ -284,20 +287,18 @@ class Overlay {
     for (std::uint32_t k = 0; k < edges_.size(); ++k) {
       const InputEdge& e = edges_[k];
       if (e.side != 0 || !near_meet_box(e)) continue;
-      for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
-        for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) {
-          const auto cell = static_cast<std::size_t>(r * n + c);
-          for (std::uint32_t m = cell_start_[cell]; m < cell_start_[cell + 1]; ++m) {
-            const InputEdge& f = edges_[cell_edges_[m]];
-            if (f.max_x < e.min_x - kEps || f.min_x > e.max_x + kEps || f.max_y < e.min_y - kEps ||
-                f.min_y > e.max_y + kEps)
-              continue;
-            if (c != std::max(col(e.min_x - kEps), col(f.min_x - kEps)) ||
-                r != std::max(row(e.min_y - kEps), row(f.min_y - kEps)))
-              continue;  // tested in another cell
-            meet(edges_, k, cell_edges_[m], splits_);
-          }
+      for_each_cell(e, [&](std::size_t cell, int r, int c) {
+        for (std::uint32_t m = cell_start_[cell]; m < cell_start_[cell + 1]; ++m) {
+          const InputEdge& f = edges_[cell_edges_[m]];
+          if (f.max_x < e.min_x - kEps || f.min_x > e.max_x + kEps || f.max_y < e.min_y - kEps ||
+              f.min_y > e.max_y + kEps)
+            continue;
+          if (c != std::max(col(e.min_x - kEps), col(f.min_x - kEps)) ||
+              r != std::max(row(e.min_y - kEps), row(f.min_y - kEps)))
+            continue;  // tested in another cell
+          meet(edges_, k, cell_edges_[m], splits_);
         }
+      });
     }
   }
 
