@@ -1,16 +1,18 @@
 #pragma once
-// Union and intersection of two valid typed multi-polygons by splitting their
-// edges where they meet, keeping the pieces that bound the result and linking
-// them into rings. Every output edge is a piece of exactly one input edge, so
+// Union, intersection and difference of two valid typed multi-polygons by
+// splitting their edges where they meet, keeping the pieces that bound the
+// result and linking them into rings. Every output edge is a piece of exactly one input edge, so
 // it carries that edge's type: no search for the best-matching input edge is
 // needed (it is the zero-penalty match of the reassignment pass by
 // construction).
 //
 // Why our own: PolygonMap's updates are small overlays (a tile of a few
-// hundred vertices and a scan piece), where Boost.Geometry's overlay costs a
-// fixed ~100 us a call in set-up (sections, turn bookkeeping, traversal
-// state) and needs the reassignment pass afterwards. This one is
-// O((n + k) log n) with a few allocations.
+// hundred vertices and a scan piece), where Boost.Geometry's overlay cost
+// about 100 us a call (2.8 ms over the ~25 calls of an insert), mostly in
+// set-up (sections, turn bookkeeping, traversal state), and needs the
+// reassignment pass afterwards. This one finds meeting edges through a grid
+// and sorts only the split points, so on map-like inputs its cost grows about
+// linearly with the vertices and meeting points; its buffers are reused.
 //
 // Robustness: points within kOverlaySnap (1e-9 m) of each other or of an edge
 // are treated as meeting it (b's vertices are moved onto a's, edges are split
