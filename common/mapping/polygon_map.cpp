@@ -319,6 +319,12 @@ bool Tile::planning_failed() const {
   return !error_.empty();
 }
 
+bool Tile::planning_by_boost() const {
+  planning();
+  const std::lock_guard lock(mutex_);
+  return planning_by_boost_;
+}
+
 std::string Tile::planning_error() const {
   planning();
   const std::lock_guard lock(mutex_);
@@ -377,6 +383,7 @@ void Tile::compute_planning() const {
           why = "planning layer invalid: " + why;
         } else {
           planning = std::move(difference.polygons);
+          planning_by_boost_ = boost || difference.boost_fallbacks > 0;
           why.clear();
           break;
         }
@@ -614,7 +621,10 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
     return layer == Layer::kFree ? tile.free : tile.planning();
   };
   if (layer == Layer::kPlanning)
-    for (const auto& [key, tile] : tiles_) result.stale_planning_tiles += tile->planning_failed() ? 1 : 0;
+    for (const auto& [key, tile] : tiles_) {
+      result.stale_planning_tiles += tile->planning_failed() ? 1 : 0;
+      result.boost_planning_tiles += tile->planning_by_boost() ? 1 : 0;
+    }
   // Balanced cascade: each vertex takes part in O(log tiles) unions. With
   // our edge overlay the types come along; with Boost's (the fallback) they
   // are matched afterwards. nullopt: an overlay failed.
@@ -735,6 +745,7 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
     }
     result.polygons = std::move(merged);
     result.stray_border_edges = strays;
+    result.boost_cascade = boost;
     result.ok = true;
     return result;
   }

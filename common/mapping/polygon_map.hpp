@@ -75,6 +75,9 @@ class Tile {
   bool planning_computed() const;
   bool planning_failed() const;
   std::string planning_error() const;
+  // The planning layer came from Boost's difference (our edge overlay's
+  // result failed a check): counted by the merge.
+  bool planning_by_boost() const;
   // For the next version of this tile: this tile's planning layer if it has
   // been computed and is its own, else the one this tile would fall back to.
   std::shared_ptr<const TypedMultiPolygon> last_good_planning() const;
@@ -90,6 +93,7 @@ class Tile {
   mutable std::shared_ptr<const TypedMultiPolygon> fallback_;  // released once computed
   mutable std::shared_ptr<const TypedMultiPolygon> planning_;  // null until computed
   mutable std::string error_;  // empty unless the difference failed
+  mutable bool planning_by_boost_ = false;
 };
 
 struct InsertResult {
@@ -115,6 +119,11 @@ struct MergeResult {
   // Tiles whose planning layer could not be derived from their free and
   // obstacle layers: they took part with their last good planning layer.
   std::int64_t stale_planning_tiles = 0;
+  // Fallbacks to Boost.Geometry: the tiles were united by Boost's cascade
+  // (the edge overlay's result failed its check); tiles whose planning layer
+  // is Boost's difference.
+  bool boost_cascade = false;
+  std::int64_t boost_planning_tiles = 0;
 };
 
 // The obstacle band of a scan polygon: each maximal chain of obstacle edges

@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
       node.counter("scan_polygon_errors") = c.scan_polygon_errors;
       node.counter("failed_tile_updates") = c.failed_tile_updates;
       node.counter("boost_fallbacks") = c.boost_fallbacks;
+      node.counter("merge_boost_fallbacks") = c.merge_boost_fallbacks;
+      node.counter("boost_planning_tiles") = c.boost_planning_tiles;
       node.counter("merge_failures") = c.merge_failures;
       node.counter("stale_planning_tiles") = c.stale_planning_tiles;
       node.counter("slam_updates") = c.slam_updates;

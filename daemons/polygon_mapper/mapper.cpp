@@ -283,6 +283,8 @@ std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
   if (dirty_) {
     const auto merged = map().planning_map();
     counters_.stale_planning_tiles = merged.stale_planning_tiles;
+    counters_.boost_planning_tiles = merged.boost_planning_tiles;
+    if (merged.boost_cascade) ++counters_.merge_boost_fallbacks;
     if (merged.ok) {
       message_ = to_message(merged.polygons);
       dirty_ = false;

@@ -71,6 +71,8 @@ struct MapperCounters {
   // Overlays our edge overlay could not do (or whose result failed a check),
   // redone with Boost.Geometry's (docs/mapping.md).
   std::int64_t boost_fallbacks = 0;
+  std::int64_t merge_boost_fallbacks = 0;  // merges whose tiles Boost's cascade united
+  std::int64_t boost_planning_tiles = 0;   // tiles of the last merge with Boost's planning layer
   std::int64_t merge_failures = 0;
   // Tiles of the last published map whose planning layer could not be
   // derived (they show their last good planning layer).
