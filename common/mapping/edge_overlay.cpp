@@ -122,11 +122,18 @@ std::uint64_t hash_of(double x, double y) {
   return h ^ (h >> 29);
 }
 
-bool on_same_box_side(const Point& a, const Point& b, const Box& box) {
-  const auto& lo = box.min_corner();
-  const auto& hi = box.max_corner();
-  return (a.x() == lo.x() && b.x() == lo.x()) || (a.x() == hi.x() && b.x() == hi.x()) ||
-         (a.y() == lo.y() && b.y() == lo.y()) || (a.y() == hi.y() && b.y() == hi.y());
+// Lists items by key (compressed rows): items of key k are
+// items[start[k] .. start[k + 1]). for_each(emit) calls emit(key, item) for
+// every pair; it runs twice, to count and then to fill. `fill` is scratch.
+template <class ForEach>
+void build_lists(std::size_t keys, std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& items,
+                 std::vector<std::uint32_t>& fill, ForEach&& for_each) {
+  start.assign(keys + 1, 0);
+  for_each([&](std::size_t key, std::uint32_t) { ++start[key + 1]; });
+  for (std::size_t k = 0; k < keys; ++k) start[k + 1] += start[k];
+  items.resize(start.back());
+  fill.assign(start.begin(), start.end() - 1);
+  for_each([&](std::size_t key, std::uint32_t item) { items[fill[key]++] = item; });
 }
 
 // The working state of one overlay. Its buffers keep their capacity from
@@ -154,7 +161,7 @@ class Overlay {
   std::vector<InputRing> rings_;
   std::vector<Point> a_points_;  // a's vertices by x, for snapping b's
   std::vector<Split> splits_;
-  std::vector<std::uint32_t> cell_start_, cell_fill_, cell_edges_;  // b's edges by grid cell
+  std::vector<std::uint32_t> cell_start_, cell_edges_;  // b's edges by grid cell
   std::vector<Point> vertices_;
   std::vector<std::uint8_t> vertex_sides_;  // bit s: a piece of side s starts or ends here
   // Open-addressing table of vertex ids by exact coordinates (a hash map
@@ -163,7 +170,8 @@ class Overlay {
   std::uint64_t vertex_mask_ = 0;
   std::vector<Piece> pieces_;
   std::vector<std::uint32_t> incident_start_, incident_;  // pieces by vertex (either end)
-  std::vector<std::uint32_t> out_start_, out_, out_fill_;  // kept pieces by start vertex
+  std::vector<std::uint32_t> out_start_, out_;  // kept pieces by start vertex
+  std::vector<std::uint32_t> fill_;             // scratch of build_lists
   std::vector<char> used_;
   std::vector<std::uint32_t> ring_pieces_;  // the ring being linked
   std::vector<std::uint32_t> loop_;         // its pieces not yet emitted as a loop
@@ -266,24 +274,12 @@ class Overlay {
       for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
         for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) fn(static_cast<std::size_t>(r * n + c), r, c);
     };
-    cell_start_.assign(static_cast<std::size_t>(n * n + 1), 0);
-    for (int pass = 0; pass < 2; ++pass) {  // count, then fill
+    build_lists(static_cast<std::size_t>(n * n), cell_start_, cell_edges_, fill_, [&](auto&& emit) {
       for (std::uint32_t k = 0; k < edges_.size(); ++k) {
         const InputEdge& e = edges_[k];
-        if (e.side != 1 || !near_meet_box(e)) continue;
-        for_each_cell(e, [&](std::size_t cell, int, int) {
-          if (pass == 0)
-            ++cell_start_[cell + 1];
-          else
-            cell_edges_[cell_fill_[cell]++] = k;
-        });
+        if (e.side == 1 && near_meet_box(e)) for_each_cell(e, [&](std::size_t cell, int, int) { emit(cell, k); });
       }
-      if (pass == 0) {
-        for (std::size_t c = 0; c + 1 < cell_start_.size(); ++c) cell_start_[c + 1] += cell_start_[c];
-        cell_edges_.resize(cell_start_.back());
-        cell_fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
-      }
-    }
+    });
     for (std::uint32_t k = 0; k < edges_.size(); ++k) {
       const InputEdge& e = edges_[k];
       if (e.side != 0 || !near_meet_box(e)) continue;
@@ -316,14 +312,11 @@ class Overlay {
         return id;
       }
     }
-    const std::uint32_t id = new_vertex(p, side);
-    vertex_table_[slot] = id;
-    return id;
-  }
-  std::uint32_t new_vertex(const Point& p, std::uint8_t side) {
+    const auto id = static_cast<std::uint32_t>(vertices_.size());
     vertices_.push_back(p);
     vertex_sides_.push_back(static_cast<std::uint8_t>(1u << side));
-    return static_cast<std::uint32_t>(vertices_.size() - 1);
+    vertex_table_[slot] = id;
+    return id;
   }
 
   void make_pieces() {
@@ -365,19 +358,12 @@ class Overlay {
 
   // For each vertex, the pieces that start or end there.
   void index_incidence() {
-    const std::size_t nv = vertices_.size();
-    incident_start_.assign(nv + 1, 0);
-    for (const auto& p : pieces_) {
-      ++incident_start_[p.from + 1];
-      ++incident_start_[p.to + 1];
-    }
-    for (std::size_t v = 0; v < nv; ++v) incident_start_[v + 1] += incident_start_[v];
-    incident_.resize(incident_start_.back());
-    out_fill_.assign(incident_start_.begin(), incident_start_.end() - 1);
-    for (std::uint32_t k = 0; k < pieces_.size(); ++k) {
-      incident_[out_fill_[pieces_[k].from]++] = k;
-      incident_[out_fill_[pieces_[k].to]++] = k;
-    }
+    build_lists(vertices_.size(), incident_start_, incident_, fill_, [&](auto&& emit) {
+      for (std::uint32_t k = 0; k < pieces_.size(); ++k) {
+        emit(pieces_[k].from, k);
+        emit(pieces_[k].to, k);
+      }
+    });
   }
 
   // Pieces of a and b with the same end points: overlapping edges.
@@ -411,11 +397,8 @@ class Overlay {
     bool in = false;
     for (std::uint32_t j = slabs.start[static_cast<std::size_t>(row)]; j < slabs.start[static_cast<std::size_t>(row) + 1];
          ++j) {
-      const Point& a = edges_[slabs.edges[j]].p;
-      const Point& b = edges_[slabs.edges[j]].q;
-      if ((a.y() > m.y()) != (b.y() > m.y()) &&
-          m.x() < (b.x() - a.x()) * (m.y() - a.y()) / (b.y() - a.y()) + a.x())
-        in = !in;
+      const InputEdge& e = edges_[slabs.edges[j]];
+      if (ray_crosses(m, e.p, e.q)) in = !in;
     }
     return in;
   }
@@ -439,17 +422,11 @@ class Overlay {
     slabs.max_y = hi;
     slabs.height = std::max((hi - lo) / rows, 1e-9);
     auto row = [&](double y) { return std::clamp(static_cast<int>((y - lo) / slabs.height), 0, rows - 1); };
-    slabs.start.assign(static_cast<std::size_t>(rows) + 1, 0);
-    for (const auto& e : edges_)
-      if (e.side == side)
-        for (int r = row(e.min_y); r <= row(e.max_y); ++r) ++slabs.start[static_cast<std::size_t>(r) + 1];
-    for (std::size_t r = 0; r + 1 < slabs.start.size(); ++r) slabs.start[r + 1] += slabs.start[r];
-    slabs.edges.resize(slabs.start.back());
-    out_fill_.assign(slabs.start.begin(), slabs.start.end() - 1);
-    for (std::uint32_t k = 0; k < edges_.size(); ++k)
-      if (edges_[k].side == side)
-        for (int r = row(edges_[k].min_y); r <= row(edges_[k].max_y); ++r)
-          slabs.edges[out_fill_[static_cast<std::size_t>(r)]++] = k;
+    build_lists(static_cast<std::size_t>(rows), slabs.start, slabs.edges, fill_, [&](auto&& emit) {
+      for (std::uint32_t k = 0; k < edges_.size(); ++k)
+        if (edges_[k].side == side)
+          for (int r = row(edges_[k].min_y); r <= row(edges_[k].max_y); ++r) emit(static_cast<std::size_t>(r), k);
+    });
   }
 
   // Whether piece p, leaving a vertex the other side's boundary passes
@@ -537,18 +514,10 @@ class Overlay {
   OverlayResult link(const std::optional<Box>& border_box) {
     OverlayResult result;
     const std::size_t nv = vertices_.size();
-    out_start_.assign(nv + 1, 0);
-    std::size_t kept = 0;
-    for (const auto& p : pieces_)
-      if (p.keep) {
-        ++out_start_[p.from + 1];
-        ++kept;
-      }
-    for (std::size_t v = 0; v < nv; ++v) out_start_[v + 1] += out_start_[v];
-    out_.resize(kept);
-    out_fill_.assign(out_start_.begin(), out_start_.end() - 1);
-    for (std::uint32_t k = 0; k < pieces_.size(); ++k)
-      if (pieces_[k].keep) out_[out_fill_[pieces_[k].from]++] = k;
+    build_lists(nv, out_start_, out_, fill_, [&](auto&& emit) {
+      for (std::uint32_t k = 0; k < pieces_.size(); ++k)
+        if (pieces_[k].keep) emit(pieces_[k].from, k);
+    });
 
     auto next_of = [&](std::uint32_t k) -> std::uint32_t {
       const std::uint32_t v = pieces_[k].to;

@@ -283,14 +283,25 @@ std::optional<MultiPolygon> direct_obstacle_band(const Chains& chains, double in
   return geometry_of(band);
 }
 
-MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m) {
+MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m, std::string* why) {
   const Chains chains = obstacle_chains(scan);
   MultiPolygon band;
   if (chains.empty()) return band;
-  if (auto direct = direct_obstacle_band(chains, inner_m, outer_m)) return std::move(*direct);
+  if (auto direct = direct_obstacle_band(chains, inner_m, outer_m)) return std::move(*direct);  // checked there
   // A closed chain, a chain whose band folds, a failed union: Boost's buffer.
   bg::buffer(chains, band, bs::distance_asymmetric<double>(inner_m, outer_m), bs::side_straight(),
              bs::join_round(kBandPointsPerCircle), bs::end_flat(), bs::point_circle(kBandPointsPerCircle));
+  // It leaves repeated points where a side meets a flat end; without them
+  // the band passes the cheap validity test.
+  for (auto& polygon : band) {
+    drop_repeated_points(polygon.outer());
+    for (auto& inner : polygon.inners()) drop_repeated_points(inner);
+  }
+  std::string reason;
+  if (!is_clearly_valid(with_uniform_type(band, EdgeType::kObstacle)) && !bg::is_valid(band, reason)) {
+    if (why) *why = "obstacle band invalid: " + reason;
+    band.clear();
+  }
   return band;
 }
 
@@ -401,17 +412,7 @@ void Tile::compute_planning() const {
 PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options) {
   PreparedScan prepared;
   try {
-    prepared.band = obstacle_band(scan, options.obstacle_inner_m, options.obstacle_outer_m);
-    // Boost's buffer leaves repeated points where a side meets a flat end;
-    // without them the band passes the cheap validity test.
-    for (auto& polygon : prepared.band) {
-      drop_repeated_points(polygon.outer());
-      for (auto& inner : polygon.inners()) drop_repeated_points(inner);
-    }
-    std::string why;
-    if (!is_clearly_valid(with_uniform_type(prepared.band, EdgeType::kObstacle)) &&
-        !bg::is_valid(prepared.band, why))
-      prepared.band_error = "obstacle band invalid: " + why;
+    prepared.band = obstacle_band(scan, options.obstacle_inner_m, options.obstacle_outer_m, &prepared.band_error);
   } catch (const std::exception& e) {
     prepared.band_error = std::string("obstacle band failed: ") + e.what();
   }
@@ -551,10 +552,10 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
       // second try.
       auto update_layer = [&](const TypedMultiPolygon* old_layer, TypedMultiPolygon& piece_layer,
                               TypedOpOptions op_options, const char* what, TypedMultiPolygon& out,
-                              double& area_after_union) {
+                              double* area_after_union) {
         if (!old_layer || old_layer->empty()) {
           out = std::move(piece_layer);
-          area_after_union = area(out);
+          if (area_after_union) *area_after_union = area(out);
           if (simplify_and_validate(out, options_.simplify_epsilon_m, why)) return true;
           fail_tile(std::string(what) + " invalid: " + why);
           return false;
@@ -592,16 +593,15 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
           result.reassign.edges += merged.reassign.edges;
           result.reassign.candidates += merged.reassign.candidates;
           out = std::move(merged.polygons);
-          area_after_union = a_union;
+          if (area_after_union) *area_after_union = a_union;
           return true;
         }
         return false;
       };
       TypedMultiPolygon free, obstacles;
-      double area_after_union = 0.0, obstacles_area = 0.0;
-      if (!update_layer(old ? &old->free : nullptr, piece.free, tile_options, "free", free, area_after_union) ||
-          !update_layer(old ? &old->obstacles : nullptr, piece.band, band_options, "obstacles", obstacles,
-                        obstacles_area))
+      double area_after_union = 0.0;
+      if (!update_layer(old ? &old->free : nullptr, piece.free, tile_options, "free", free, &area_after_union) ||
+          !update_layer(old ? &old->obstacles : nullptr, piece.band, band_options, "obstacles", obstacles, nullptr))
         continue;
       const double area_before = old ? area(old->free) : 0.0;
       result.free_area_before_m2 += area_before;

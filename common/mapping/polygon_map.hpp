@@ -130,8 +130,10 @@ struct MergeResult {
 // buffered `inner_m` to its left (free side of a counter-clockwise ring) and
 // `outer_m` to its right, with flat ends and round joins.
 // Built directly chain by chain (direct_obstacle_band), else by Boost's
-// buffer of the chains.
-MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m);
+// buffer of the chains. Checked valid either way: an invalid band comes back
+// empty, with the reason in *why if given.
+MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m,
+                           std::string* why = nullptr);
 
 // The maximal chains of obstacle edges of a scan polygon (what the band covers).
 using Chain = bg::model::linestring<Point>;
@@ -154,7 +156,7 @@ struct PreparedScan {
   std::string band_error;  // not empty: no band could be built (the scan goes in without one)
 };
 // Builds the band with the map options' obstacle_inner_m / obstacle_outer_m
-// and checks it (is_clearly_valid, else bg::is_valid).
+// (obstacle_band, which checks it).
 PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options);
 
 class PolygonMap {

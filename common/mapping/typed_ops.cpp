@@ -14,13 +14,6 @@ namespace {
 constexpr double kSnap = 1e-9;
 constexpr double kClipSearchRadius = 1e-6;
 
-bool on_same_box_side(const Point& a, const Point& b, const Box& box) {
-  const auto& lo = box.min_corner();
-  const auto& hi = box.max_corner();
-  return (a.x() == lo.x() && b.x() == lo.x()) || (a.x() == hi.x() && b.x() == hi.x()) ||
-         (a.y() == lo.y() && b.y() == lo.y()) || (a.y() == hi.y() && b.y() == hi.y());
-}
-
 TypedOpResult finish(MultiPolygon geometry, const EdgeTypeIndex& index, double search_radius_m,
                      const TypedOpOptions& options) {
   TypedOpResult result;
@@ -95,6 +88,13 @@ bool edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, Overla
 }
 
 }  // namespace
+
+bool on_same_box_side(const Point& a, const Point& b, const Box& box) {
+  const auto& lo = box.min_corner();
+  const auto& hi = box.max_corner();
+  return (a.x() == lo.x() && b.x() == lo.x()) || (a.x() == hi.x() && b.x() == hi.x()) ||
+         (a.y() == lo.y() && b.y() == lo.y()) || (a.y() == hi.y() && b.y() == hi.y());
+}
 
 void snap_to_box(MultiPolygon& geometry, const Box& box) {
   const double xs[2] = {box.min_corner().x(), box.max_corner().x()};

@@ -110,6 +110,10 @@ TypedPolygon without_holes(const TypedPolygon& polygon, Pred&& set_aside, std::v
 // a hole has no such polygon or is degenerate.
 bool put_back_holes(TypedMultiPolygon& polygons, std::vector<TypedRing> holes);
 
+// True if edge a-b lies on one side of the box (both ends exactly on the same
+// side line): a tile's border edge, typed kBorder.
+bool on_same_box_side(const Point& a, const Point& b, const Box& box);
+
 // Sets coordinates within 1e-9 m of the box's sides exactly onto them, so
 // neighbouring tiles share bit-identical border vertices.
 void snap_to_box(MultiPolygon& geometry, const Box& box);

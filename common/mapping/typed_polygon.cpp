@@ -67,11 +67,7 @@ bool is_valid(const TypedMultiPolygon& polygons, std::string* why) {
 bool inside_ring(const Point& p, const Ring& ring) {
   bool inside = false;
   for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-    const Point& a = ring[i];
-    const Point& b = ring[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
-      inside = !inside;
+    if (ray_crosses(p, ring[i], ring[j])) inside = !inside;
   }
   return inside;
 }

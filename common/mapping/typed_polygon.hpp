@@ -61,6 +61,12 @@ bool is_valid(const TypedMultiPolygon& polygons, std::string* why = nullptr);
 // type). For points known to be off the ring's boundary.
 bool inside_ring(const Point& p, const Ring& ring);
 
+// The crossing-number rule for one edge: true if the ray from p towards +x
+// crosses edge a-b (half-open in y, so a vertex on the ray counts once).
+inline bool ray_crosses(const Point& p, const Point& a, const Point& b) {
+  return (a.y() > p.y()) != (b.y() > p.y()) && p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x();
+}
+
 // A sufficient test of validity, several times cheaper than bg::is_valid:
 // true only when every ring is closed, has at least 3 distinct vertices, no
 // repeated consecutive point and the right orientation, no two edges of any
