@@ -16,6 +16,8 @@ inline constexpr std::string_view kMap = "MAP";
 inline constexpr std::string_view kExploreState = "EXPLORE_STATE";
 inline constexpr std::string_view kDaemonStatus = "DAEMON_STATUS";
 inline constexpr std::string_view kSimTruth = "SIM_TRUTH";
+inline constexpr std::string_view kSimClock = "SIM_CLOCK";
+inline constexpr std::string_view kMissionCmd = "MISSION_CMD";
 
 struct ChannelInfo {
   std::string_view name;
@@ -25,7 +27,7 @@ struct ChannelInfo {
   std::string_view publisher;   // daemon that publishes it
 };
 
-inline constexpr std::array<ChannelInfo, 9> kRegistry{{
+inline constexpr std::array<ChannelInfo, 11> kRegistry{{
     {kLidarScan, "pex.laser_scan_t", 25.0, true, "lidar_reader"},
     {kOdometry, "pex.odometry_t", 50.0, true, "base_driver"},
     {kBaseCmd, "pex.velocity_cmd_t", 10.0, true, "explorer"},
@@ -35,6 +37,8 @@ inline constexpr std::array<ChannelInfo, 9> kRegistry{{
     {kExploreState, "pex.explore_state_t", 2.0, true, "explorer"},
     {kDaemonStatus, "pex.daemon_status_t", 1.0, true, "every daemon"},
     {kSimTruth, "pex.pose_t", 50.0, true, "sim"},
+    {kSimClock, "pex.sim_clock_t", 100.0, true, "sim"},
+    {kMissionCmd, "pex.mission_cmd_t", 0.0, true, "pex-mission"},
 }};
 
 // nullptr if the name is not registered.

@@ -213,6 +213,8 @@ std::unique_ptr<Process> start_daemon(const std::string& name, const std::string
 
 #include <pex/daemon_status_t.hpp>
 #include <pex/explore_state_t.hpp>
+#include <pex/mission_cmd_t.hpp>
+#include <pex/sim_clock_t.hpp>
 #include <pex/laser_scan_t.hpp>
 #include <pex/odometry_t.hpp>
 #include <pex/polygon_map_t.hpp>
@@ -245,6 +247,8 @@ std::string decode_registered(const std::string& channel, const void* data, int 
   if (t == "pex.polygon_map_t") return try_decode<pex::polygon_map_t>(data, size);
   if (t == "pex.explore_state_t") return try_decode<pex::explore_state_t>(data, size);
   if (t == "pex.daemon_status_t") return try_decode<pex::daemon_status_t>(data, size);
+  if (t == "pex.sim_clock_t") return try_decode<pex::sim_clock_t>(data, size);
+  if (t == "pex.mission_cmd_t") return try_decode<pex::mission_cmd_t>(data, size);
   return "no decoder for type " + std::string(t);
 }
 
