@@ -65,13 +65,19 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
     // The one key every daemon has: how often it publishes DAEMON_STATUS.
     const int heartbeat_period_ms =
         config.get<int>("heartbeat_period_ms", 1000, in_range(10, 60'000));
-    Node node(NodeOptions{info.name, g_args.lcm_url, offline, g_args.replay_out,
-                          heartbeat_period_ms * 1e-3});
+    // And where its time comes from: "system" (the robot) or "sim" (SIM_CLOCK).
+    const std::string clock = config.get<std::string>("clock", "system", one_of({"system", "sim"}));
+    if (clock == "sim" && info.is_clock_source)
+      config.fail("clock", "pex-" + info.name + " publishes the simulated clock and runs on the system's: must be \"system\", got \"sim\"");
+    if (clock == "sim" && offline) spdlog::info("clock = \"sim\" is ignored in replay: the log's time is the clock");
+    Node node(NodeOptions{info.name, g_args.lcm_url, offline, g_args.replay_out, heartbeat_period_ms * 1e-3,
+                          clock == "sim" ? ClockSource::kSim : ClockSource::kSystem});
     node.set_signal_fd(signal_fd);
     setup(node, config);
     config.finish();
     spdlog::info("started ({}; config {})",
-                 offline ? "replay of " + std::to_string(g_args.replay_logs.size()) + " log(s)" : "live",
+                 offline ? "replay of " + std::to_string(g_args.replay_logs.size()) + " log(s)"
+                         : "live, " + clock + " clock",
                  config.origin());
     if (offline) {
       const int64_t events = node.replay_logs(g_args.replay_logs);

@@ -44,6 +44,9 @@ struct DaemonInfo {
   bool supports_replay = false;
   // Daemon-specific command-line options, registered before parsing.
   std::function<void(CLI::App&)> add_options = {};
+  // The daemon publishes SIM_CLOCK (pex-sim): it cannot run on it, so
+  // `clock = "sim"` in its config is a config error.
+  bool is_clock_source = false;
 };
 
 // setup() reads its typed options from `config` and wires handlers into `node`.

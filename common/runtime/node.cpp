@@ -6,11 +6,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
 #include <pex/daemon_status_t.hpp>
+#include <pex/sim_clock_t.hpp>
 
 #include "runtime/channels.hpp"
 
@@ -45,10 +47,18 @@ int64_t wall_utime() {
       .count();
 }
 
+int64_t steady_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace
 
 Node::Node(NodeOptions options) : options_(std::move(options)) {
-  start_mono_us_ = monotonic_us();
+  start_mono_us_ = steady_us();
+  driven_clock_ = options_.offline || options_.clock == ClockSource::kSim;
+  clock_started_ = !driven_clock_;
   if (!options_.offline) {
     lcm_ = options_.lcm_url.empty() ? std::make_unique<lcm::LCM>()
                                     : std::make_unique<lcm::LCM>(options_.lcm_url);
@@ -62,19 +72,83 @@ Node::Node(NodeOptions options) : options_(std::move(options)) {
     if (!out_log_->good())
       throw std::runtime_error("cannot write log '" + options_.offline_output_log + "'");
   }
-  every(std::chrono::microseconds(static_cast<int64_t>(options_.heartbeat_period_s * 1e6)),
-        [this](int64_t) { publish_status(); });
+  if (!options_.offline && options_.clock == ClockSource::kSim) {
+    subscribe_raw(channels::kSimClock, [this](const void* data, int size, int64_t) { on_sim_clock(data, size); });
+    counters_["sim_clock_rejected"] = 0;
+    set_clock_problem(pex::daemon_status_t::STATE_DEGRADED,
+                      "waiting for the simulator's clock on " + std::string(channels::kSimClock));
+  }
+  every_on_system_clock(std::chrono::microseconds(static_cast<int64_t>(options_.heartbeat_period_s * 1e6)),
+                        [this](int64_t) {
+                          check_sim_clock_silence();
+                          publish_status();
+                        });
 }
 
 Node::~Node() = default;
 
-int64_t Node::monotonic_us() const {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+int64_t Node::now_utime() const { return driven_clock_ ? clock_now_us_ : wall_utime(); }
+
+int64_t Node::monotonic_us() const { return driven_clock_ ? clock_now_us_ : steady_us(); }
+
+void Node::advance_clock(int64_t now_us) {
+  clock_now_us_ = now_us;
+  clock_started_ = true;
+  fire_due_timers(timers_, now_us);
 }
 
-int64_t Node::now_utime() const { return options_.offline ? offline_now_us_ : wall_utime(); }
+void Node::on_sim_clock(const void* data, int size) {
+  pex::sim_clock_t c{};
+  std::string why;
+  if (c.decode(data, 0, size) != size)
+    why = "cannot decode " + std::to_string(size) + " bytes as " + pex::sim_clock_t::getTypeName();
+  else if (c.utime <= 0 || c.sim_time_us < 0 || c.sim_time_us > c.utime)
+    why = "utime " + std::to_string(c.utime) + " / sim_time_us " + std::to_string(c.sim_time_us) + " out of range";
+  else if (!std::isfinite(c.speed_factor) || c.speed_factor <= 0.0)
+    why = "speed_factor " + std::to_string(c.speed_factor) + " is not a positive number";
+  else if (clock_started_ && c.utime < clock_now_us_)
+    why = "went backwards from " + std::to_string(clock_now_us_) + " to " + std::to_string(c.utime) + " us";
+  if (!why.empty()) {
+    // Keep the last good time: a clock that jumps back would re-run timers and
+    // make every timeout measured across the jump negative.
+    ++counters_["sim_clock_rejected"];
+    throw BadInput(why);
+  }
+  last_clock_steady_us_ = steady_us();
+  // The problem (waiting, silence) ends before the timers run, so what they
+  // publish already carries the daemon's own state.
+  const int8_t before = published_state();
+  if (!clock_problem_.empty()) {
+    spdlog::info("{} running: simulated time {:.3f} s, x{} speed", channels::kSimClock, c.sim_time_us * 1e-6,
+                 c.speed_factor);
+    set_clock_problem(pex::daemon_status_t::STATE_OK, {});
+  }
+  if (published_state() != before && !shut_down_) publish_status();
+  advance_clock(c.utime);
+}
+
+void Node::check_sim_clock_silence() {
+  if (options_.offline || options_.clock != ClockSource::kSim || !clock_started_ || !clock_problem_.empty()) return;
+  const int64_t silent_us = steady_us() - last_clock_steady_us_;
+  if (silent_us <= static_cast<int64_t>(options_.sim_clock_silence_s * 1e6)) return;
+  // Frozen simulated time freezes our timers and timeouts too: the daemon
+  // cannot do its job, nor notice its inputs are gone, hence ERROR.
+  set_clock_problem(pex::daemon_status_t::STATE_ERROR,
+                    "no " + std::string(channels::kSimClock) + " for " + std::to_string(silent_us / 1000) +
+                        " ms: the simulator is paused or gone; timers and timeouts are stopped");
+}
+
+void Node::set_clock_problem(int8_t state, std::string why) {
+  if (!why.empty()) spdlog::warn("{}", why);
+  clock_problem_state_ = why.empty() ? pex::daemon_status_t::STATE_OK : state;
+  clock_problem_ = std::move(why);
+  counters_["sim_clock_waiting"] = clock_problem_.empty() ? 0 : 1;
+}
+
+int8_t Node::published_state() const {
+  if (clock_problem_.empty() || state_ == pex::daemon_status_t::STATE_STOPPING) return state_;
+  return std::max(state_, clock_problem_state_);
+}
 
 void Node::subscribe_raw(std::string_view channel, RawHandler handler) {
   auto it = handlers_.find(channel);
@@ -102,10 +176,7 @@ void Node::publish_raw(std::string_view channel, const void* data, int size) {
 }
 
 void Node::dispatch(std::string_view channel, const void* data, int size, int64_t recv_utime) {
-  if (options_.offline) {
-    offline_now_us_ = recv_utime;
-    fire_due_timers(recv_utime);
-  }
+  if (options_.offline) advance_clock(recv_utime);
   auto it = handlers_.find(channel);
   if (it == handlers_.end()) return;
   const int64_t rejected_before = msgs_rejected_;
@@ -123,9 +194,18 @@ void Node::dispatch(std::string_view channel, const void* data, int size, int64_
 }
 
 void Node::every(std::chrono::microseconds period, std::function<void(int64_t)> fn) {
+  add_timer(timers_, period, std::move(fn));
+}
+
+void Node::every_on_system_clock(std::chrono::microseconds period, std::function<void(int64_t)> fn) {
+  add_timer(options_.offline ? timers_ : system_timers_, period, std::move(fn));
+}
+
+void Node::add_timer(std::vector<Timer>& timers, std::chrono::microseconds period, std::function<void(int64_t)> fn) {
   const int64_t p = std::max<int64_t>(1, period.count());
-  // Offline timers start at the first event (next_us == 0 means "not yet").
-  timers_.push_back({p, options_.offline ? 0 : monotonic_us() + p, std::move(fn)});
+  const bool driven = driven_clock_ && &timers == &timers_;
+  // A driven clock's timers start at its next time (next_us == 0 means "not yet").
+  timers.push_back({p, driven ? 0 : steady_us() + p, std::move(fn)});
 }
 
 int Node::watch_fd(int fd, std::function<void()> fn) {
@@ -138,15 +218,15 @@ void Node::unwatch_fd(int id) {
   std::erase_if(watches_, [id](const Watch& w) { return w.id == id; });
 }
 
-void Node::fire_due_timers(int64_t now_us) {
-  for (size_t i = 0; i < timers_.size(); ++i) {
-    Timer& t = timers_[i];
+void Node::fire_due_timers(std::vector<Timer>& timers, int64_t now_us) {
+  for (size_t i = 0; i < timers.size(); ++i) {
+    Timer& t = timers[i];
     if (t.next_us == 0) t.next_us = now_us + t.period_us;
     if (now_us < t.next_us) continue;
     // Skip missed periods instead of bursting to catch up.
     t.next_us += t.period_us * std::max<int64_t>(1, (now_us - t.next_us) / t.period_us + 1);
     try {
-      t.fn(options_.offline ? now_us : wall_utime());
+      t.fn(now_utime());
     } catch (const std::exception& e) {
       error("timer", std::string("timer failed: ") + e.what());
     }
@@ -173,22 +253,24 @@ void Node::set_state(int8_t state, std::string reason) {
     else
       spdlog::warn("state {}{}{}", static_cast<int>(state), reason.empty() ? "" : ": ", reason);
   }
-  const bool changed = state != state_;
+  const int8_t before = published_state();
   state_ = state;
   state_reason_ = std::move(reason);
   // A change of health is news: publish it now rather than at the next heartbeat.
-  if (changed && !shut_down_) publish_status();
+  if (published_state() != before && !shut_down_) publish_status();
 }
 
 int64_t& Node::counter(const std::string& name) { return counters_[name]; }
 
 void Node::publish_status() {
   pex::daemon_status_t s;
-  s.utime = now_utime();
+  // Live, the heartbeat is the process's health in real time: wall-clock
+  // stamped even on a "sim" clock, which may not have started or may be stopped.
+  s.utime = options_.offline ? clock_now_us_ : wall_utime();
   s.name = options_.name;
   s.pid = static_cast<int32_t>(getpid());
-  s.state = state_;
-  s.uptime_s = options_.offline ? 0.0 : (monotonic_us() - start_mono_us_) * 1e-6;
+  s.state = published_state();
+  s.uptime_s = options_.offline ? 0.0 : (steady_us() - start_mono_us_) * 1e-6;
   s.msgs_in = msgs_in_;
   s.msgs_out = msgs_out_ + 1;  // counts this status message too
   s.msgs_rejected = msgs_rejected_;
@@ -201,8 +283,9 @@ void Node::publish_status() {
   s.ncounters = static_cast<int32_t>(s.counter_names.size());
   publish(channels::kDaemonStatus, s);
   if (!options_.offline && state_ != pex::daemon_status_t::STATE_STOPPING) {
-    const std::string text = "STATUS=state " + std::to_string(state_) + ", in " +
-                             std::to_string(msgs_in_) + ", out " + std::to_string(msgs_out_) +
+    const std::string& reason = clock_problem_.empty() ? state_reason_ : clock_problem_;
+    const std::string text = "STATUS=state " + std::to_string(s.state) + (reason.empty() ? "" : " (" + reason + ")") +
+                             ", in " + std::to_string(msgs_in_) + ", out " + std::to_string(msgs_out_) +
                              ", rejected " + std::to_string(msgs_rejected_);
     sd_notify(0, text.c_str());
   }
@@ -212,15 +295,17 @@ void Node::run() {
   if (state_ == pex::daemon_status_t::STATE_STARTING) set_state(pex::daemon_status_t::STATE_OK);
   uint64_t watchdog_usec = 0;
   if (sd_watchdog_enabled(0, &watchdog_usec) > 0 && watchdog_usec > 0)
-    every(std::chrono::microseconds(watchdog_usec / 2), [](int64_t) { sd_notify(0, "WATCHDOG=1"); });
+    every_on_system_clock(std::chrono::microseconds(watchdog_usec / 2), [](int64_t) { sd_notify(0, "WATCHDOG=1"); });
   sd_notify(0, "READY=1");
   publish_status();
 
   std::vector<pollfd> fds;
   while (!stop_) {
-    const int64_t now = monotonic_us();
+    const int64_t now = steady_us();
     int64_t next = now + 100'000;
-    for (const auto& t : timers_) next = std::min(next, t.next_us);
+    for (const auto& t : system_timers_) next = std::min(next, t.next_us);
+    if (!driven_clock_)
+      for (const auto& t : timers_) next = std::min(next, t.next_us);
     const int timeout_ms = static_cast<int>(std::max<int64_t>(0, (next - now + 999) / 1000));
 
     fds.clear();
@@ -258,7 +343,9 @@ void Node::run() {
         }
       }
     }
-    fire_due_timers(monotonic_us());
+    fire_due_timers(system_timers_, steady_us());
+    // On "sim", the node's timers fire from on_sim_clock() instead.
+    if (!driven_clock_) fire_due_timers(timers_, steady_us());
   }
   shutdown();
 }

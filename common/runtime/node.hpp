@@ -5,6 +5,14 @@
 // dispatch(); offline, a log reader calls dispatch() with the logged bytes and
 // the node's clock follows the log, so timers fire in log time.
 //
+// One clock seam (config key `clock`, read by run_daemon): with "system" the
+// node stamps with the system clock and runs timers and timeouts on the
+// monotonic clock; with "sim" it runs all of them on the simulator's SIM_CLOCK
+// (as ROS's use_sim_time), driven through the same path as replay, so a
+// simulation at 10x speed gives the daemons the same time line as one at 1x.
+// The DAEMON_STATUS heartbeat and the systemd watchdog always stay on the
+// monotonic clock, so health shows even when the simulator is paused or gone.
+//
 // Every subscription decodes defensively: a message that fails to decode, or
 // whose handler throws (bad content), is counted as rejected, logged at most
 // once a second per channel, and dropped; the daemon keeps its state and goes on.
@@ -50,12 +58,23 @@ class RateLimitedLog {
   std::map<std::string, Entry> entries_;
 };
 
+// Where a live node's time comes from (config key `clock`).
+enum class ClockSource {
+  kSystem,  // "system": stamps from the system clock, timers and timeouts on steady_clock
+  kSim,     // "sim": everything on the latest SIM_CLOCK message (the simulator's clock)
+};
+
 struct NodeOptions {
   std::string name;                 // daemon name, as in DAEMON_STATUS
   std::string lcm_url;              // "" = LCM's default (LCM_DEFAULT_URL)
   bool offline = false;             // replay: no LCM; clock follows dispatched events
   std::string offline_output_log;   // offline: publish() writes here ("" = discard)
   double heartbeat_period_s = 1.0;
+  // Live only: offline, the log's event times are the clock whatever this says
+  // (a log need not hold SIM_CLOCK, e.g. the Intel data set).
+  ClockSource clock = ClockSource::kSystem;
+  // "sim": no SIM_CLOCK for this long (monotonic) after it ran = ERROR.
+  double sim_clock_silence_s = 2.0;
 };
 
 class Node {
@@ -71,6 +90,7 @@ class Node {
 
   const std::string& name() const { return options_.name; }
   bool offline() const { return options_.offline; }
+  ClockSource clock_source() const { return options_.clock; }
 
   // Decodes each message on `channel` as Msg and calls `handler(msg)`.
   template <class Msg, class Handler>
@@ -103,7 +123,9 @@ class Node {
   // (offline: the log event's time, which becomes the node's clock).
   void dispatch(std::string_view channel, const void* data, int size, int64_t recv_utime);
 
-  // Calls `fn(now_utime)` every `period` (live: steady wall clock; offline: log time).
+  // Calls `fn(now_utime())` every `period` of the node's clock: live "system",
+  // steady_clock; live "sim", simulated time as SIM_CLOCK messages arrive (none
+  // before the first); offline, log time. Missed periods are skipped, not burst.
   void every(std::chrono::microseconds period, std::function<void(int64_t now_utime)> fn);
   // Calls `fn()` whenever `fd` is readable (live only). Returns an id for unwatch().
   int watch_fd(int fd, std::function<void()> fn);
@@ -111,8 +133,17 @@ class Node {
   // Runs once when the node stops (live: SIGTERM; offline: end of log).
   void on_shutdown(std::function<void()> fn) { shutdown_hooks_.push_back(std::move(fn)); }
 
-  // Time in microseconds since the epoch (offline: time of the last event).
+  // For stamps (`utime`): us since the epoch. Live "system": the system clock;
+  // live "sim": the latest good SIM_CLOCK utime; offline: the current event's
+  // time. 0 while clock_started() is false.
   int64_t now_utime() const;
+  // For timeouts and rates: us that never go back (differences only). Live
+  // "system": steady_clock, unaffected by the system clock being set; live "sim"
+  // and offline: the same value as now_utime().
+  int64_t monotonic_us() const;
+  // False until the clock has a time: live "sim" before the first good
+  // SIM_CLOCK, offline before the first event. Always true for "system".
+  bool clock_started() const { return clock_started_; }
 
   // Health bookkeeping, published in DAEMON_STATUS.
   void reject(std::string_view what_key, const std::string& text);  // bad input
@@ -121,6 +152,10 @@ class Node {
   int64_t& counter(const std::string& name);                        // daemon-specific counter
   int64_t msgs_rejected() const { return msgs_rejected_; }
   int64_t errors() const { return errors_; }
+  // The state DAEMON_STATUS carries: the daemon's own, made at least DEGRADED
+  // while a "sim" node waits for its first SIM_CLOCK and ERROR while the clock
+  // has been silent for sim_clock_silence_s of monotonic time.
+  int8_t published_state() const;
 
   // Live loop: polls LCM, fds and timers until request_stop() or a signal.
   void run();
@@ -138,15 +173,24 @@ class Node {
   void set_signal_fd(int fd) { signal_fd_ = fd; }
 
  private:
-  void fire_due_timers(int64_t now_us);
-  void publish_status();
-  int64_t monotonic_us() const;
-
   struct Timer {
     int64_t period_us;
-    int64_t next_us;
+    int64_t next_us;  // 0 on a driven clock: starts at the clock's next time
     std::function<void(int64_t)> fn;
   };
+
+  // Heartbeat and watchdog: live, on steady_clock whatever `clock` says, so
+  // health is published while the simulator is paused or gone; offline, in log time.
+  void every_on_system_clock(std::chrono::microseconds period, std::function<void(int64_t)> fn);
+  void add_timer(std::vector<Timer>& timers, std::chrono::microseconds period, std::function<void(int64_t)> fn);
+  void fire_due_timers(std::vector<Timer>& timers, int64_t now_us);
+  // The one path by which a driven clock (offline: log time; "sim": SIM_CLOCK)
+  // moves: sets the time and fires the node's due timers.
+  void advance_clock(int64_t now_us);
+  void on_sim_clock(const void* data, int size);
+  void check_sim_clock_silence();
+  void set_clock_problem(int8_t state, std::string why);
+  void publish_status();
   struct Watch {
     int id;
     int fd;
@@ -157,7 +201,8 @@ class Node {
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<lcm::LogFile> out_log_;
   std::map<std::string, std::vector<RawHandler>, std::less<>> handlers_;
-  std::vector<Timer> timers_;
+  std::vector<Timer> timers_;         // on the node's clock
+  std::vector<Timer> system_timers_;  // live: on steady_clock (heartbeat, watchdog)
   std::vector<Watch> watches_;
   std::vector<std::function<void()>> shutdown_hooks_;
   std::map<std::string, int64_t> counters_;
@@ -166,7 +211,13 @@ class Node {
   int signal_fd_ = -1;
   bool stop_ = false;
   bool shut_down_ = false;
-  int64_t offline_now_us_ = 0;
+  // True when the clock is driven by events (offline, or live "sim") rather than read.
+  bool driven_clock_ = false;
+  bool clock_started_ = false;
+  int64_t clock_now_us_ = 0;           // driven clock: its time (0 = none yet)
+  int64_t last_clock_steady_us_ = 0;   // "sim": steady time of the last good SIM_CLOCK
+  int8_t clock_problem_state_ = 0;     // "sim": state the clock imposes (with a reason) ...
+  std::string clock_problem_;          // ... "" = none
   int64_t start_mono_us_ = 0;
   int64_t msgs_in_ = 0, msgs_out_ = 0, msgs_rejected_ = 0, errors_ = 0;
   std::string last_error_;

@@ -4,20 +4,29 @@
 
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
+#include <sys/timerfd.h>
+#include <unistd.h>
+
+#include <cmath>
 #include <pex/daemon_status_t.hpp>
 #include <pex/pose_t.hpp>
+#include <pex/sim_clock_t.hpp>
 
 #include "runtime/channels.hpp"
 
 using pex::runtime::BadInput;
+using pex::runtime::ClockSource;
 using pex::runtime::Node;
 using pex::runtime::NodeOptions;
+using pex::daemon_status_t;
+namespace ch = pex::runtime::channels;
 
 namespace {
 
-std::vector<uint8_t> encode(const pex::pose_t& p) {
-  std::vector<uint8_t> buf(static_cast<size_t>(p.getEncodedSize()));
-  p.encode(buf.data(), 0, static_cast<int>(buf.size()));
+template <class Msg>
+std::vector<uint8_t> encode(const Msg& m) {
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
   return buf;
 }
 
@@ -153,4 +162,165 @@ TEST(Node, ReplayOfSeveralLogsMergesThemByEventTime) {
   const std::vector<std::pair<int64_t, double>> expected = {{10, 1}, {20, 2}, {30, 1}, {30, 2}, {40, 2}, {50, 1}, {60, 2}};
   EXPECT_EQ(seen, expected);
   std::filesystem::remove_all(dir);
+}
+
+// ------------------------------------------------------------- clock = "sim" --
+
+namespace {
+
+constexpr int64_t kSimEpoch = 1'700'000'000'000'000;  // the sim's start, us since the epoch
+
+pex::sim_clock_t sim_clock(int64_t sim_time_us) {
+  pex::sim_clock_t c{};
+  c.utime = kSimEpoch + sim_time_us;
+  c.sim_time_us = sim_time_us;
+  c.speed_factor = 10.0;
+  return c;
+}
+
+// A live node on the simulator's clock. memq:// is LCM's in-process queue: no
+// network, and what the node publishes comes back to its own subscriptions.
+NodeOptions sim_node_options(double heartbeat_period_s = 1.0) {
+  NodeOptions o{"t", "memq://", false, "", heartbeat_period_s};
+  o.clock = ClockSource::kSim;
+  return o;
+}
+
+void dispatch_clock(Node& node, const pex::sim_clock_t& c) {
+  const auto buf = encode(c);
+  // The receive time is wall time: the node must take its time from the content.
+  node.dispatch(ch::kSimClock, buf.data(), static_cast<int>(buf.size()), 42);
+}
+
+int64_t counter(const daemon_status_t& s, const std::string& name) {
+  for (int i = 0; i < s.ncounters; ++i)
+    if (s.counter_names[static_cast<size_t>(i)] == name) return s.counter_values[static_cast<size_t>(i)];
+  return -1;
+}
+
+}  // namespace
+
+TEST(NodeSimClock, TimersFireInSimulatedTimeOnlyOnceTheClockRuns) {
+  Node node(sim_node_options());
+  node.set_state(daemon_status_t::STATE_OK);
+  std::vector<int64_t> fired;
+  node.every(std::chrono::milliseconds(100), [&](int64_t now) { fired.push_back(now); });
+  node.subscribe<pex::pose_t>("P", [](const pex::pose_t&) {});
+
+  // Before the first SIM_CLOCK: no time, no timers, and the daemon says why.
+  const auto pose_bytes = encode(pose(0, 0));
+  for (int64_t wall = 1; wall <= 3; ++wall)
+    node.dispatch("P", pose_bytes.data(), static_cast<int>(pose_bytes.size()), wall * 1'000'000);
+  EXPECT_TRUE(fired.empty());
+  EXPECT_FALSE(node.clock_started());
+  EXPECT_EQ(node.now_utime(), 0);
+  EXPECT_EQ(node.published_state(), +daemon_status_t::STATE_DEGRADED);
+  EXPECT_EQ(node.counter("sim_clock_waiting"), 1);
+
+  // 1 s of simulated time in 10 ms steps: the 100 ms timer fires about ten
+  // times, each time with the simulated time it fired at.
+  for (int64_t t = 0; t <= 1'000'000; t += 10'000) dispatch_clock(node, sim_clock(t));
+  EXPECT_TRUE(node.clock_started());
+  EXPECT_EQ(node.now_utime(), kSimEpoch + 1'000'000);
+  EXPECT_EQ(node.monotonic_us(), kSimEpoch + 1'000'000);
+  EXPECT_EQ(node.published_state(), +daemon_status_t::STATE_OK);
+  EXPECT_EQ(node.counter("sim_clock_waiting"), 0);
+  ASSERT_EQ(fired.size(), 10u);
+  for (size_t i = 0; i < fired.size(); ++i) EXPECT_EQ(fired[i], kSimEpoch + 100'000 * static_cast<int64_t>(i + 1));
+
+  // Other traffic does not move the clock: simulated time stands still.
+  for (int64_t wall = 4; wall <= 10; ++wall)
+    node.dispatch("P", pose_bytes.data(), static_cast<int>(pose_bytes.size()), wall * 1'000'000);
+  EXPECT_EQ(fired.size(), 10u);
+  EXPECT_EQ(node.now_utime(), kSimEpoch + 1'000'000);
+}
+
+TEST(NodeSimClock, BackwardsOrGarbageClockIsRejectedAndTheLastGoodTimeKept) {
+  Node node(sim_node_options());
+  int fired = 0;
+  node.every(std::chrono::milliseconds(10), [&](int64_t) { ++fired; });
+  dispatch_clock(node, sim_clock(2'000'000));
+  ASSERT_EQ(node.now_utime(), kSimEpoch + 2'000'000);
+
+  dispatch_clock(node, sim_clock(1'990'000));  // backwards
+  auto nan_speed = sim_clock(2'100'000);
+  nan_speed.speed_factor = std::nan("");
+  dispatch_clock(node, nan_speed);
+  auto negative = sim_clock(2'100'000);
+  negative.sim_time_us = -5;
+  dispatch_clock(node, negative);
+  const std::vector<uint8_t> garbage(40, 0xAB);
+  node.dispatch(ch::kSimClock, garbage.data(), static_cast<int>(garbage.size()), 42);
+
+  EXPECT_EQ(node.now_utime(), kSimEpoch + 2'000'000);
+  EXPECT_EQ(node.counter("sim_clock_rejected"), 4);
+  EXPECT_EQ(node.msgs_rejected(), 4);
+  EXPECT_EQ(fired, 0);
+
+  // A good clock after the bad ones moves time on as before.
+  dispatch_clock(node, sim_clock(2'010'000));
+  EXPECT_EQ(node.now_utime(), kSimEpoch + 2'010'000);
+  EXPECT_EQ(fired, 1);
+}
+
+// The heartbeat runs on the monotonic clock through the live loop: statuses
+// flow before the simulator's clock exists (DEGRADED, waiting), turn OK when it
+// arrives, and turn ERROR once it has been silent for sim_clock_silence_s.
+TEST(NodeSimClock, HeartbeatIsPublishedWithoutTheClockAndReportsIt) {
+  NodeOptions options = sim_node_options(0.01);
+  options.sim_clock_silence_s = 0.05;
+  Node node(options);
+  int user_timer = 0;
+  node.every(std::chrono::milliseconds(1), [&](int64_t) { ++user_timer; });
+  std::vector<daemon_status_t> statuses;
+  int timer_before_clock = -1;
+  node.subscribe<daemon_status_t>(ch::kDaemonStatus, [&](const daemon_status_t& s) {
+    statuses.push_back(s);
+    if (statuses.size() == 3) {
+      timer_before_clock = user_timer;
+      // Through the bus, as the simulator sends it: 0 then 5 ms of simulated time.
+      node.publish(ch::kSimClock, sim_clock(0));
+      node.publish(ch::kSimClock, sim_clock(5'000));
+    }
+    // Enough heartbeats have passed, however slow the machine, or the clock went silent.
+    if (statuses.size() >= 1000 || s.state == daemon_status_t::STATE_ERROR) node.request_stop();
+  });
+  // Only a guard against hanging if no heartbeat ever comes, not a time limit under test.
+  const int guard = timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC);
+  itimerspec in_60s{};
+  in_60s.it_value.tv_sec = 60;
+  timerfd_settime(guard, 0, &in_60s, nullptr);
+  node.watch_fd(guard, [&] { node.request_stop(); });
+  node.run();
+  close(guard);
+
+  ASSERT_GE(statuses.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(statuses[i].state, +daemon_status_t::STATE_DEGRADED) << i;
+    EXPECT_EQ(counter(statuses[i], "sim_clock_waiting"), 1) << i;
+  }
+  EXPECT_EQ(timer_before_clock, 0);
+  EXPECT_EQ(user_timer, 1);  // 5 ms of simulated time, missed periods skipped
+  const auto ok = std::find_if(statuses.begin() + 3, statuses.end(),
+                               [](const daemon_status_t& s) { return s.state == daemon_status_t::STATE_OK; });
+  ASSERT_NE(ok, statuses.end()) << "never OK once SIM_CLOCK ran";
+  EXPECT_EQ(counter(*ok, "sim_clock_waiting"), 0);
+  EXPECT_EQ(statuses.back().state, +daemon_status_t::STATE_ERROR) << "a silent clock went unnoticed";
+  EXPECT_EQ(counter(statuses.back(), "sim_clock_waiting"), 1);
+  EXPECT_EQ(node.now_utime(), kSimEpoch + 5'000);
+}
+
+TEST(NodeSystemClock, StampsAreWallTimeAndTimeoutsMonotonic) {
+  Node node(NodeOptions{"t", "memq://", false, "", 1.0});
+  EXPECT_TRUE(node.clock_started());
+  const auto wall = std::chrono::duration_cast<std::chrono::microseconds>(
+                        std::chrono::system_clock::now().time_since_epoch()).count();
+  const auto steady = std::chrono::duration_cast<std::chrono::microseconds>(
+                          std::chrono::steady_clock::now().time_since_epoch()).count();
+  // Each within a minute of its own clock (the two clocks are decades apart).
+  EXPECT_NEAR(static_cast<double>(node.now_utime()), static_cast<double>(wall), 60e6);
+  EXPECT_NEAR(static_cast<double>(node.monotonic_us()), static_cast<double>(steady), 60e6);
+  // SIM_CLOCK means nothing to a node on the system clock.
+  dispatch_clock(node, sim_clock(1'000'000));
+  EXPECT_NE(node.now_utime(), kSimEpoch + 1'000'000);
 }
