@@ -1,7 +1,8 @@
 // Drive a known trajectory through worlds/two_rooms.wkt with a noise-free
 // LMS111 (pex_sim's ray caster) and compare the polygon map with the world:
 // IoU of the free-space map with the world's free space >= 0.97, and >= 99 %
-// of the obstacle-typed edge length within a few centimetres of a real wall.
+// of the obstacle-typed edge length within a few centimetres of a real wall
+// (evaluation::obstacle_on_wall, exact lengths).
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -9,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "evaluation/obstacle_on_wall.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "sim/sim.hpp"
@@ -44,31 +46,6 @@ std::vector<Pose2> trajectory(const std::vector<std::pair<double, double>>& wayp
       poses.push_back({x0 + s / length * (x1 - x0), y0 + s / length * (y1 - y0), heading});
   }
   return poses;
-}
-
-double distance_to_walls(const Point& p, const sim::World& world) {
-  double best = std::numeric_limits<double>::infinity();
-  for (const auto& w : world.walls)
-    best = std::min(best, bg::distance(p, Segment(Point(w.x0, w.y0), Point(w.x1, w.y1))));
-  return best;
-}
-
-// Share of the obstacle-typed length whose points (sampled every 1 cm) lie
-// within `tolerance_m` of a wall.
-double obstacle_share_on_walls(const TypedMultiPolygon& map, const sim::World& world, double tolerance_m) {
-  double total = 0.0, on_wall = 0.0;
-  for_each_edge(map, [&](const Point& a, const Point& b, EdgeType t) {
-    if (t != EdgeType::kObstacle) return;
-    const double length = bg::distance(a, b);
-    const int samples = std::max(1, static_cast<int>(std::ceil(length / 0.01)));
-    for (int i = 0; i < samples; ++i) {
-      const double s = (i + 0.5) / samples;
-      const Point p(a.x() + s * (b.x() - a.x()), a.y() + s * (b.y() - a.y()));
-      total += length / samples;
-      if (distance_to_walls(p, world) <= tolerance_m) on_wall += length / samples;
-    }
-  });
-  return total > 0 ? on_wall / total : 0.0;
 }
 
 TEST(MappingAccuracy, TwoRoomsNoiseFree) {
@@ -126,7 +103,7 @@ TEST(MappingAccuracy, TwoRoomsNoiseFree) {
   bg::intersection(mapped, world_free, inter);
   bg::union_(mapped, world_free, uni);
   const double iou = bg::area(inter) / bg::area(uni);
-  const double on_walls = obstacle_share_on_walls(free_space.polygons, world, 0.03);
+  const double on_walls = evaluation::obstacle_on_wall(free_space.polygons, world, 0.03);
   RecordProperty("iou", std::to_string(iou));
   RecordProperty("obstacle_share_on_walls", std::to_string(on_walls));
   std::printf("free map: IoU %.4f, obstacle length on walls %.4f, %zu vertices\n", iou, on_walls,
@@ -141,7 +118,7 @@ TEST(MappingAccuracy, TwoRoomsNoiseFree) {
   const auto planning = map.planning_map();
   ASSERT_TRUE(planning.ok) << planning.error;
   const double planning_on_walls =
-      obstacle_share_on_walls(planning.polygons, world, map.options().obstacle_outer_m + 0.03);
+      evaluation::obstacle_on_wall(planning.polygons, world, map.options().obstacle_outer_m + 0.03);
   std::printf("planning map: obstacle length on walls %.4f, %zu vertices, %.2f m2\n", planning_on_walls,
               vertex_count(planning.polygons), area(planning.polygons));
   EXPECT_GE(planning_on_walls, 0.99);
