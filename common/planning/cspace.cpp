@@ -75,6 +75,7 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
   polygons_.clear();
   edges_.clear();
   reflex_nodes_.clear();
+  reflex_edges_.clear();
   tree_.reset();
   BuildResult result;
   if (!(options.robot_radius_m >= 0.0) || !(options.clearance_margin_m >= 0.0) ||
@@ -144,7 +145,10 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
     const Edge& out = edges_[in.next];
     const double turn = orient(in.a, in.b, out.b) / (distance(in.a, in.b) * distance(out.a, out.b));
     if (!(turn < -1e-9)) continue;
-    if (auto node = inward(in.b, i, /*at_vertex_b=*/true)) reflex_nodes_.push_back(*node);
+    if (auto node = inward(in.b, i, /*at_vertex_b=*/true)) {
+      reflex_nodes_.push_back(*node);
+      reflex_edges_.push_back(i);
+    }
   }
   result.ok = true;
   return result;

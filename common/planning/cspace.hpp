@@ -81,6 +81,11 @@ class ConfigurationSpace {
   // interior_offset_m inward along its bisector: the nodes through which
   // shortest paths bend.
   const std::vector<Point>& reflex_nodes() const { return reflex_nodes_; }
+  // Parallel to reflex_nodes(): the boundary edge ending at the node's vertex
+  // (edges()[e] comes in, edges()[edges()[e].next] goes out). The node is the
+  // vertex of the boundary moved interior_offset_m inward with both edges
+  // parallel, so these edges give the tangent directions at the node.
+  const std::vector<std::uint32_t>& reflex_edges() const { return reflex_edges_; }
 
   // Segment tests done so far (for statistics).
   std::int64_t segment_tests() const { return segment_tests_; }
@@ -96,6 +101,7 @@ class ConfigurationSpace {
   TypedMultiPolygon polygons_;
   std::vector<Edge> edges_;
   std::vector<Point> reflex_nodes_;
+  std::vector<std::uint32_t> reflex_edges_;
   std::unique_ptr<Tree> tree_;
   mutable std::int64_t segment_tests_ = 0;
 };

@@ -1,0 +1,62 @@
+#pragma once
+// All the path lengths a tour over goal candidates needs: from the robot to
+// every candidate and between every pair of candidates, in the same exact
+// shortest-path metric as shortest_paths (visibility_graph.hpp): polylines in
+// the C-space that bend only at its reflex vertices (moved interior_offset_m
+// inward).
+//
+// How (and why it is fast): the graph over the reflex vertices is built once,
+// with only the edges a shortest path can use. A shortest path bends around a
+// reflex vertex only along a line tangent to the boundary there; an edge
+// whose line runs on behind its reflex end into the obstacle would bend with
+// the obstacle outside the bend, and is dropped before any segment test (with
+// a slack for the nodes' offset from the vertices, so that the lengths stay
+// those of shortest_paths' graph). Each candidate and the start are joined to
+// the reflex vertices they see the same way; one Dijkstra per candidate over
+// this sparse graph gives the lengths that bend at least once, and the
+// straight segment is tested only where it would be shorter than that.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "planning/cspace.hpp"
+
+namespace pex::planning {
+
+struct PathMatrixOptions {
+  // Drop graph edges that cannot be on a shortest path before testing them
+  // (see above). false: every visible pair is an edge (tests compare).
+  bool tangent_pruning = true;
+};
+
+struct PathMatrix {
+  // Per target i: length of the shortest path from the start (+inf if not
+  // reachable), and the path itself (start first, target last; empty if not
+  // reachable).
+  std::vector<double> from_start_m;
+  std::vector<std::vector<Point>> path_from_start;
+  // n x n, row-major: between_m[i * n + j] is the length of the shortest path
+  // between targets i and j. Exactly symmetric, 0 on the diagonal, +inf when
+  // the targets lie in different connected pieces of the C-space.
+  std::vector<double> between_m;
+
+  // Statistics.
+  std::int64_t reflex_nodes = 0;
+  std::int64_t graph_edges = 0;    // undirected edges of the sparse graph
+  std::int64_t segment_tests = 0;  // visibility tests made
+
+  std::size_t size() const { return from_start_m.size(); }
+  double between(std::size_t i, std::size_t j) const { return between_m[i * size() + j]; }
+};
+
+// Contract as shortest_paths: `start` and every target should lie in the
+// C-space's interior (ConfigurationSpace::nearest_interior_point); targets
+// are path ends, never intermediate nodes. from_start_m agrees with
+// shortest_paths(cspace, start, targets).length_m (up to rounding of the sums).
+// Pure and deterministic: ties go to the lower node index.
+PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
+                                const std::vector<Point>& targets, const PathMatrixOptions& options = {});
+
+}  // namespace pex::planning

@@ -1,0 +1,239 @@
+#include "planning/path_matrix.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "planning/test_maps.hpp"
+#include "planning/visibility_graph.hpp"
+
+namespace pex::planning {
+namespace {
+
+using testing::rectangle;
+using testing::rectangle_hole;
+using testing::typed_polygon;
+
+// Uniform in [lo, hi) from the raw 64-bit output (the same on every standard
+// library, unlike std::uniform_real_distribution).
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
+
+// A 20 x 20 m room with a wall sticking in from the top (reflex vertices on
+// the outer ring too) and `holes` random obstacles apart from each other:
+// rectangles, regular polygons and L shapes.
+mapping::TypedMultiPolygon random_map(std::mt19937_64& rng, int holes) {
+  testing::RingSpec outer{{Point(0, 0), Point(20, 0), Point(20, 20), Point(12, 20), Point(12, 9), Point(11, 9),
+                           Point(11, 20), Point(0, 20)},
+                          {}};
+  std::vector<mapping::Box> boxes{mapping::Box(Point(10.2, 8.2), Point(12.8, 21))};
+  std::vector<testing::RingSpec> rings;
+  for (int attempt = 0; attempt < 500 && static_cast<int>(rings.size()) < holes; ++attempt) {
+    const double cx = uniform(rng, 2, 18), cy = uniform(rng, 2, 18), s = uniform(rng, 0.4, 1.8);
+    const mapping::Box box(Point(cx - s - 0.8, cy - s - 0.8), Point(cx + s + 0.8, cy + s + 0.8));
+    bool apart = box.min_corner().x() > 0 && box.min_corner().y() > 0 && box.max_corner().x() < 20 &&
+                 box.max_corner().y() < 20;
+    for (const auto& b : boxes) apart = apart && !boost::geometry::intersects(box, b);
+    if (!apart) continue;
+    boxes.push_back(box);
+    const int kind = static_cast<int>(rng() % 3);
+    if (kind == 0) {
+      rings.push_back(rectangle_hole(cx - s, cy - s * 0.6, cx + s, cy + s * 0.6));
+    } else if (kind == 1) {
+      // Clockwise regular polygon, 5 to 9 corners, turned at random.
+      const int k = 5 + static_cast<int>(rng() % 5);
+      const double phase = uniform(rng, 0, 2 * M_PI);
+      testing::RingSpec ring;
+      for (int i = 0; i < k; ++i) {
+        const double a = phase - 2 * M_PI * i / k;
+        ring.points.emplace_back(cx + s * std::cos(a), cy + s * std::sin(a));
+      }
+      rings.push_back(ring);
+    } else {
+      // Clockwise L: a reflex corner on the obstacle, i.e. a convex one of the free space.
+      rings.push_back(testing::RingSpec{{Point(cx - s, cy - s), Point(cx - s, cy + s), Point(cx, cy + s),
+                                         Point(cx, cy), Point(cx + s, cy), Point(cx + s, cy - s)},
+                                        {}});
+    }
+  }
+  return {typed_polygon(outer, rings)};
+}
+
+// Random interior points of the C-space.
+std::vector<Point> random_points(std::mt19937_64& rng, const ConfigurationSpace& cs, std::size_t count) {
+  std::vector<Point> points;
+  while (points.size() < count) {
+    const Point p(uniform(rng, 0, 20), uniform(rng, 0, 20));
+    if (cs.covers(p) && cs.distance_to_boundary(p) > 0.01) points.push_back(p);
+  }
+  return points;
+}
+
+void expect_consistent(const PathMatrix& m, const ConfigurationSpace& cs, const Point& start) {
+  const std::size_t n = m.size();
+  ASSERT_EQ(m.between_m.size(), n * n);
+  ASSERT_EQ(m.path_from_start.size(), n);
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(m.between(i, i), 0.0);
+    for (std::size_t j = 0; j < n; ++j) {
+      EXPECT_EQ(m.between(i, j), m.between(j, i));  // exactly
+      // Triangle inequality through every third target and through the start.
+      for (std::size_t k = 0; k < n; ++k) {
+        if (std::isfinite(m.between(i, k)) && std::isfinite(m.between(k, j))) {
+          EXPECT_LE(m.between(i, j), m.between(i, k) + m.between(k, j) + 1e-9) << i << " " << k << " " << j;
+        }
+      }
+      if (std::isfinite(m.from_start_m[i]) && std::isfinite(m.between(i, j))) {
+        EXPECT_LE(m.from_start_m[j], m.from_start_m[i] + m.between(i, j) + 1e-9);
+      }
+      // Both reachable from the start: reachable from each other; one only: not.
+      if (std::isfinite(m.from_start_m[i]) && std::isfinite(m.from_start_m[j])) {
+        EXPECT_TRUE(std::isfinite(m.between(i, j)));
+      }
+      if (std::isfinite(m.from_start_m[i]) != std::isfinite(m.from_start_m[j])) {
+        EXPECT_FALSE(std::isfinite(m.between(i, j)));
+      }
+    }
+    if (!std::isfinite(m.from_start_m[i])) {
+      EXPECT_TRUE(m.path_from_start[i].empty());
+      continue;
+    }
+    const auto& path = m.path_from_start[i];
+    ASSERT_GE(path.size(), 2u);
+    EXPECT_EQ(path.front().x(), start.x());
+    EXPECT_EQ(path.front().y(), start.y());
+    EXPECT_NEAR(polyline_length(path), m.from_start_m[i], 1e-9);
+    for (std::size_t k = 1; k < path.size(); ++k) EXPECT_TRUE(cs.segment_free(path[k - 1], path[k]));
+  }
+}
+
+TEST(PathMatrix, EmptyRoomIsStraightLines) {
+  ConfigurationSpace cs;
+  ASSERT_TRUE(cs.build({typed_polygon(rectangle(0, 0, 10, 10))}, testing::disk(0.3)).ok);
+  const std::vector<Point> targets{Point(8, 5), Point(2, 9), Point(5, 5)};
+  const auto m = shortest_path_matrix(cs, Point(1, 1), targets);
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_EQ(m.reflex_nodes, 0);
+  EXPECT_NEAR(m.from_start_m[0], std::hypot(7.0, 4.0), 1e-12);
+  EXPECT_NEAR(m.between(0, 1), std::hypot(6.0, 4.0), 1e-12);
+  EXPECT_NEAR(m.between(2, 1), std::hypot(3.0, 4.0), 1e-12);
+  EXPECT_EQ(m.path_from_start[1].size(), 2u);
+  expect_consistent(m, cs, Point(1, 1));
+}
+
+TEST(PathMatrix, AroundABlockBetweenTargetsToo) {
+  // Block [4, 6] x [2, 8] in a 10 x 10 room, point robot: from (2, 5) to
+  // (8, 5) over a corner, 2 * |(2, 3)| + 2 (+ millimetres for the node offset).
+  ConfigurationSpace cs;
+  ASSERT_TRUE(cs.build({typed_polygon(rectangle(0, 0, 10, 10), {rectangle_hole(4, 2, 6, 8)})}, testing::disk(0.0)).ok);
+  const auto m = shortest_path_matrix(cs, Point(2, 5), {Point(8, 5), Point(2, 5.5)});
+  const double around = 2.0 * std::hypot(2.0, 3.0) + 2.0;
+  EXPECT_NEAR(m.from_start_m[0], around, 5e-3);
+  EXPECT_EQ(m.path_from_start[0].size(), 4u);
+  EXPECT_NEAR(m.from_start_m[1], 0.5, 1e-12);
+  // From (2, 5.5) the top corners are nearer: |(2, 3)| + 2 + |(2, 2.5)|.
+  EXPECT_NEAR(m.between(0, 1), std::hypot(2.0, 3.0) + 2.0 + std::hypot(2.0, 2.5), 5e-3);
+  expect_consistent(m, cs, Point(2, 5));
+}
+
+TEST(PathMatrix, OtherPieceIsInfinite) {
+  // Two rooms joined by a 0.4 m gap: a 0.5 m robot cannot pass.
+  mapping::TypedMultiPolygon map{typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(5, 0), Point(5, 2.3), Point(6, 2.3), Point(6, 0), Point(11, 0), Point(11, 5), Point(6, 5),
+       Point(6, 2.7), Point(5, 2.7), Point(5, 5), Point(0, 5)},
+      {}})};
+  ConfigurationSpace cs;
+  ASSERT_TRUE(cs.build(map, testing::disk(0.25)).ok);
+  const auto m = shortest_path_matrix(cs, Point(1, 1), {Point(4, 4), Point(9, 4), Point(10, 1)});
+  EXPECT_TRUE(std::isfinite(m.from_start_m[0]));
+  EXPECT_FALSE(std::isfinite(m.from_start_m[1]));
+  EXPECT_FALSE(std::isfinite(m.between(0, 1)));
+  EXPECT_FALSE(std::isfinite(m.between(2, 0)));
+  EXPECT_NEAR(m.between(1, 2), std::hypot(1.0, 3.0), 1e-12);
+  expect_consistent(m, cs, Point(1, 1));
+
+  const auto none = shortest_path_matrix(cs, Point(1, 1), {});
+  EXPECT_EQ(none.size(), 0u);
+  EXPECT_TRUE(none.between_m.empty());
+}
+
+// The matrix against shortest_paths (the full lazy visibility graph, no
+// pruning) on random maps: from the start and between every pair of targets.
+TEST(PathMatrix, AgreesWithShortestPathsOnRandomMaps) {
+  std::mt19937_64 rng(20240611);
+  std::int64_t pruned_edges = 0, all_edges = 0, compared = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const auto map = random_map(rng, 4 + trial);
+    CSpaceOptions o;
+    o.robot_radius_m = 0.1 + 0.05 * (trial % 4);
+    o.points_per_circle = trial % 2 == 0 ? 16 : 8;
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, o).ok);
+    ASSERT_GT(cs.reflex_nodes().size(), 10u);
+    const auto points = random_points(rng, cs, 13);
+    const Point start = points[0];
+    const std::vector<Point> targets(points.begin() + 1, points.end());
+    const auto m = shortest_path_matrix(cs, start, targets);
+    expect_consistent(m, cs, start);
+
+    const auto sp = shortest_paths(cs, start, targets);
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      ASSERT_EQ(std::isfinite(sp.length_m[i]), std::isfinite(m.from_start_m[i]));
+      if (std::isfinite(sp.length_m[i])) {
+        EXPECT_NEAR(m.from_start_m[i], sp.length_m[i], 1e-6) << trial << " " << i;
+      }
+      const std::vector<Point> rest(targets.begin() + static_cast<std::ptrdiff_t>(i) + 1, targets.end());
+      const auto from_i = shortest_paths(cs, targets[i], rest);
+      for (std::size_t j = i + 1; j < targets.size(); ++j) {
+        const double expected = from_i.length_m[j - i - 1];
+        ASSERT_EQ(std::isfinite(expected), std::isfinite(m.between(i, j)));
+        if (std::isfinite(expected)) {
+          EXPECT_NEAR(m.between(i, j), expected, 1e-6) << trial << " " << i << " " << j;
+        }
+        ++compared;
+      }
+    }
+
+    // Without the pruning: the same lengths from many more edges.
+    const auto full = shortest_path_matrix(cs, start, targets, PathMatrixOptions{.tangent_pruning = false});
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      EXPECT_EQ(std::isfinite(m.from_start_m[i]), std::isfinite(full.from_start_m[i]));
+      if (std::isfinite(full.from_start_m[i])) {
+        EXPECT_NEAR(m.from_start_m[i], full.from_start_m[i], 1e-6);
+      }
+      for (std::size_t j = 0; j < targets.size(); ++j) {
+        if (std::isfinite(full.between(i, j))) {
+          EXPECT_NEAR(m.between(i, j), full.between(i, j), 1e-6);
+        }
+      }
+    }
+    pruned_edges += m.graph_edges;
+    all_edges += full.graph_edges;
+  }
+  EXPECT_EQ(compared, 12 * 66);
+  // The tangent rule keeps well under half of the visible pairs.
+  EXPECT_LT(pruned_edges * 3, all_edges) << pruned_edges << " of " << all_edges;
+}
+
+TEST(PathMatrix, Deterministic) {
+  std::mt19937_64 rng(7);
+  const auto map = random_map(rng, 8);
+  ConfigurationSpace cs;
+  ASSERT_TRUE(cs.build(map, CSpaceOptions{}).ok);
+  const auto points = random_points(rng, cs, 20);
+  const std::vector<Point> targets(points.begin() + 1, points.end());
+  const auto a = shortest_path_matrix(cs, points[0], targets);
+  const auto b = shortest_path_matrix(cs, points[0], targets);
+  EXPECT_EQ(a.between_m, b.between_m);
+  EXPECT_EQ(a.from_start_m, b.from_start_m);
+  for (std::size_t i = 0; i < targets.size(); ++i) {
+    ASSERT_EQ(a.path_from_start[i].size(), b.path_from_start[i].size());
+    for (std::size_t k = 0; k < a.path_from_start[i].size(); ++k)
+      EXPECT_TRUE(boost::geometry::equals(a.path_from_start[i][k], b.path_from_start[i][k]));
+  }
+}
+
+}  // namespace
+}  // namespace pex::planning
