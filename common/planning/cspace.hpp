@@ -82,9 +82,10 @@ class ConfigurationSpace {
   // shortest paths bend.
   const std::vector<Point>& reflex_nodes() const { return reflex_nodes_; }
   // Parallel to reflex_nodes(): the boundary edge ending at the node's vertex
-  // (edges()[e] comes in, edges()[edges()[e].next] goes out). The node is the
-  // vertex of the boundary moved interior_offset_m inward with both edges
-  // parallel, so these edges give the tangent directions at the node.
+  // (edges()[e] comes in, edges()[edges()[e].next] goes out). The node is
+  // where both edges' parallels at interior_offset_m meet (the step is capped
+  // at sharp spikes), so these edges also give the boundary's directions at
+  // the node.
   const std::vector<std::uint32_t>& reflex_edges() const { return reflex_edges_; }
 
   // Segment tests done so far (for statistics).
