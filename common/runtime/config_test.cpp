@@ -3,6 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <set>
+#include <toml++/toml.h>
+
 using pex::runtime::ConfigError;
 using pex::runtime::ConfigReader;
 using testing::AllOf;
@@ -108,4 +112,47 @@ TEST(ConfigReader, PathsAreRelativeToTheConfigFile) {
   EXPECT_THAT(error_of([&] { c.get_path("world_file", ""); }),
               AllOf(HasSubstr("/opt/pex/config/sim.toml"), HasSubstr("'world_file'"),
                     HasSubstr("cannot read '/opt/pex/config/../worlds/x.wkt'")));
+}
+
+// The shipped files and the `clock` key. config/ is the simulator deployment;
+// on the robot, config/robot/ files are copied over it (README), whole files
+// replacing whole files. So a daemon whose sim file runs on "sim" needs a robot
+// file saying "system", and that file must have every key the sim file has
+// (else the robot silently runs on a default the sim file overrides).
+namespace {
+
+void leaf_keys(const toml::table& t, const std::string& prefix, std::set<std::string>& out) {
+  for (const auto& [k, v] : t) {
+    const std::string path = prefix + std::string(k.str());
+    if (const auto* sub = v.as_table())
+      leaf_keys(*sub, path + ".", out);
+    else
+      out.insert(path);
+  }
+}
+
+}  // namespace
+
+TEST(ShippedConfig, EveryDaemonOnTheSimClockHasACompleteRobotFileOnTheSystemClock) {
+  const std::filesystem::path config_dir = std::filesystem::path(PEX_SOURCE_DIR) / "config";
+  int on_sim = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(config_dir)) {
+    if (entry.path().extension() != ".toml") continue;
+    const toml::table sim = toml::parse_file(entry.path().string());
+    const std::string clock = sim["clock"].value_or(std::string("system"));
+    if (clock != "sim") continue;
+    ++on_sim;
+    const auto robot_path = config_dir / "robot" / entry.path().filename();
+    ASSERT_TRUE(std::filesystem::exists(robot_path)) << entry.path() << " says clock = \"sim\": the robot needs " << robot_path;
+    const toml::table robot = toml::parse_file(robot_path.string());
+    EXPECT_EQ(robot["clock"].value_or(std::string("system")), "system") << robot_path;
+    EXPECT_TRUE(robot.contains("clock")) << robot_path << ": say clock = \"system\" explicitly";
+    std::set<std::string> sim_keys, robot_keys;
+    leaf_keys(sim, "", sim_keys);
+    leaf_keys(robot, "", robot_keys);
+    for (const auto& k : sim_keys) EXPECT_TRUE(robot_keys.count(k)) << robot_path << " lacks " << k;
+  }
+  EXPECT_GE(on_sim, 2);  // lidar_reader and base_driver at least
+  // The simulator is the clock: it never runs on its own.
+  EXPECT_NE(toml::parse_file((config_dir / "sim.toml").string())["clock"].value_or(std::string()), "sim");
 }

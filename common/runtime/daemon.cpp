@@ -25,6 +25,16 @@ int make_signal_fd() {
 
 const CommonArgs& common_args() { return g_args; }
 
+RuntimeOptions load_runtime_options(ConfigReader& config, bool is_clock_source) {
+  RuntimeOptions o;
+  o.heartbeat_period_ms = config.get<int>("heartbeat_period_ms", o.heartbeat_period_ms, in_range(10, 60'000));
+  const std::string clock = config.get<std::string>("clock", "system", one_of({"system", "sim"}));
+  if (clock == "sim" && is_clock_source)
+    config.fail("clock", "this daemon publishes the simulated clock and runs on the system's: must be \"system\", got \"sim\"");
+  o.clock = clock == "sim" ? ClockSource::kSim : ClockSource::kSystem;
+  return o;
+}
+
 int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup& setup) {
   CLI::App app{info.description, "pex-" + info.name};
   app.add_option("--config", g_args.config_path, "TOML configuration file (default: built-in defaults)")
@@ -62,22 +72,17 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   try {
     ConfigReader config =
         g_args.config_path.empty() ? ConfigReader() : ConfigReader::from_file(g_args.config_path);
-    // The one key every daemon has: how often it publishes DAEMON_STATUS.
-    const int heartbeat_period_ms =
-        config.get<int>("heartbeat_period_ms", 1000, in_range(10, 60'000));
-    // And where its time comes from: "system" (the robot) or "sim" (SIM_CLOCK).
-    const std::string clock = config.get<std::string>("clock", "system", one_of({"system", "sim"}));
-    if (clock == "sim" && info.is_clock_source)
-      config.fail("clock", "pex-" + info.name + " publishes the simulated clock and runs on the system's: must be \"system\", got \"sim\"");
-    if (clock == "sim" && offline) spdlog::info("clock = \"sim\" is ignored in replay: the log's time is the clock");
-    Node node(NodeOptions{info.name, g_args.lcm_url, offline, g_args.replay_out, heartbeat_period_ms * 1e-3,
-                          clock == "sim" ? ClockSource::kSim : ClockSource::kSystem});
+    const RuntimeOptions every_daemon = load_runtime_options(config, info.is_clock_source);
+    const bool sim_clock = every_daemon.clock == ClockSource::kSim;
+    if (sim_clock && offline) spdlog::info("clock = \"sim\" is ignored in replay: the log's time is the clock");
+    Node node(NodeOptions{info.name, g_args.lcm_url, offline, g_args.replay_out, every_daemon.heartbeat_period_ms * 1e-3,
+                          every_daemon.clock});
     node.set_signal_fd(signal_fd);
     setup(node, config);
     config.finish();
     spdlog::info("started ({}; config {})",
                  offline ? "replay of " + std::to_string(g_args.replay_logs.size()) + " log(s)"
-                         : "live, " + clock + " clock",
+                         : std::string("live, ") + (sim_clock ? "sim" : "system") + " clock",
                  config.origin());
     if (offline) {
       const int64_t events = node.replay_logs(g_args.replay_logs);

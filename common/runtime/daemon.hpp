@@ -55,6 +55,15 @@ using DaemonSetup = std::function<void(Node& node, ConfigReader& config)>;
 
 int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup& setup);
 
+// The keys every daemon's config has, read by run_daemon before setup. A test
+// of a shipped config reads them through this, as the daemon does, before finish().
+struct RuntimeOptions {
+  int heartbeat_period_ms = 1000;            // DAEMON_STATUS period
+  ClockSource clock = ClockSource::kSystem;  // `clock`: "system" | "sim"
+};
+// Throws ConfigError; with `is_clock_source` (pex-sim), clock = "sim" is one.
+RuntimeOptions load_runtime_options(ConfigReader& config, bool is_clock_source = false);
+
 // The options every daemon gets, after parsing (for daemons that need them in setup).
 struct CommonArgs {
   std::string config_path;

@@ -218,6 +218,20 @@ double RayCaster::cast(double x, double y, double angle_rad, double max_range_m)
   return best;
 }
 
+double RayCaster::clearance(double x, double y, double max_m) const {
+  const bg::model::box<Point> near(Point(x - max_m, y - max_m), Point(x + max_m, y + max_m));
+  double best = max_m;
+  for (auto it = index_->tree.qbegin(bgi::intersects(near)); it != index_->tree.qend(); ++it) {
+    const Wall& w = index_->walls[it->second];
+    // Distance to the segment: to its closest point, the projection clamped to it.
+    const double ex = w.x1 - w.x0, ey = w.y1 - w.y0;
+    const double len2 = ex * ex + ey * ey;
+    const double u = len2 > 0.0 ? std::clamp(((x - w.x0) * ex + (y - w.y0) * ey) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, std::hypot(w.x0 + u * ex - x, w.y0 + u * ey - y));
+  }
+  return best;
+}
+
 // --------------------------------------------------------------------- laser --
 
 int LaserOptions::beam_count() const { return static_cast<int>(std::lround(fov_deg / step_deg)) + 1; }
@@ -286,15 +300,27 @@ void DiffDrivePlant::step(double dt_s, double left_radps, double right_radps, co
   const double mid = pose_.theta_rad + 0.5 * dtheta;
   Pose2 next{pose_.x_m + ds * std::cos(mid), pose_.y_m + ds * std::sin(mid),
              kinematics::normalize_angle(pose_.theta_rad + dtheta)};
+  bool refused = false;
   if (caster && std::abs(ds) > 0.0) {
     // Refuse translation into a wall (rotation in place is always allowed).
     const double heading = ds >= 0.0 ? mid : mid + std::numbers::pi;
     const double free = caster->cast(pose_.x_m, pose_.y_m, heading, std::abs(ds) + options_.robot_radius_m + 1.0);
     if (free < std::abs(ds) + options_.robot_radius_m) {
-      ++collisions_;
+      ++refused_steps_;
+      refused = true;
       next.x_m = pose_.x_m;
       next.y_m = pose_.y_m;
     }
+  }
+  if (caster) {
+    // The refusal looks along the heading only: a disk sliding sideways or
+    // turning near a corner can still touch, which the clearance sees.
+    const double reach = options_.robot_radius_m + kContactClearanceM;
+    const double clearance = caster->clearance(next.x_m, next.y_m, reach + 1.0);
+    const bool touching = refused || clearance <= options_.robot_radius_m;
+    if (touching && !in_contact_) ++contacts_;
+    if (touching) in_contact_ = true;
+    else if (clearance > reach) in_contact_ = false;
   }
   v_ = std::hypot(next.x_m - pose_.x_m, next.y_m - pose_.y_m) / dt_s * (ds < 0.0 ? -1.0 : 1.0);
   omega_ = dtheta / dt_s;

@@ -50,6 +50,8 @@ class RayCaster {
   // Distance (m) from (x, y) along `angle_rad` to the nearest wall, or
   // `max_range_m` when no wall is closer.
   double cast(double x, double y, double angle_rad, double max_range_m) const;
+  // Distance (m) from (x, y) to the nearest wall, or `max_m` when none is closer.
+  double clearance(double x, double y, double max_m) const;
   std::size_t wall_count() const;
 
  private:
@@ -108,20 +110,34 @@ class DiffDrivePlant {
 
   // Advances by dt_s with the wheels turning at the given rates (rad/s).
   // With a caster, motion that would put the robot's centre within
-  // robot_radius_m of a wall is refused (the robot stops at the wall).
+  // robot_radius_m of a wall is refused (the robot stops at the wall), and
+  // contacts with walls are counted.
   void step(double dt_s, double left_wheel_radps, double right_wheel_radps,
             const RayCaster* caster = nullptr);
   const Pose2& pose() const { return pose_; }
   double v_mps() const { return v_; }
   double omega_radps() const { return omega_; }
-  std::uint64_t collisions() const { return collisions_; }
+  // Steps in which a motion into a wall was refused (pressing on a wall for a
+  // second at 200 Hz counts 200).
+  std::uint64_t refused_steps() const { return refused_steps_; }
+  // Contacts begun: steps in which the disk touches a wall (within
+  // robot_radius_m, or a motion into one refused) after having been clear of
+  // every wall by more than kContactClearanceM. Pressing on a wall, or
+  // turning on the spot against it, is one contact.
+  std::uint64_t contacts() const { return contacts_; }
+  bool in_contact() const { return in_contact_; }
+  // A refused step leaves the disk up to one step's travel (a few mm) short of
+  // the wall; it is clear again only beyond this, so it cannot count one push twice.
+  static constexpr double kContactClearanceM = 0.01;
 
  private:
   Options options_;
   Pose2 pose_;
   std::mt19937_64 rng_;
   double v_ = 0.0, omega_ = 0.0;
-  std::uint64_t collisions_ = 0;
+  std::uint64_t refused_steps_ = 0;
+  std::uint64_t contacts_ = 0;
+  bool in_contact_ = false;
 };
 
 }  // namespace pex::sim

@@ -152,7 +152,55 @@ TEST(Plant, StopsAtWalls) {
   for (int i = 0; i < 1000; ++i) plant.step(0.01, 10.0, 10.0, &caster);  // 1 m/s for 10 s towards the pillar at x = 6
   EXPECT_LT(plant.pose().x_m, 6.0 - o.robot_radius_m + 1e-9);
   EXPECT_GT(plant.pose().x_m, 5.0);
-  EXPECT_GT(plant.collisions(), 0u);
+  EXPECT_GT(plant.refused_steps(), 1u);
+  EXPECT_EQ(plant.contacts(), 1u);  // pressing on the pillar for seconds is one contact
+}
+
+TEST(RayCaster, ClearanceIsTheDistanceToTheNearestWall) {
+  World w = parse_ok(kBox);
+  RayCaster caster(w);
+  EXPECT_NEAR(caster.clearance(2.0, 3.0, 10.0), 2.0, 1e-12);   // the left wall at x = 0
+  EXPECT_NEAR(caster.clearance(5.0, 3.0, 10.0), 1.0, 1e-12);   // the pillar's face at x = 6
+  EXPECT_NEAR(caster.clearance(7.5, 4.0, 10.0), std::hypot(0.5, 0.5), 1e-12);  // the pillar's corner (7, 3.5)
+  EXPECT_EQ(caster.clearance(5.0, 3.0, 0.5), 0.5);               // nothing within 0.5 m
+}
+
+// Contacts begun: a disk that drives into the pillar, backs off clear of it and
+// drives in again has two contacts; driving past a wall with a few cm to spare
+// has none; sliding sideways into a wall (which the heading check misses) has one.
+TEST(Plant, CountsContactsBegunNotStepsAgainstAWall) {
+  World w = parse_ok(kBox);
+  RayCaster caster(w);
+  DiffDrivePlant::Options o;  // radius 0.25 m
+  DiffDrivePlant plant(o, w.start, 1);
+  auto drive = [&](double wheel_radps, int steps) {
+    for (int i = 0; i < steps; ++i) plant.step(0.01, wheel_radps, wheel_radps, &caster);
+  };
+  drive(5.0, 800);  // 0.5 m/s towards the pillar at x = 6: stops at 5.75
+  EXPECT_TRUE(plant.in_contact());
+  EXPECT_EQ(plant.contacts(), 1u);
+  drive(-5.0, 1);  // 5 mm back: still within the clearance, the same contact
+  EXPECT_TRUE(plant.in_contact());
+  drive(5.0, 50);
+  EXPECT_EQ(plant.contacts(), 1u);
+  drive(-5.0, 100);  // 0.5 m back: clear
+  EXPECT_FALSE(plant.in_contact());
+  drive(5.0, 200);
+  EXPECT_EQ(plant.contacts(), 2u);
+
+  // Along the bottom wall (y = 0) 5 cm clear of it: no contact.
+  DiffDrivePlant along(o, Pose2{1.0, o.robot_radius_m + 0.05, 0.0}, 1);
+  for (int i = 0; i < 300; ++i) along.step(0.01, 5.0, 5.0, &caster);
+  EXPECT_GT(along.pose().x_m, 2.0);
+  EXPECT_EQ(along.contacts(), 0u);
+  EXPECT_EQ(along.refused_steps(), 0u);
+
+  // Heading 0.2 rad towards the bottom wall from 0.5 mm off it: the heading
+  // check lets the disk close in until its ray sees the wall; the clearance
+  // counts the touch whatever the refusal did.
+  DiffDrivePlant sliding(o, Pose2{1.0, o.robot_radius_m + 0.0005, -0.2}, 1);
+  sliding.step(0.01, 5.0, 5.0, &caster);
+  EXPECT_EQ(sliding.contacts(), 1u);
 }
 
 TEST(World, ShippedWorldsLoadAndHaveTheirSize) {

@@ -86,9 +86,9 @@ Driver::Driver(runtime::Node& node, DriverOptions options)
                                        [this](const pex::velocity_cmd_t& cmd) { on_command(cmd); });
   node_.watch_fd(can_->fd(), [this] { on_frames(); });
   node_.every(std::chrono::microseconds(static_cast<std::int64_t>(1e6 / options_.control_rate_hz)),
-              [this](std::int64_t now_us) { control(now_us); });
+              [this](std::int64_t) { control(node_.monotonic_us()); });
   node_.every(std::chrono::microseconds(static_cast<std::int64_t>(1e6 / options_.odometry_rate_hz)),
-              [this](std::int64_t now_us) { publish_odometry(now_us); });
+              [this](std::int64_t) { publish_odometry(node_.monotonic_us()); });
   node_.set_state(pex::daemon_status_t::STATE_DEGRADED, "waiting for the drives on " + can_->describe());
   spdlog::info("CAN {} nodes {} and {}, {:.1f} counts/m, cmd timeout {} ms", can_->describe(),
                options_.left_node_id, options_.right_node_id, options_.geometry.counts_per_m(),
@@ -100,12 +100,21 @@ void Driver::on_command(const pex::velocity_cmd_t& cmd) {
     throw runtime::BadInput("BASE_CMD with a non-finite velocity from '" + cmd.source + "'");
   }
   command_ = kinematics::BodyVelocity{cmd.v, cmd.omega};
-  command_us_ = node_.now_utime();
+  command_us_ = node_.monotonic_us();
   ++node_.counter("commands");
 }
 
 void Driver::on_frames() {
-  const std::int64_t now_us = node_.now_utime();
+  if (!node_.clock_started()) {
+    // clock = "sim" before the first SIM_CLOCK: a frame cannot be timed, and
+    // one timed 0 would read as a heartbeat lost when the clock starts. The
+    // drives repeat their heartbeats; drop these.
+    while (can_->receive()) ++node_.counter("can_frames_before_clock");
+    return;
+  }
+  // Heartbeat, SDO and velocity timing on the monotonic clock; the odometry
+  // stamp (ODOMETRY utime) on the stamping clock.
+  const std::int64_t now_us = node_.monotonic_us();
   while (auto frame = can_->receive()) {
     if (frame->can_id & CAN_ERR_FLAG) {
       // A bus error (bus-off, error passive, lost arbitration, ...): stop and hold.
@@ -133,6 +142,7 @@ void Driver::on_frames() {
       nodes[1].position_time_us != last_positions_us_[1]) {
     last_positions_us_[0] = nodes[0].position_time_us;
     last_positions_us_[1] = nodes[1].position_time_us;
+    positions_utime_ = node_.now_utime();
     const std::uint64_t rejected = odometry_.rejected_jumps();
     odometry_.update(nodes[0].position_actual, nodes[1].position_actual, now_us);
     if (odometry_.rejected_jumps() != rejected) node_.reject("encoder", "implausible encoder jump: re-baselined");
@@ -169,14 +179,15 @@ void Driver::publish_odometry(std::int64_t now_us) {
   const auto& s = odometry_.state();
   pex::odometry_t msg{};
   const auto& nodes = master_.nodes();
-  msg.utime = std::max(nodes[0].position_time_us, nodes[1].position_time_us);
-  if (msg.utime == 0) return;  // no encoder reading yet
+  const std::int64_t newest_us = std::max(nodes[0].position_time_us, nodes[1].position_time_us);
+  if (positions_utime_ == 0) return;  // no encoder reading yet
   // Encoder readings older than the heartbeat timeout mean the drives are
   // gone: publish nothing rather than a stale pose with a fresh look.
-  if (now_us - msg.utime > 1000ll * options_.heartbeat_timeout_ms) {
+  if (now_us - newest_us > 1000ll * options_.heartbeat_timeout_ms) {
     ++node_.counter("odometry_withheld");
     return;
   }
+  msg.utime = positions_utime_;
   msg.x = s.pose.x_m;
   msg.y = s.pose.y_m;
   msg.theta = s.pose.theta_rad;

@@ -56,10 +56,12 @@ class Driver {
   kinematics::VelocityLimiter limiter_;
   kinematics::OdometryIntegrator odometry_;
   kinematics::BodyVelocity command_;
-  std::int64_t command_us_ = 0;          // host time of the last BASE_CMD (0 = never)
+  // *_us: the node's monotonic clock (timeouts); *_utime: its stamping clock.
+  std::int64_t command_us_ = 0;          // when the last BASE_CMD came (0 = never)
   std::int64_t last_control_us_ = 0;
   std::int64_t last_error_frame_us_ = 0;
   std::int64_t last_positions_us_[2] = {0, 0};
+  std::int64_t positions_utime_ = 0;     // stamp of the newest pair of encoder readings (0 = none)
   std::uint64_t restarts_seen_[2] = {0, 0};
   bool cmd_timed_out_ = true;
   bool safe_stop_ = true;

@@ -3,13 +3,14 @@
 
 #include "driver.hpp"
 #include "runtime/config.hpp"
+#include "runtime/daemon.hpp"
 
 namespace pex::base_driver {
 namespace {
 
 TEST(BaseDriverOptions, ShippedConfigLoadsCompletely) {
   auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + "/config/base_driver.toml");
-  config.get<int>("heartbeat_period_ms", 1000);  // read by the runtime
+  runtime::load_runtime_options(config);  // read by run_daemon
   DriverOptions o = load_options(config);
   EXPECT_NO_THROW(config.finish());
   EXPECT_EQ(o.cmd_timeout_ms, 250);

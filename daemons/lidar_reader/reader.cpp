@@ -71,13 +71,7 @@ Reader::Reader(runtime::Node& node, ReaderOptions options)
   // DEGRADED, not STARTING: the runtime promotes STARTING to OK when its loop
   // starts, and we are not OK before scans flow.
   node_.set_state(pex::daemon_status_t::STATE_DEGRADED, "connecting to " + options_.host);
-  node_.every(std::chrono::milliseconds(20), [this](std::int64_t) { poll(monotonic_us()); });
-}
-
-std::int64_t Reader::monotonic_us() const {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  node_.every(std::chrono::milliseconds(20), [this](std::int64_t) { poll(node_.monotonic_us()); });
 }
 
 void Reader::poll(std::int64_t now_us) {
@@ -151,7 +145,7 @@ void Reader::send_next_step(std::int64_t now_us) {
 
 void Reader::on_readable() {
   char buffer[16384];
-  const std::int64_t now_us = monotonic_us();
+  const std::int64_t now_us = node_.monotonic_us();
   for (;;) {
     if (!fd_.valid()) return;
     hwio::ReadResult r = hwio::read_some(fd_.get(), buffer, sizeof buffer);

@@ -1,6 +1,8 @@
 #pragma once
 // pex-lidar-reader's parts: options from config/lidar_reader.toml and the
 // connection state machine (connect, log in, configure, stream, back off).
+// Its timeouts and back-off run on the node's monotonic clock (simulated time
+// with clock = "sim"); `now_us` arguments below are that clock's.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -58,7 +60,6 @@ class Reader {
   void on_reply(const cola::Telegram& telegram, std::int64_t now_us);
   void on_scan(const cola::ScanData& scan, std::int64_t now_us);
   void send_next_step(std::int64_t now_us);
-  std::int64_t monotonic_us() const;
 
   runtime::Node& node_;
   ReaderOptions options_;

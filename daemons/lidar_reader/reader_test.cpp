@@ -3,13 +3,14 @@
 
 #include "reader.hpp"
 #include "runtime/config.hpp"
+#include "runtime/daemon.hpp"
 
 namespace pex::lidar_reader {
 namespace {
 
 TEST(LidarReaderOptions, ShippedConfigLoadsCompletelyAndGivesTheLms111Setup) {
   auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + "/config/lidar_reader.toml");
-  config.get<int>("heartbeat_period_ms", 1000);  // read by the runtime
+  runtime::load_runtime_options(config);  // read by run_daemon
   ReaderOptions o = load_options(config);
   EXPECT_NO_THROW(config.finish());
   const cola::ScanConfig c = o.scan_config();

@@ -1,6 +1,7 @@
 // pex-sim: the world, the robot and its devices. Serves the LMS111's CoLa-A
 // protocol on a loopback TCP port, plays the CiA 402 wheel drives on the CAN
-// transport, and publishes the ground truth on SIM_TRUTH (for evaluation only).
+// transport, publishes the ground truth on SIM_TRUTH (for evaluation only) and
+// its clock on SIM_CLOCK, which daemons with clock = "sim" run on.
 #include <memory>
 #include <optional>
 #include <string>
@@ -13,6 +14,7 @@ int main(int argc, char** argv) {
   std::string world;
   std::unique_ptr<pex::simd::Simulator> simulator;  // outlives the node's handlers' use of it
   pex::runtime::DaemonInfo info{"sim", "simulated world, LMS111 (CoLa-A/TCP) and CiA 402 wheel drives (CAN)"};
+  info.is_clock_source = true;  // publishes SIM_CLOCK, paced by the wall clock x speed
   info.add_options = [&speed, &world](CLI::App& app) {
     app.add_option_function<double>(
            "--speed", [&speed](double factor) { speed = factor; },

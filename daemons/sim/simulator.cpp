@@ -17,6 +17,9 @@ SimOptions load_options(runtime::ConfigReader& config) {
   o.speed_factor = config.get<double>("speed_factor", o.speed_factor, in_range(0.01, 100.0));
   o.physics_rate_hz = config.get<double>("physics_rate_hz", o.physics_rate_hz, in_range(100.0, 2000.0));
   o.truth_rate_hz = config.get<double>("truth_rate_hz", o.truth_rate_hz, in_range(1.0, 500.0));
+  o.clock_rate_hz = config.get<double>("clock_rate_hz", o.clock_rate_hz, in_range(1.0, 2000.0));
+  // The clock moves in physics steps: it cannot tick more often than they do.
+  if (o.clock_rate_hz > o.physics_rate_hz) config.fail("clock_rate_hz", "must be <= physics_rate_hz");
   std::vector<double> start = config.get<std::vector<double>>("start_pose_m_m_rad", {});
   if (!start.empty()) {
     if (start.size() != 3 || !std::isfinite(start[0]) || !std::isfinite(start[1]) || !std::isfinite(start[2])) {
@@ -215,6 +218,7 @@ cola::ScanData Lms111Protocol::make_scan(const std::vector<float>& ranges_m, std
 
 #include <pex/pose_t.hpp>
 #include <pex/daemon_status_t.hpp>
+#include <pex/sim_clock_t.hpp>
 #include <spdlog/spdlog.h>
 
 #include "runtime/channels.hpp"
@@ -224,10 +228,6 @@ cola::ScanData Lms111Protocol::make_scan(const std::vector<float>& ranges_m, std
 namespace pex::simd {
 
 namespace {
-
-double steady_seconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 sim::World load_world(const std::string& path) {
   std::ifstream in(path);
@@ -262,10 +262,21 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
                                                      options_.max_motor_accel_counts_per_s2});
   }
 
+  // Present from the start, so "no collision" reads 0 rather than absent.
+  node_.counter("collisions") = 0;
+  node_.counter("collision_steps") = 0;
   node_.watch_fd(listener_.fd(), [this] { accept_clients(); });
   node_.watch_fd(can_->fd(), [this] { receive_can(); });
-  wall_start_s_ = steady_seconds();
+  // The sim is the clock source: its node runs on the system clock (run_daemon
+  // refuses clock = "sim" for it), and it paces simulated time by the
+  // monotonic clock x speed_factor.
+  wall_start_s_ = node_.monotonic_us() * 1e-6;
   wall_start_utime_ = node_.now_utime();
+  // Every periodic output falls on its period's grid of simulated time (k x
+  // period), so SIM_TRUTH at 50 Hz is stamped at ticks of SIM_CLOCK at 100 Hz.
+  next_laser_us_ = static_cast<std::int64_t>(std::llround(1e6 / options_.laser.rate_hz));
+  next_truth_us_ = static_cast<std::int64_t>(std::llround(1e6 / options_.truth_rate_hz));
+  next_clock_us_ = static_cast<std::int64_t>(std::llround(1e6 / options_.clock_rate_hz));
   // The timer only wakes the loop; tick() runs as many fixed physics steps as
   // the simulated clock (wall time x speed) is due, so the simulation is the
   // same whatever the timer's jitter.
@@ -281,7 +292,8 @@ Simulator::~Simulator() = default;
 void Simulator::tick() {
   drop_closed_clients();
   const double step_s = 1.0 / options_.physics_rate_hz;
-  const auto due = static_cast<std::int64_t>((steady_seconds() - wall_start_s_) * options_.speed_factor / step_s);
+  const auto due =
+      static_cast<std::int64_t>((node_.monotonic_us() * 1e-6 - wall_start_s_) * options_.speed_factor / step_s);
   // At most 0.25 s of simulated time per call, so the loop stays responsive
   // when the host cannot keep up (the simulation then runs slower than asked).
   const std::int64_t limit = steps_done_ + static_cast<std::int64_t>(options_.physics_rate_hz / 4) + 1;
@@ -303,10 +315,15 @@ void Simulator::physics_step() {
   const double step_s = 1.0 / options_.physics_rate_hz;
   const double counts_per_wheel_rad = options_.geometry.counts_per_rev * options_.geometry.gear_ratio /
                                       (2.0 * std::numbers::pi);
-  const std::uint64_t collisions_before = plant_->collisions();
   plant_->step(step_s, drives_[0].velocity_actual() / counts_per_wheel_rad,
                drives_[1].velocity_actual() / counts_per_wheel_rad, caster_.get());
-  if (plant_->collisions() != collisions_before) ++node_.counter("collision_steps");
+  node_.counter("collisions") = static_cast<std::int64_t>(plant_->contacts());
+  node_.counter("collision_steps") = static_cast<std::int64_t>(plant_->refused_steps());
+  // The clock first: a daemon that gets this step's scan or truth has its time.
+  if (sim_time_us_ >= next_clock_us_) {
+    next_clock_us_ += static_cast<std::int64_t>(std::llround(1e6 / options_.clock_rate_hz));
+    publish_clock();
+  }
   if (sim_time_us_ >= next_laser_us_) {
     next_laser_us_ += static_cast<std::int64_t>(std::llround(1e6 / options_.laser.rate_hz));
     laser_step();
@@ -314,12 +331,22 @@ void Simulator::physics_step() {
   if (sim_time_us_ >= next_truth_us_) {
     next_truth_us_ += static_cast<std::int64_t>(std::llround(1e6 / options_.truth_rate_hz));
     pex::pose_t truth{};
-    truth.utime = wall_start_utime_ + sim_time_us_;
+    truth.utime = sim_utime();
     truth.x = plant_->pose().x_m;
     truth.y = plant_->pose().y_m;
     truth.theta = plant_->pose().theta_rad;
     node_.publish(runtime::channels::kSimTruth, truth);
   }
+}
+
+void Simulator::publish_clock() {
+  pex::sim_clock_t clock{};
+  clock.utime = sim_utime();
+  clock.sim_time_us = sim_time_us_;
+  clock.speed_factor = options_.speed_factor;
+  clock.collisions = static_cast<std::int64_t>(plant_->contacts());
+  clock.collision_steps = static_cast<std::int64_t>(plant_->refused_steps());
+  node_.publish(runtime::channels::kSimClock, clock);
 }
 
 void Simulator::laser_step() {

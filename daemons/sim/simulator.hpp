@@ -22,6 +22,7 @@ struct SimOptions {
   double speed_factor = 1.0;        // simulated seconds per wall second
   double physics_rate_hz = 200.0;   // plant and drives step rate (simulated time)
   double truth_rate_hz = 50.0;      // SIM_TRUTH publication rate (simulated time)
+  double clock_rate_hz = 100.0;     // SIM_CLOCK publication rate (simulated time, <= physics_rate_hz)
   // Override of the world's START pose (all three or none).
   bool start_override = false;
   kinematics::Pose2 start;
@@ -99,7 +100,11 @@ class Simulator {
  private:
   void tick();                      // runs the simulation steps that are due
   void physics_step();
+  void publish_clock();
   void laser_step();
+  // SIM_CLOCK's utime, and every stamp of ours: the wall time the simulation
+  // started plus the simulated time since.
+  std::int64_t sim_utime() const { return wall_start_utime_ + sim_time_us_; }
   void accept_clients();
   void read_client(ColaClient& client);
   void drop_closed_clients();
@@ -121,6 +126,7 @@ class Simulator {
   std::int64_t sim_time_us_ = 0;
   std::int64_t next_laser_us_ = 0;
   std::int64_t next_truth_us_ = 0;
+  std::int64_t next_clock_us_ = 0;
   std::int64_t wall_start_utime_ = 0;
   double wall_start_s_ = 0.0;        // steady clock at start
   std::int64_t steps_done_ = 0;

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "runtime/config.hpp"
+#include "runtime/daemon.hpp"
 #include "simulator.hpp"
 
 namespace pex::simd {
@@ -96,11 +97,14 @@ TEST(Lms111Protocol, ScanTelegramRoundTripsToMetres) {
 
 TEST(SimOptions, ShippedConfigLoadsAndBadValuesAreRefused) {
   auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + "/config/sim.toml");
-  config.get<int>("heartbeat_period_ms", 1000);  // read by the runtime
+  runtime::load_runtime_options(config, /*is_clock_source=*/true);  // read by run_daemon
   SimOptions o = load_options(config);
   EXPECT_NO_THROW(config.finish());
   EXPECT_EQ(o.laser.beam_count(), 541);
   EXPECT_EQ(o.world_file, std::string(PEX_SOURCE_DIR) + "/config/../worlds/office.wkt");
+  EXPECT_EQ(o.clock_rate_hz, 100.0);
+  auto fast_clock = runtime::ConfigReader::from_string("physics_rate_hz = 200.0\nclock_rate_hz = 400.0\n", "clk.toml");
+  EXPECT_THROW(load_options(fast_clock), runtime::ConfigError);
   auto bad = runtime::ConfigReader::from_string("[base]\ncan_transport = \"carrier-pigeon\"\n", "bad.toml");
   EXPECT_THROW(load_options(bad), runtime::ConfigError);
   auto same_ids = runtime::ConfigReader::from_string("[base]\nleft_node_id = 3\nright_node_id = 3\n", "ids.toml");
