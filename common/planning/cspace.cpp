@@ -162,10 +162,17 @@ bool ConfigurationSpace::covers(const Point& p) const {
 
 double ConfigurationSpace::distance_to_boundary(const Point& p) const {
   double best = std::numeric_limits<double>::infinity();
-  if (!tree_) return best;
-  // Boxes come nearest first; an edge is never nearer than its box.
-  for (auto it = tree_->qbegin(bgi::nearest(p, static_cast<unsigned>(edges_.size()))); it != tree_->qend(); ++it) {
-    if (bg::distance(p, it->first) > best) break;
+  if (!tree_ || tree_->empty()) return best;
+  // The edge of the nearest box bounds the answer, and every edge nearer
+  // than that has its box within that distance of p. (Two cheap queries: an
+  // incremental nearest query over all edges sorts them all, which made this
+  // most of the C-space's build time.)
+  for (auto it = tree_->qbegin(bgi::nearest(p, 1)); it != tree_->qend(); ++it) {
+    const Edge& e = edges_[it->second];
+    best = segment_distance(p, e.a, e.b);
+  }
+  const mapping::Box window(Point(p.x() - best, p.y() - best), Point(p.x() + best, p.y() + best));
+  for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) {
     const Edge& e = edges_[it->second];
     best = std::min(best, segment_distance(p, e.a, e.b));
   }
