@@ -1,6 +1,7 @@
 #include "planning/path_matrix.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <queue>
 #include <utility>
@@ -11,7 +12,11 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-double cross(double ux, double uy, double vx, double vy) { return ux * vy - uy * vx; }
+// std::hypot is several times slower and needs no guard here (map coordinates).
+double length(const Point& a, const Point& b) {
+  const double dx = b.x() - a.x(), dy = b.y() - a.y();
+  return std::sqrt(dx * dx + dy * dy);
+}
 
 // How far ConfigurationSpace moves a node off the vertex at which `edge`
 // ends (the miter of the two edges' parallels at interior_offset_m, capped as
@@ -25,68 +30,83 @@ double node_offset(const ConfigurationSpace& cspace, std::uint32_t edge) {
   return cspace.options().interior_offset_m / std::max(std::hypot(nx, ny) / 2.0, 0.1);
 }
 
-// The boundary at a reflex node: its vertex v, the neighbours p (before) and
-// q (after), and the unit directions of the edges p-v and v-q. The node is
-// v moved interior_offset_m inward with both edges kept parallel, so the
-// directions are also those of the boundary moved to the node. slack_p_m and
-// slack_q_m: how deep a line through the node may pass beyond p or q and
-// still be on a shortest path of the node graph (see worth_testing).
-struct Corner {
-  Point p, v, q;
-  double in_x, in_y, out_x, out_y;
-  double slack_p_m, slack_q_m;
+// The boundary at the reflex nodes, as arrays (the pair loop below runs
+// over all of them for each node): per node its vertex v, the neighbours p
+// (before) and q (after), the edge vectors v - p ("in") and q - v ("out"),
+// and slack_p2 / slack_q2, the squares of how deep a line through the node
+// may pass beyond p or q and still be on a shortest path of the node graph
+// (see below). The node is v moved interior_offset_m inward with both edges
+// kept parallel, so the edge vectors are also the directions of the
+// boundary moved to the node.
+struct Corners {
+  std::vector<double> x, y;  // the node
+  std::vector<double> in_x, in_y, out_x, out_y;
+  std::vector<double> slack_p2, slack_q2;
+  std::vector<Point> p, v, q;
+
+  Corners(const ConfigurationSpace& cspace, const std::vector<Point>& nodes) {
+    for (std::size_t k = 0; k < cspace.reflex_edges().size(); ++k) {
+      const std::uint32_t e = cspace.reflex_edges()[k];
+      const auto& in = cspace.edges()[e];
+      const auto& out = cspace.edges()[in.next];
+      x.push_back(nodes[k].x());
+      y.push_back(nodes[k].y());
+      in_x.push_back(in.b.x() - in.a.x());
+      in_y.push_back(in.b.y() - in.a.y());
+      out_x.push_back(out.b.x() - out.a.x());
+      out_y.push_back(out.b.y() - out.a.y());
+      const double slack_p = 2.0 * node_offset(cspace, in.prev), slack_q = 2.0 * node_offset(cspace, in.next);
+      slack_p2.push_back(slack_p * slack_p);
+      slack_q2.push_back(slack_q * slack_q);
+      p.push_back(in.a);
+      v.push_back(in.b);
+      q.push_back(out.b);
+    }
+  }
+
+  // Which graph edges from reflex node k, in direction (ux, uy), are worth
+  // a segment test.
+  //
+  // The obstacle at the node is the wedge between the directions back along
+  // the incoming edge and on along the outgoing one (less than 180 degrees:
+  // the free space's corner is reflex).
+  // - behind(): -u inside the wedge (the line runs on behind the node into
+  //   the obstacle). A path that bends at the node onto this edge keeps the
+  //   obstacle on the outside of the bend and is shortened by cutting the
+  //   bend, so the edge is never on a shortest path. This is most of the
+  //   pruning: the classic rule that a shortest path bends only along lines
+  //   tangent to the boundary (both edges on one side of the line).
+  // - blocked_here(): u inside the wedge and the edge crosses one of the
+  //   node's own two boundary edges (exact; no index needed).
+  // - otherwise (tangent, or into the wedge but not across those two
+  //   edges): tested.
+  // The nodes sit interior_offset_m off the vertices, so in the node graph
+  // that shortest_paths searches a path may cut a corner by about that
+  // much: pass a short boundary edge's far vertex without bending at its
+  // node, or bend at a node along a line that runs that little into the
+  // wedge behind it. So "inside the wedge" in behind() means deeper at a
+  // neighbouring vertex (the line's distance from it) than twice the offset
+  // of that vertex's own node. (With this slack the matrix equals the full
+  // graph's lengths on every random map tried; with none it was up to
+  // 3e-5 m longer.)
+  //
+  // a and b are |u| times how far p and q lie from the line, signed so that
+  // both are negative when the wedge lies behind the node, both positive
+  // when ahead; no square root, and no branch, for the pair loop.
+  bool behind(std::size_t k, double ux, double uy) const {
+    const double a = ux * in_y[k] - uy * in_x[k];
+    const double b = ux * out_y[k] - uy * out_x[k];
+    const double u2 = ux * ux + uy * uy;
+    return (a < 0.0) & (b < 0.0) & (a * a > slack_p2[k] * u2) & (b * b > slack_q2[k] * u2);
+  }
+  bool blocked_here(std::size_t k, const Point& node, const Point& other) const {
+    const double ux = other.x() - node.x(), uy = other.y() - node.y();
+    const double a = ux * in_y[k] - uy * in_x[k];
+    const double b = ux * out_y[k] - uy * out_x[k];
+    return a > 0.0 && b > 0.0 &&
+           (segments_intersect(node, other, p[k], v[k]) || segments_intersect(node, other, v[k], q[k]));
+  }
 };
-
-Corner corner_of(const ConfigurationSpace& cspace, std::uint32_t edge) {
-  const auto& in = cspace.edges()[edge];
-  const auto& out = cspace.edges()[in.next];
-  const double lin = distance(in.a, in.b), lout = distance(out.a, out.b);
-  return {in.a,
-          in.b,
-          out.b,
-          (in.b.x() - in.a.x()) / lin,
-          (in.b.y() - in.a.y()) / lin,
-          (out.b.x() - out.a.x()) / lout,
-          (out.b.y() - out.a.y()) / lout,
-          2.0 * node_offset(cspace, in.prev),
-          2.0 * node_offset(cspace, in.next)};
-}
-
-// Whether a graph edge from a reflex node to `other` is worth a segment test.
-//
-// The obstacle at the node is the wedge between the directions back along
-// the incoming edge and on along the outgoing one (less than 180 degrees: the
-// free space's corner is reflex). Cases, with u the direction to `other`:
-// - -u inside the wedge (the line runs on behind the node into the
-//   obstacle): a path that bends at the node onto this edge keeps the
-//   obstacle on the outside of the bend and is shortened by cutting the bend,
-//   so the edge is never on a shortest path. Dropped. This is most of the
-//   pruning: the classic rule that a shortest path bends only along lines
-//   tangent to the boundary (both edges on one side of the line).
-// - u inside the wedge: the edge runs into the obstacle. Dropped when it
-//   crosses one of the node's own two boundary edges (exact, no index).
-// - otherwise (tangent): tested.
-// The nodes sit interior_offset_m off the vertices, so in the node graph
-// that shortest_paths searches a path may cut a corner by about that much:
-// pass a short boundary edge's far vertex without bending at its node, or
-// bend at a node along a line that runs that little into the wedge behind
-// it. So "inside the wedge" means deeper at a neighbouring vertex (the
-// line's distance from it) than twice the offset of that vertex's own node,
-// and the rest is tested. (With this slack the matrix equals the full
-// graph's lengths on every random map tried; with none it was up to 3e-5 m
-// longer.)
-bool worth_testing(const Corner& c, const Point& node, const Point& other) {
-  const double ux = other.x() - node.x(), uy = other.y() - node.y();
-  const double length = std::hypot(ux, uy);
-  // How far p and q lie from the line, signed so that both are negative when
-  // the wedge lies behind the node (-u inside it), both positive when ahead.
-  const double a = cross(ux, uy, c.in_x, c.in_y) / length * distance(c.p, c.v);
-  const double b = cross(ux, uy, c.out_x, c.out_y) / length * distance(c.v, c.q);
-  if (a < -c.slack_p_m && b < -c.slack_q_m) return false;
-  if (a > 0.0 && b > 0.0)
-    return !segments_intersect(node, other, c.p, c.v) && !segments_intersect(node, other, c.v, c.q);
-  return true;
-}
 
 // Compressed adjacency lists of an undirected graph.
 struct Graph {
@@ -174,30 +194,37 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
   const std::uint32_t first_point = r;
   const auto total = static_cast<std::uint32_t>(nodes.size());
 
-  std::vector<Corner> corners;
-  corners.reserve(r);
-  for (const auto e : cspace.reflex_edges()) corners.push_back(corner_of(cspace, e));
-  auto useful = [&](std::uint32_t reflex_node, std::uint32_t other) {
-    return !options.tangent_pruning || worth_testing(corners[reflex_node], nodes[reflex_node], nodes[other]);
-  };
+  const Corners corners(cspace, nodes);
+  const bool prune = options.tangent_pruning;
 
   // 1. The graph: reflex-reflex edges worth testing at both ends, then each
   // point to the reflex vertices it sees, worth testing at the reflex end.
   // No point-point edges: a path between points that bends, bends at reflex
   // vertices only.
   EdgeList edges;
+  std::vector<char> drop(r);
   for (std::uint32_t i = 0; i < r; ++i) {
+    // The cheap test for all j > i at once (both ends), then the rest.
+    const double xi = corners.x[i], yi = corners.y[i];
     for (std::uint32_t j = i + 1; j < r; ++j) {
-      if (!useful(i, j) || !useful(j, i)) continue;
+      const double ux = corners.x[j] - xi, uy = corners.y[j] - yi;
+      drop[j] = prune & (corners.behind(i, ux, uy) | corners.behind(j, -ux, -uy));
+    }
+    for (std::uint32_t j = i + 1; j < r; ++j) {
+      if (drop[j]) continue;
+      if (prune && (corners.blocked_here(i, nodes[i], nodes[j]) || corners.blocked_here(j, nodes[j], nodes[i])))
+        continue;
       if (!cspace.segment_free(nodes[i], nodes[j])) continue;
-      edges.add(i, j, distance(nodes[i], nodes[j]));
+      edges.add(i, j, length(nodes[i], nodes[j]));
     }
   }
   for (std::uint32_t i = 0; i < r; ++i) {
     for (std::uint32_t p = first_point; p < total; ++p) {
-      if (!useful(i, p)) continue;
+      if (prune && (corners.behind(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y()) ||
+                    corners.blocked_here(i, nodes[i], nodes[p])))
+        continue;
       if (!cspace.segment_free(nodes[i], nodes[p])) continue;
-      edges.add(i, p, distance(nodes[i], nodes[p]));
+      edges.add(i, p, length(nodes[i], nodes[p]));
     }
   }
   const Graph graph = compress(edges, total);
@@ -218,7 +245,7 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
     for (std::uint32_t q = p + 1; q < total; ++q) {
       double d = dist[q];
       bool straight = false;
-      const double direct = distance(nodes[p], nodes[q]);
+      const double direct = length(nodes[p], nodes[q]);
       if (direct < d && cspace.segment_free(nodes[p], nodes[q])) {
         d = direct;
         straight = true;
