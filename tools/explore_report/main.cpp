@@ -1,0 +1,105 @@
+// pex-explore-report --world worlds/X.wkt --log run.lcm [--robot-radius-m 0.25]
+//   [--map-frame start|world] [--wall-tolerance-m 0.1] [--start-pose X Y THETA]
+//   [--json-out FILE] [--svg FILE]
+// Scores an exploration run recorded with lcm-logger against its world: one
+// JSON line (the exploration benchmark's) on stdout and in --json-out; what
+// was read and how the map decoded on stderr. Channels missing from the log
+// give null fields. Exit codes: 0 done, 64 bad command line, 65 bad world
+// file, empty log or start pose in collision, 66 unreadable file, 70 the
+// geometry failed, 73 an output cannot be written.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "report.hpp"
+
+namespace {
+
+int fail(int code, const std::string& message) {
+  std::fprintf(stderr, "pex-explore-report: %s\n", message.c_str());
+  return code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Score an exploration run (LCM log) against its world: the benchmark's JSON line",
+               "pex-explore-report"};
+  std::string world_path, log_path, map_frame = "start", json_out, svg_out;
+  pex::explore_report::ReportOptions options;
+  std::vector<double> start_pose;
+  app.add_option("--world", world_path, "world file the run explored (worlds/*.wkt)")->required();
+  app.add_option("--log", log_path, "LCM log of the run (lcm-logger)")->required();
+  app.add_option("--robot-radius-m", options.robot_radius_m, "robot radius (config/sim.toml [base])")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--map-frame", map_frame,
+                 "frame of the MAP: start (SLAM / odometry: origin at the start pose) or world (pose_source = sim_truth)")
+      ->check(CLI::IsMember({"start", "world"}));
+  app.add_option("--wall-tolerance-m", options.wall_tolerance_m, "obstacle edges this close to a wall are on it")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--start-pose", start_pose, "X_M Y_M THETA_RAD: the start pose, if not the world's START line")
+      ->expected(3);
+  app.add_option("--json-out", json_out, "also write the JSON line to this file");
+  app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed) to this SVG");
+  CLI11_PARSE(app, argc, argv);
+
+  std::ifstream world_file(world_path);
+  if (!world_file) return fail(66, "cannot read world file " + world_path);
+  std::stringstream text;
+  text << world_file.rdbuf();
+  auto parsed = pex::sim::parse_world(text.str(), world_path);
+  if (auto* error = std::get_if<pex::sim::WorldError>(&parsed)) return fail(65, error->message);
+  const auto& world = std::get<pex::sim::World>(parsed);
+  pex::kinematics::Pose2 start = world.start;
+  if (!start_pose.empty()) start = {start_pose[0], start_pose[1], start_pose[2]};
+  if (map_frame == "start") options.map_in_world = start;
+
+  std::string error;
+  const auto log = pex::explore_report::read_log(log_path, &error);
+  if (!log) return fail(error.rfind("cannot open", 0) == 0 ? 66 : 65, error);
+
+  pex::mapping::MultiPolygon reachable;
+  try {
+    reachable = pex::evaluation::reachable_free_space(world, options.robot_radius_m, start);
+  } catch (const std::exception& e) {
+    return fail(70, std::string("reachable free space: ") + e.what());
+  }
+  if (reachable.empty())
+    return fail(65, "the start pose (" + std::to_string(start.x_m) + ", " + std::to_string(start.y_m) +
+                        ") is within robot_radius_m of a wall: nothing is reachable");
+
+  const std::string world_name = std::filesystem::path(world_path).stem().string();
+  pex::mapping::TypedMultiPolygon map_world;
+  const auto report = pex::explore_report::make_report(world_name, *log, world, reachable, options, &map_world);
+
+  std::fprintf(stderr,
+               "pex-explore-report: %lld events (%lld undecodable); MAP %s, EXPLORE_STATE %s, SIM_CLOCK %s, "
+               "explorer DAEMON_STATUS %s; map frame %s\n",
+               static_cast<long long>(log->events), static_cast<long long>(log->rejected),
+               log->map ? "yes" : "none", log->explore_state ? "yes" : "none", log->sim_clock ? "yes" : "none",
+               log->explorer_status ? "yes" : "none", map_frame.c_str());
+  if (!report.map_error.empty())
+    std::fprintf(stderr, "pex-explore-report: the last MAP does not decode: %s\n", report.map_error.c_str());
+  if (report.map_polygons_dropped > 0)
+    std::fprintf(stderr, "pex-explore-report: %d invalid map polygons dropped (not counted as mapped)\n",
+                 report.map_polygons_dropped);
+
+  const std::string line = pex::explore_report::to_json(report);
+  std::printf("%s\n", line.c_str());
+  if (!json_out.empty()) {
+    std::ofstream out(json_out);
+    out << line << '\n';
+    if (!out) return fail(73, "cannot write " + json_out);
+  }
+  if (!svg_out.empty()) {
+    std::ofstream out(svg_out);
+    out << pex::explore_report::to_svg(world, reachable, map_world, start, options.robot_radius_m);
+    if (!out) return fail(73, "cannot write " + svg_out);
+  }
+  return 0;
+}

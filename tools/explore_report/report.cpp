@@ -1,0 +1,290 @@
+#include "report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "map_message.hpp"
+#include "runtime/channels.hpp"
+
+namespace pex::explore_report {
+
+namespace bg = boost::geometry;
+using mapping::MultiPolygon;
+
+namespace {
+
+template <class Msg>
+bool decode(const lcm::LogEvent& event, Msg& msg) {
+  return msg.decode(event.data, 0, event.datalen) == event.datalen;
+}
+
+std::optional<std::int64_t> counter(const pex::daemon_status_t& status, const std::string& name) {
+  for (int i = 0; i < status.ncounters && i < static_cast<int>(status.counter_names.size()); ++i)
+    if (status.counter_names[static_cast<std::size_t>(i)] == name) return status.counter_values[static_cast<std::size_t>(i)];
+  return std::nullopt;
+}
+
+std::optional<double> us_to_ms(std::optional<std::int64_t> us) {
+  if (!us) return std::nullopt;
+  return static_cast<double>(*us) / 1000.0;
+}
+
+std::optional<double> finite(double v) {
+  if (!std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+}  // namespace
+
+std::optional<LogContents> read_log(const std::string& path, std::string* error) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) {
+    if (error) *error = "cannot open LCM log " + path;
+    return std::nullopt;
+  }
+  namespace ch = runtime::channels;
+  LogContents out;
+  for (const lcm::LogEvent* event = log.readNextEvent(); event; event = log.readNextEvent()) {
+    ++out.events;
+    if (event->channel == ch::kMap) {
+      pex::polygon_map_t msg;
+      if (decode(*event, msg)) out.map = std::move(msg); else ++out.rejected;
+    } else if (event->channel == ch::kExploreState) {
+      pex::explore_state_t msg;
+      if (decode(*event, msg)) out.explore_state = std::move(msg); else ++out.rejected;
+    } else if (event->channel == ch::kSimClock) {
+      pex::sim_clock_t msg;
+      if (decode(*event, msg)) out.sim_clock = msg; else ++out.rejected;
+    } else if (event->channel == ch::kDaemonStatus) {
+      pex::daemon_status_t msg;
+      if (!decode(*event, msg)) ++out.rejected;
+      else if (msg.name == "explorer") out.explorer_status = std::move(msg);
+    }
+  }
+  if (out.events == 0) {
+    if (error) *error = "no LCM event in " + path + " (empty, or not an LCM log)";
+    return std::nullopt;
+  }
+  return out;
+}
+
+std::string phase_name(std::int8_t phase) {
+  using S = pex::explore_state_t;
+  switch (phase) {
+    case S::PHASE_IDLE: return "idle";
+    case S::PHASE_SELECTING: return "selecting";
+    case S::PHASE_MOVING: return "moving";
+    case S::PHASE_DONE: return "done";
+    case S::PHASE_FAILED: return "failed";
+    case S::PHASE_DONE_WITH_UNREACHABLE: return "done_with_unreachable";
+    case S::PHASE_WAITING_START: return "waiting_start";
+    case S::PHASE_PAUSED: return "paused";
+    case S::PHASE_HOMING: return "homing";
+    case S::PHASE_HOME: return "home";
+    case S::PHASE_STOPPED: return "stopped";
+    default: return "unknown_" + std::to_string(static_cast<int>(phase));
+  }
+}
+
+Report make_report(const std::string& world_name, const LogContents& log, const sim::World& world,
+                   const MultiPolygon& reachable, const ReportOptions& options,
+                   mapping::TypedMultiPolygon* map_world) {
+  Report r;
+  r.world = world_name;
+  r.reachable_m2 = bg::area(reachable);
+  if (const auto& s = log.explore_state) {
+    if (!s->strategy.empty()) r.strategy = s->strategy;
+    r.phase = phase_name(s->phase);
+    r.path_m = s->distance_travelled_m;
+    r.goals = s->goals_reached;
+    r.plans = s->plans;
+  }
+  if (log.sim_clock) {
+    r.sim_time_s = static_cast<double>(log.sim_clock->sim_time_us) / 1e6;
+    r.collisions = log.sim_clock->collisions;
+  } else if (log.explore_state) {
+    r.sim_time_s = log.explore_state->mission_time_s;
+  }
+  if (const auto& st = log.explorer_status) {
+    r.plan_ms_p50 = us_to_ms(counter(*st, "plan_us_p50"));
+    r.plan_ms_p99 = us_to_ms(counter(*st, "plan_us_p99"));
+    r.control_ms_p99 = us_to_ms(counter(*st, "control_us_p99"));
+  }
+  if (log.map) {
+    explorer::MapDecodeOptions decode_options;
+    decode_options.max_vertices = std::numeric_limits<std::int64_t>::max();  // score whatever was published
+    const auto decoded = explorer::decode_map(*log.map, decode_options);
+    if (!decoded.ok) {
+      r.map_error = decoded.error;
+    } else {
+      r.map_polygons_dropped = decoded.polygons_dropped;
+      const evaluation::WallIndex walls(world.walls);
+      const auto score =
+          evaluation::score_map(decoded.polygons, options.map_in_world, reachable, walls, options.wall_tolerance_m);
+      r.explored_m2 = score.explored_m2;
+      r.coverage = finite(score.coverage);
+      r.iou = finite(score.iou);
+      r.obstacle_on_wall = finite(score.obstacle_on_wall);
+      if (map_world) *map_world = evaluation::to_world(decoded.polygons, options.map_in_world);
+    }
+  }
+  return r;
+}
+
+namespace {
+
+class JsonLine {
+ public:
+  void key(const char* k) {
+    out_ << (first_ ? "{" : ",") << '"' << k << "\":";
+    first_ = false;
+  }
+  void string(const char* k, const std::optional<std::string>& v) {
+    key(k);
+    if (!v) {
+      out_ << "null";
+      return;
+    }
+    out_ << '"';
+    for (const char c : *v) {
+      if (c == '"' || c == '\\') out_ << '\\' << c;
+      else if (static_cast<unsigned char>(c) < 0x20) {
+        char buf[8];
+        std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+        out_ << buf;
+      } else out_ << c;
+    }
+    out_ << '"';
+  }
+  void number(const char* k, const std::optional<double>& v, int decimals) {
+    key(k);
+    if (!v || !std::isfinite(*v)) {
+      out_ << "null";
+      return;
+    }
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, *v);
+    out_ << buf;
+  }
+  void integer(const char* k, const std::optional<std::int64_t>& v) {
+    key(k);
+    if (v) out_ << *v; else out_ << "null";
+  }
+  std::string str() const { return out_.str() + "}"; }
+
+ private:
+  std::ostringstream out_;
+  bool first_ = true;
+};
+
+}  // namespace
+
+std::string to_json(const Report& r) {
+  JsonLine j;
+  j.string("world", r.world);
+  j.string("strategy", r.strategy);
+  j.string("phase", r.phase);
+  j.number("sim_time_s", r.sim_time_s, 3);
+  j.number("path_m", r.path_m, 3);
+  j.number("explored_m2", r.explored_m2, 3);
+  j.number("reachable_m2", r.reachable_m2, 3);
+  j.number("coverage", r.coverage, 5);
+  j.number("iou", r.iou, 5);
+  j.number("obstacle_on_wall", r.obstacle_on_wall, 5);
+  j.integer("collisions", r.collisions);
+  j.integer("goals", r.goals);
+  j.integer("plans", r.plans);
+  j.number("plan_ms_p50", r.plan_ms_p50, 3);
+  j.number("plan_ms_p99", r.plan_ms_p99, 3);
+  j.number("control_ms_p99", r.control_ms_p99, 3);
+  return j.str();
+}
+
+namespace {
+
+// SVG path data of polygons (each ring a closed subpath) in the drawing's
+// pixel frame; the fill rule even-odd keeps holes empty.
+template <class ToPx>
+std::string path_of(const MultiPolygon& polygons, const ToPx& px) {
+  std::ostringstream d;
+  auto ring = [&](const mapping::Ring& points) {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto [x, y] = px(points[i]);
+      d << (i == 0 ? "M" : "L") << x << ' ' << y << ' ';
+    }
+    d << "Z ";
+  };
+  for (const auto& p : polygons) {
+    ring(p.outer());
+    for (const auto& h : p.inners()) ring(h);
+  }
+  return d.str();
+}
+
+}  // namespace
+
+std::string to_svg(const sim::World& world, const MultiPolygon& reachable, const mapping::TypedMultiPolygon& map_world,
+                   const kinematics::Pose2& start, double robot_radius_m) {
+  const MultiPolygon map_free = mapping::geometry_of(map_world);
+  // Frame: the walls' box and the map, a 1 m margin.
+  double min_x = world.min_x, min_y = world.min_y, max_x = world.max_x, max_y = world.max_y;
+  mapping::for_each_edge(map_world, [&](const mapping::Point& a, const mapping::Point&, mapping::EdgeType) {
+    min_x = std::min(min_x, a.x()), max_x = std::max(max_x, a.x());
+    min_y = std::min(min_y, a.y()), max_y = std::max(max_y, a.y());
+  });
+  const double margin = 1.0;
+  const double x0 = min_x - margin, y1 = max_y + margin;
+  const double width_m = max_x - min_x + 2 * margin, height_m = max_y - min_y + 2 * margin;
+  const double scale = std::min(40.0, 1600.0 / std::max(width_m, height_m));  // px per m
+  auto px = [&](const mapping::Point& p) {
+    return std::pair<long, long>(std::lround((p.x() - x0) * scale * 10), std::lround((y1 - p.y()) * scale * 10));
+  };  // tenths of a pixel, as integers: short and exact; the viewBox scales back
+
+  const auto missed = evaluation::checked_overlay(reachable, map_free, mapping::OverlayOp::kDifference);
+  const auto outside = evaluation::checked_overlay(map_free, reachable, mapping::OverlayOp::kDifference);
+
+  std::ostringstream s;
+  const long w_px = std::lround(width_m * scale), h_px = std::lround(height_m * scale);
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << w_px << "\" height=\"" << h_px << "\" viewBox=\"0 0 "
+    << w_px * 10 << ' ' << h_px * 10 << "\">\n";
+  s << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  s << "<path fill=\"#bfe8bf\" fill-rule=\"evenodd\" d=\"" << path_of(reachable, px) << "\"/>\n";
+  s << "<path fill=\"#4a78c8\" fill-opacity=\"0.55\" fill-rule=\"evenodd\" d=\"" << path_of(map_free, px) << "\"/>\n";
+  if (missed) s << "<path fill=\"#e03030\" fill-rule=\"evenodd\" d=\"" << path_of(*missed, px) << "\"/>\n";
+  if (outside) s << "<path fill=\"#a040c0\" fill-rule=\"evenodd\" d=\"" << path_of(*outside, px) << "\"/>\n";
+  const double edge_px = std::max(10.0, 0.05 * scale * 10);
+  for (const auto& [type, colour] : {std::pair{mapping::EdgeType::kObstacle, "#102060"},
+                                     std::pair{mapping::EdgeType::kFrontier, "#ff9900"}}) {
+    std::ostringstream d;
+    mapping::for_each_edge(map_world, [&](const mapping::Point& a, const mapping::Point& b, mapping::EdgeType t) {
+      if (t != type) return;
+      const auto [ax, ay] = px(a);
+      const auto [bx, by] = px(b);
+      d << 'M' << ax << ' ' << ay << 'L' << bx << ' ' << by << ' ';
+    });
+    s << "<path fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"" << edge_px << "\" d=\"" << d.str()
+      << "\"/>\n";
+  }
+  {
+    std::ostringstream d;
+    for (const auto& wall : world.walls) {
+      const auto [ax, ay] = px(mapping::Point(wall.x0, wall.y0));
+      const auto [bx, by] = px(mapping::Point(wall.x1, wall.y1));
+      d << 'M' << ax << ' ' << ay << 'L' << bx << ' ' << by << ' ';
+    }
+    s << "<path fill=\"none\" stroke=\"black\" stroke-width=\"" << edge_px * 0.6 << "\" stroke-linecap=\"round\" d=\""
+      << d.str() << "\"/>\n";
+  }
+  const auto [sx, sy] = px(mapping::Point(start.x_m, start.y_m));
+  s << "<circle cx=\"" << sx << "\" cy=\"" << sy << "\" r=\"" << robot_radius_m * scale * 10
+    << "\" fill=\"none\" stroke=\"#008000\" stroke-width=\"" << edge_px << "\"/>\n";
+  s << "</svg>\n";
+  return s.str();
+}
+
+}  // namespace pex::explore_report

@@ -1,0 +1,74 @@
+#pragma once
+// pex-explore-report's core: the last messages of an exploration run's LCM
+// log, scored against the world file, as the exploration benchmark's JSON
+// line (and an SVG that shows what was missed).
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <pex/daemon_status_t.hpp>
+#include <pex/explore_state_t.hpp>
+#include <pex/polygon_map_t.hpp>
+#include <pex/sim_clock_t.hpp>
+
+#include "evaluation/exploration_metrics.hpp"
+
+namespace pex::explore_report {
+
+// The last decodable message of each channel the report needs.
+struct LogContents {
+  std::optional<pex::polygon_map_t> map;              // MAP
+  std::optional<pex::explore_state_t> explore_state;  // EXPLORE_STATE
+  std::optional<pex::sim_clock_t> sim_clock;          // SIM_CLOCK
+  std::optional<pex::daemon_status_t> explorer_status;  // DAEMON_STATUS with name "explorer"
+  std::int64_t events = 0;    // all events in the log
+  std::int64_t rejected = 0;  // events on those channels that did not decode
+};
+
+// Reads the log at `path`. nullopt (and *error set) when the file cannot be
+// opened or holds no LCM event at all.
+std::optional<LogContents> read_log(const std::string& path, std::string* error);
+
+// The lower-case name of an explore_state_t phase ("done",
+// "done_with_unreachable", ...), "unknown_<n>" for others.
+std::string phase_name(std::int8_t phase);
+
+struct ReportOptions {
+  double robot_radius_m = 0.25;
+  double wall_tolerance_m = 0.1;
+  // The pose of the MAP frame's origin in the world: the robot's start pose
+  // (SLAM / odometry frame) or the identity (pose_source = "sim_truth").
+  kinematics::Pose2 map_in_world;
+};
+
+// One benchmark line; nullopt fields are printed as null.
+struct Report {
+  std::string world;
+  std::optional<std::string> strategy, phase;
+  std::optional<double> sim_time_s, path_m, explored_m2, reachable_m2, coverage, iou, obstacle_on_wall;
+  std::optional<std::int64_t> collisions, goals, plans;
+  std::optional<double> plan_ms_p50, plan_ms_p99, control_ms_p99;
+  // Not in the line (stderr): how the map decoded.
+  int map_polygons_dropped = 0;
+  std::string map_error;  // the last MAP did not decode at all
+};
+
+// Fills the report from the log and the world's reachable free space
+// (evaluation::reachable_free_space, computed by the caller). `map_world`,
+// if given, receives the decoded map moved into the world frame.
+Report make_report(const std::string& world_name, const LogContents& log, const sim::World& world,
+                   const mapping::MultiPolygon& reachable, const ReportOptions& options,
+                   mapping::TypedMultiPolygon* map_world = nullptr);
+
+// The JSON line (no trailing newline), keys in the benchmark's order.
+std::string to_json(const Report& report);
+
+// SVG: the reachable space light green, the part of it the map missed red,
+// mapped free space outside it violet, the map's free space blue over the
+// reachable, map obstacle edges dark blue, frontier edges orange, world
+// walls black, the robot's disk at the start green; y up.
+std::string to_svg(const sim::World& world, const mapping::MultiPolygon& reachable,
+                   const mapping::TypedMultiPolygon& map_world, const kinematics::Pose2& start,
+                   double robot_radius_m);
+
+}  // namespace pex::explore_report

@@ -1,0 +1,208 @@
+#include "report.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include "map_message.hpp"
+#include "runtime/channels.hpp"
+
+namespace pex::explore_report {
+namespace {
+
+namespace bg = boost::geometry;
+namespace ch = runtime::channels;
+
+// A 6 x 4 m room; the robot starts in its middle.
+sim::World room() {
+  auto parsed = sim::parse_world("START 3 2 0\nLINESTRING(0 0, 6 0, 6 4, 0 4, 0 0)\n", "room");
+  return std::get<sim::World>(parsed);
+}
+
+class TempLog {
+ public:
+  TempLog()
+      : path_(std::filesystem::temp_directory_path() /
+              ("pex_explore_report_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++) + ".lcm")) {}
+  ~TempLog() { std::filesystem::remove(path_); }
+  std::string path() const { return path_.string(); }
+
+  template <class Msg>
+  void add(std::string_view channel, const Msg& msg) {
+    std::vector<std::uint8_t> buffer(static_cast<std::size_t>(msg.getEncodedSize()));
+    msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+    add_raw(channel, buffer);
+  }
+  void add_raw(std::string_view channel, std::vector<std::uint8_t> data) {
+    events_.push_back({std::string(channel), std::move(data)});
+  }
+  void write() const {
+    lcm::LogFile log(path(), "w");
+    ASSERT_TRUE(log.good());
+    std::int64_t t = 1'000'000;
+    for (const auto& [channel, data] : events_) {
+      lcm::LogEvent event{};
+      event.timestamp = t += 1000;
+      event.channel = channel;
+      event.datalen = static_cast<std::int32_t>(data.size());
+      event.data = const_cast<std::uint8_t*>(data.data());
+      ASSERT_EQ(log.writeEvent(&event), 0);
+    }
+  }
+
+ private:
+  static inline int counter_ = 0;
+  std::filesystem::path path_;
+  std::vector<std::pair<std::string, std::vector<std::uint8_t>>> events_;
+};
+
+pex::daemon_status_t status(const std::string& name, const std::vector<std::pair<std::string, std::int64_t>>& counters) {
+  pex::daemon_status_t s{};
+  s.name = name;
+  s.state = pex::daemon_status_t::STATE_OK;
+  for (const auto& [k, v] : counters) {
+    s.counter_names.push_back(k);
+    s.counter_values.push_back(v);
+  }
+  s.ncounters = static_cast<std::int32_t>(counters.size());
+  return s;
+}
+
+TEST(ExploreReport, FullLogGivesEveryField) {
+  const auto world = room();
+  const auto reachable = evaluation::reachable_free_space(world, 0.25, world.start);
+
+  // The map: the room's left half, all obstacle edges, in the start frame
+  // (origin at (3, 2) world, same heading).
+  mapping::Polygon left;
+  bg::read_wkt("POLYGON((-3 -2, 0 -2, 0 2, -3 2, -3 -2))", left);
+  bg::correct(left);
+  const auto map = explorer::encode_map(mapping::with_uniform_type({left}, mapping::EdgeType::kObstacle), 5);
+
+  pex::explore_state_t state{};
+  state.phase = pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE;
+  state.strategy = "greedy";
+  state.distance_travelled_m = 12.5;
+  state.mission_time_s = 80.0;
+  state.goals_reached = 4;
+  state.plans = 7;
+  pex::sim_clock_t clock{};
+  clock.sim_time_us = 95'500'000;
+  clock.collisions = 1;
+
+  TempLog log;
+  log.add(ch::kMap, map);
+  log.add_raw(ch::kMap, {1, 2, 3});  // garbage: counted, skipped
+  log.add(ch::kExploreState, state);
+  log.add(ch::kSimClock, clock);
+  log.add(ch::kDaemonStatus, status("explorer", {{"plan_us_p50", 1500}, {"plan_us_p99", 12000}}));
+  log.add(ch::kDaemonStatus, status("slam", {{"plan_us_p50", 99}}));  // not the explorer's
+  log.write();
+
+  std::string error;
+  const auto contents = read_log(log.path(), &error);
+  ASSERT_TRUE(contents) << error;
+  EXPECT_EQ(contents->events, 6);
+  EXPECT_EQ(contents->rejected, 1);
+
+  ReportOptions options;
+  options.map_in_world = world.start;
+  mapping::TypedMultiPolygon map_world;
+  const auto r = make_report("room", *contents, world, reachable, options, &map_world);
+  EXPECT_EQ(r.strategy, "greedy");
+  EXPECT_EQ(r.phase, "done_with_unreachable");
+  EXPECT_DOUBLE_EQ(*r.sim_time_s, 95.5);
+  EXPECT_DOUBLE_EQ(*r.path_m, 12.5);
+  EXPECT_NEAR(*r.explored_m2, 12.0, 1e-9);
+  EXPECT_NEAR(*r.reachable_m2, bg::area(reachable), 1e-12);
+  EXPECT_NEAR(*r.coverage, 0.5, 1e-9);  // the room and its reachable space are symmetric
+  // The map holds the reachable space's left half and the two corners the
+  // robot cannot reach: IoU = A/2 / (A + 12 - A/2).
+  const double a = bg::area(reachable);
+  EXPECT_NEAR(*r.iou, 0.5 * a / (0.5 * a + 12.0), 1e-9);
+  // 10 m of the map's 14 m of obstacle edges on walls, and the 0.1 m ends of
+  // the x = 3 edge near the walls it meets.
+  EXPECT_NEAR(*r.obstacle_on_wall, 10.2 / 14.0, 1e-9);
+  EXPECT_EQ(r.collisions, 1);
+  EXPECT_EQ(r.goals, 4);
+  EXPECT_EQ(r.plans, 7);
+  EXPECT_DOUBLE_EQ(*r.plan_ms_p50, 1.5);
+  EXPECT_DOUBLE_EQ(*r.plan_ms_p99, 12.0);
+  EXPECT_FALSE(r.control_ms_p99);  // the counter is absent
+
+  const std::string json = to_json(r);
+  EXPECT_EQ(json.rfind("{\"world\":\"room\",\"strategy\":\"greedy\",\"phase\":\"done_with_unreachable\","
+                       "\"sim_time_s\":95.500,\"path_m\":12.500,\"explored_m2\":12.000,",
+                       0),
+            0u)
+      << json;
+  EXPECT_NE(json.find("\"coverage\":0.50000,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"collisions\":1,\"goals\":4,\"plans\":7,\"plan_ms_p50\":1.500,\"plan_ms_p99\":12.000,"
+                      "\"control_ms_p99\":null}"),
+            std::string::npos)
+      << json;
+
+  // The map, moved to the world, lies on the room's left half.
+  ASSERT_EQ(map_world.size(), 1u);
+  for (const auto& p : map_world.front().geometry.outer()) {
+    EXPECT_TRUE(std::abs(p.x()) < 1e-12 || std::abs(p.x() - 3.0) < 1e-12) << p.x();
+    EXPECT_TRUE(std::abs(p.y()) < 1e-12 || std::abs(p.y() - 4.0) < 1e-12) << p.y();
+  }
+  const std::string svg = to_svg(world, reachable, map_world, world.start, 0.25);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("#e03030"), std::string::npos);  // the missed right half
+}
+
+TEST(ExploreReport, MissingChannelsGiveNulls) {
+  const auto world = room();
+  const auto reachable = evaluation::reachable_free_space(world, 0.25, world.start);
+  pex::explore_state_t state{};
+  state.phase = pex::explore_state_t::PHASE_MOVING;
+  state.mission_time_s = 12.25;
+  TempLog log;
+  log.add(ch::kExploreState, state);
+  log.add(ch::kDaemonStatus, status("explorer", {}));
+  log.write();
+  const auto contents = read_log(log.path(), nullptr);
+  ASSERT_TRUE(contents);
+  const auto r = make_report("room", *contents, world, reachable, {});
+  char reachable_m2[32];
+  std::snprintf(reachable_m2, sizeof reachable_m2, "%.3f", bg::area(reachable));
+  EXPECT_EQ(to_json(r), std::string("{\"world\":\"room\",\"strategy\":null,\"phase\":\"moving\",\"sim_time_s\":12.250,"
+                                    "\"path_m\":0.000,\"explored_m2\":null,\"reachable_m2\":") +
+                            reachable_m2 +
+                            ",\"coverage\":null,\"iou\":null,\"obstacle_on_wall\":null,\"collisions\":null,"
+                            "\"goals\":0,\"plans\":0,\"plan_ms_p50\":null,\"plan_ms_p99\":null,\"control_ms_p99\":null}");
+}
+
+TEST(ExploreReport, UnreadableLogsAreErrors) {
+  std::string error;
+  EXPECT_FALSE(read_log("/nonexistent/dir/run.lcm", &error));
+  EXPECT_NE(error.find("cannot open"), std::string::npos) << error;
+
+  TempLog not_a_log;
+  std::ofstream(not_a_log.path()) << "this is not an LCM log\n";
+  error.clear();
+  EXPECT_FALSE(read_log(not_a_log.path(), &error));
+  EXPECT_NE(error.find("no LCM event"), std::string::npos) << error;
+}
+
+TEST(ExploreReport, PhaseNamesAndJsonStrings) {
+  EXPECT_EQ(phase_name(pex::explore_state_t::PHASE_DONE), "done");
+  EXPECT_EQ(phase_name(pex::explore_state_t::PHASE_FAILED), "failed");
+  EXPECT_EQ(phase_name(pex::explore_state_t::PHASE_STOPPED), "stopped");
+  EXPECT_EQ(phase_name(42), "unknown_42");
+  Report r;
+  r.world = "a\"b\\c\n";
+  EXPECT_EQ(to_json(r).rfind("{\"world\":\"a\\\"b\\\\c\\u000a\",\"strategy\":null,", 0), 0u) << to_json(r);
+}
+
+}  // namespace
+}  // namespace pex::explore_report
