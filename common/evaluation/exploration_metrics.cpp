@@ -128,6 +128,14 @@ MultiPolygon union_cascade(std::vector<MultiPolygon> parts) {
   return std::move(parts.front());
 }
 
+std::optional<MultiPolygon> union_or_nullopt(std::vector<MultiPolygon> parts) {
+  try {
+    return union_cascade(std::move(parts));
+  } catch (const std::runtime_error&) {
+    return std::nullopt;
+  }
+}
+
 MultiPolygon walls_box(const sim::World& world) {
   Polygon box;
   bg::convert(Box(Point(world.min_x, world.min_y), Point(world.max_x, world.max_y)), box);
@@ -235,17 +243,34 @@ double iou(const MultiPolygon& map_free, const MultiPolygon& reachable) {
 }
 
 MapScore score_map(const mapping::TypedMultiPolygon& map, const kinematics::Pose2& map_in_world,
-                   const MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m) {
+                   const MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m,
+                   double obstacle_band_credit_m) {
   MapScore score;
   const mapping::TypedMultiPolygon typed_world = to_world(map, map_in_world);
-  const MultiPolygon free_world = mapping::geometry_of(typed_world);
+  MultiPolygon free_world = mapping::geometry_of(typed_world);
   score.explored_m2 = bg::area(free_world);
   score.reachable_m2 = bg::area(reachable);
+  score.obstacle_on_wall = obstacle_on_wall(typed_world, walls, wall_tolerance_m);
+  if (obstacle_band_credit_m > 0.0) {
+    // The map plus the reachable space within the credit of an obstacle edge.
+    const auto offsets = disk_offsets(obstacle_band_credit_m, 16);
+    std::vector<MultiPolygon> capsules;
+    mapping::for_each_edge(typed_world, [&](const Point& a, const Point& b, mapping::EdgeType t) {
+      if (t == mapping::EdgeType::kObstacle) capsules.push_back({capsule(a, b, offsets)});
+    });
+    const auto band = checked_overlay(union_or_nullopt(std::move(capsules)).value_or(MultiPolygon{}), reachable,
+                                      mapping::OverlayOp::kIntersection);
+    const auto credited = band ? checked_overlay(free_world, *band, mapping::OverlayOp::kUnion) : std::nullopt;
+    if (!credited) {
+      score.mapped_reachable_m2 = score.coverage = score.iou = kNaN;
+      return score;
+    }
+    free_world = *credited;
+  }
   score.mapped_reachable_m2 = intersection_area(free_world, reachable);
   score.coverage = score.reachable_m2 > 0.0 ? score.mapped_reachable_m2 / score.reachable_m2 : kNaN;
-  const double uni = score.explored_m2 + score.reachable_m2 - score.mapped_reachable_m2;
+  const double uni = bg::area(free_world) + score.reachable_m2 - score.mapped_reachable_m2;
   score.iou = uni > 0.0 ? score.mapped_reachable_m2 / uni : kNaN;
-  score.obstacle_on_wall = obstacle_on_wall(typed_world, walls, wall_tolerance_m);
   return score;
 }
 

@@ -72,17 +72,28 @@ double coverage(const mapping::MultiPolygon& map_free, const mapping::MultiPolyg
 // |map| + |reachable| - |map ∩ reachable|, from the same overlay.
 double iou(const mapping::MultiPolygon& map_free, const mapping::MultiPolygon& reachable);
 
-// Everything at once, from one overlay: the map (free-space polygons, MAP
-// frame) against the world.
+// Everything at once: the map (free-space polygons, MAP frame) against the
+// world.
+//
+// obstacle_band_credit_m > 0 credits the strip the mapper's obstacle band
+// takes from the free space: the MAP message is the planning map, free space
+// minus a band around every obstacle edge (polygon_mapper [map]
+// obstacle_inner_m on the free side, obstacle_outer_m beyond the wall, so a
+// thin wall seen from both sides loses obstacle_outer_m on each side). With
+// the credit, reachable space within that distance of a map obstacle edge
+// counts as mapped (added to the map for coverage and IoU, never outside the
+// reachable space, so the map's own overreach still counts against IoU).
+// Frontier edges get no credit. 0: the map as published.
 struct MapScore {
-  double explored_m2 = 0.0;       // area of the map's free space
+  double explored_m2 = 0.0;       // area of the map's free space (as published, no credit)
   double reachable_m2 = 0.0;      // area of the reachable free space
-  double mapped_reachable_m2 = 0.0;  // area(map ∩ reachable)
+  double mapped_reachable_m2 = 0.0;  // area(map ∩ reachable), with the credit if any
   double coverage = 0.0;          // mapped_reachable / reachable (NaN: see coverage())
-  double iou = 0.0;               // mapped_reachable / (explored + reachable - mapped_reachable)
+  double iou = 0.0;               // mapped_reachable / area(map ∪ reachable), with the credit if any
   double obstacle_on_wall = 0.0;  // see obstacle_on_wall(); NaN without obstacle edges
 };
 MapScore score_map(const mapping::TypedMultiPolygon& map, const kinematics::Pose2& map_in_world,
-                   const mapping::MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m);
+                   const mapping::MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m,
+                   double obstacle_band_credit_m = 0.0);
 
 }  // namespace pex::evaluation

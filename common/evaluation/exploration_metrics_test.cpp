@@ -171,6 +171,24 @@ TEST(MapScores, HalfMapCoversHalf) {
   EXPECT_TRUE(std::isnan(iou(MultiPolygon{}, MultiPolygon{})));
 }
 
+TEST(MapScores, ObstacleBandCreditCountsTheStripBehindObstacleEdgesOnly) {
+  const auto world = world_from(kRoom);
+  const auto reachable = reachable_free_space(world, kR, world.start);
+  const WallIndex walls(world.walls);
+  // A map whose walls stop 5 cm short of the real ones (the obstacle band).
+  const auto inset = polygon("POLYGON((0.05 0.05, 5.95 0.05, 5.95 3.95, 0.05 3.95, 0.05 0.05))");
+  const auto raw = score_map(typed(inset), {}, reachable, walls, 0.1);
+  EXPECT_LT(raw.coverage, 0.97);
+  const auto credited = score_map(typed(inset), {}, reachable, walls, 0.1, 0.1);
+  EXPECT_NEAR(credited.coverage, 1.0, 1e-9);
+  EXPECT_GT(credited.iou, 0.999);  // the map's corners beyond the robot's reach still count
+  EXPECT_LT(credited.iou, 1.0);
+  EXPECT_DOUBLE_EQ(credited.explored_m2, raw.explored_m2);
+  // Frontier edges earn nothing.
+  const auto frontier = score_map(typed(inset, EdgeType::kFrontier), {}, reachable, walls, 0.1, 0.1);
+  EXPECT_DOUBLE_EQ(frontier.coverage, raw.coverage);
+}
+
 TEST(ObstacleOnWall, ShareOfObstacleLengthNearWalls) {
   const auto world = world_from(kRoom);
   // The left 3 x 4 m of the room: 10 m of its edges on walls, 4 m (x = 3)

@@ -1,5 +1,6 @@
 // pex-explore-report --world worlds/X.wkt --log run.lcm [--robot-radius-m 0.25]
-//   [--map-frame start|world] [--wall-tolerance-m 0.1] [--start-pose X Y THETA]
+//   [--map-frame start|world] [--wall-tolerance-m 0.1] [--credit-obstacle-band-m 0]
+//   [--start-pose X Y THETA]
 //   [--json-out FILE] [--svg FILE]
 // Scores an exploration run recorded with lcm-logger against its world: one
 // JSON line (the exploration benchmark's) on stdout and in --json-out; what
@@ -42,6 +43,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"start", "world"}));
   app.add_option("--wall-tolerance-m", options.wall_tolerance_m, "obstacle edges this close to a wall are on it")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--credit-obstacle-band-m", options.obstacle_band_credit_m,
+                 "count reachable space this close to a map obstacle edge as mapped (MAP is free space minus "
+                 "polygon_mapper's obstacle band; its obstacle_outer_m is 0.10); default 0: the map as published")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--start-pose", start_pose, "X_M Y_M THETA_RAD: the start pose, if not the world's START line")
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
@@ -79,10 +84,11 @@ int main(int argc, char** argv) {
 
   std::fprintf(stderr,
                "pex-explore-report: %lld events (%lld undecodable); MAP %s, EXPLORE_STATE %s, SIM_CLOCK %s, "
-               "explorer DAEMON_STATUS %s; map frame %s\n",
+               "explorer DAEMON_STATUS %s; map frame %s; mission_time_s %s\n",
                static_cast<long long>(log->events), static_cast<long long>(log->rejected),
                log->map ? "yes" : "none", log->explore_state ? "yes" : "none", log->sim_clock ? "yes" : "none",
-               log->explorer_status ? "yes" : "none", map_frame.c_str());
+               log->explorer_status ? "yes" : "none", map_frame.c_str(),
+               log->explore_state ? std::to_string(log->explore_state->mission_time_s).c_str() : "none");
   if (!report.map_error.empty())
     std::fprintf(stderr, "pex-explore-report: the last MAP does not decode: %s\n", report.map_error.c_str());
   if (report.map_polygons_dropped > 0)
@@ -98,7 +104,8 @@ int main(int argc, char** argv) {
   }
   if (!svg_out.empty()) {
     std::ofstream out(svg_out);
-    out << pex::explore_report::to_svg(world, reachable, map_world, start, options.robot_radius_m);
+    out << pex::explore_report::to_svg(world, reachable, map_world, start, options.robot_radius_m,
+                                                options.wall_tolerance_m);
     if (!out) return fail(73, "cannot write " + svg_out);
   }
   return 0;

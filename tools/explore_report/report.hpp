@@ -36,6 +36,9 @@ std::string phase_name(std::int8_t phase);
 struct ReportOptions {
   double robot_radius_m = 0.25;
   double wall_tolerance_m = 0.1;
+  // Reachable space this close to a map obstacle edge counts as mapped
+  // (evaluation::score_map): the obstacle band the mapper cuts out of MAP.
+  double obstacle_band_credit_m = 0.0;
   // The pose of the MAP frame's origin in the world: the robot's start pose
   // (SLAM / odometry frame) or the identity (pose_source = "sim_truth").
   kinematics::Pose2 map_in_world;
@@ -65,10 +68,11 @@ std::string to_json(const Report& report);
 
 // SVG: the reachable space light green, the part of it the map missed red,
 // mapped free space outside it violet, the map's free space blue over the
-// reachable, map obstacle edges dark blue, frontier edges orange, world
-// walls black, the robot's disk at the start green; y up.
+// reachable, map obstacle edges dark blue (magenta where more than 1 % of
+// an edge is farther than wall_tolerance_m from every wall), frontier edges
+// orange, world walls black, the robot's disk at the start green; y up.
 std::string to_svg(const sim::World& world, const mapping::MultiPolygon& reachable,
                    const mapping::TypedMultiPolygon& map_world, const kinematics::Pose2& start,
-                   double robot_radius_m);
+                   double robot_radius_m, double wall_tolerance_m);
 
 }  // namespace pex::explore_report

@@ -155,9 +155,12 @@ TEST(ExploreReport, FullLogGivesEveryField) {
     EXPECT_TRUE(std::abs(p.x()) < 1e-12 || std::abs(p.x() - 3.0) < 1e-12) << p.x();
     EXPECT_TRUE(std::abs(p.y()) < 1e-12 || std::abs(p.y() - 4.0) < 1e-12) << p.y();
   }
-  const std::string svg = to_svg(world, reachable, map_world, world.start, 0.25);
+  const std::string svg = to_svg(world, reachable, map_world, world.start, 0.25, 0.1);
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
   EXPECT_NE(svg.find("#e03030"), std::string::npos);  // the missed right half
+  const auto off_wall = svg.find("stroke=\"#ff00ff\"");  // the x = 3 edge, off the walls
+  ASSERT_NE(off_wall, std::string::npos);
+  EXPECT_LT(svg.find("d=\"M", off_wall), svg.find("/>", off_wall));
 }
 
 TEST(ExploreReport, MissingChannelsGiveNulls) {
