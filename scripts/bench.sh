@@ -4,10 +4,17 @@
 # the tables live in docs/. Each benchmark ends with one JSON line of its figures.
 #   scripts/bench.sh mapping
 #   scripts/bench.sh slam            (see docs/slam.md for its arguments)
+#   scripts/bench.sh explore [WORLD...]  (whole missions on the simulator; docs/exploration.md)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-name=${1:?usage: scripts/bench.sh NAME [ARGS...]   (NAME: $(ls bench | grep -v CMakeLists | tr '\n' ' '))}
+name=${1:?usage: scripts/bench.sh NAME [ARGS...]   (NAME: explore $(ls bench | grep -v CMakeLists | tr '\n' ' '))}
 shift
+if [ "$name" = explore ]; then
+  bash scripts/deps.sh
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build build -j"$(nproc)"
+  exec bash scripts/bench-explore.sh "$@"
+fi
 [ -d "bench/$name" ] || { echo "bench.sh: no benchmark bench/$name" >&2; exit 64; }
 bash scripts/deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Runs inside scripts/netns-run (loopback only): the whole set on the simulator
-# explores a world by itself, recorded with lcm-logger; then the map is drawn.
-#   WORLD (default two_rooms; any worlds/<name>.wkt), MISSION_S (default 300),
-#   SPEED (simulator speed factor, default 1), OUT (default out)
+# explores a world by itself, recorded with lcm-logger; then the map is drawn
+# and the run is measured against the world (OUT/report.json).
+#   WORLD (default two_rooms; any worlds/<name>.wkt), MISSION_S (mission-clock
+#   limit, default 300: simulated seconds, so the same at any SPEED),
+#   SPEED (simulator speed factor, default 1), STRATEGY (goal strategy,
+#   default: config/explorer.toml's), OUT (default out), QUIET=1 (no progress lines)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ "${PEX_IN_NETNS:-}" = "1" ] || { echo "demo-run.sh: run me through scripts/netns-run" >&2; exit 64; }
@@ -14,6 +17,13 @@ OUT=${OUT:-out}
 BIN=${BIN:-build/bin}
 [ -f "worlds/$WORLD.wkt" ] || { echo "demo: no world worlds/$WORLD.wkt" >&2; exit 64; }
 mkdir -p "$OUT"
+rm -f "$OUT/report.json"
+
+explorer_config=config/explorer.toml
+if [ -n "${STRATEGY:-}" ]; then
+  explorer_config="$OUT/explorer.toml"
+  sed "s/^goal_strategy *=.*/goal_strategy = \"$STRATEGY\"/" config/explorer.toml >"$explorer_config"
+fi
 
 pids=()
 cleanup() {
@@ -23,25 +33,41 @@ cleanup() {
 trap cleanup EXIT
 
 lcm-logger -f -q "$OUT/demo.lcm" & pids+=($!)
-sleep 0.3
 "$BIN/pex-sim" --config config/sim.toml --world "worlds/$WORLD.wkt" --speed "$SPEED" 2>"$OUT/sim.log" & pids+=($!)
-sleep 0.5
-for d in lidar_reader base_driver slam polygon_mapper explorer; do
+# The base driver needs the simulated CAN bus up: wait for the sim's OK.
+for _ in $(seq 30); do "$BIN/pex-status" --seconds 0.5 --expect sim >/dev/null && break; done
+for d in lidar_reader base_driver slam polygon_mapper; do
   "$BIN/pex-${d//_/-}" --config "config/$d.toml" 2>"$OUT/$d.log" & pids+=($!)
 done
-echo "demo: exploring worlds/$WORLD.wkt with the whole set (sim, lidar_reader, base_driver, slam,"
-echo "      polygon_mapper, explorer) for at most ${MISSION_S} s; logs in $OUT/, record in $OUT/demo.lcm"
+"$BIN/pex-explorer" --config "$explorer_config" 2>"$OUT/explorer.log" & pids+=($!)
+echo "demo: exploring worlds/$WORLD.wkt with the whole set (sim x$SPEED, lidar_reader, base_driver, slam,"
+echo "      polygon_mapper, explorer) for at most ${MISSION_S} s of mission time; logs in $OUT/, record in $OUT/demo.lcm"
 result=0
-"$BIN/pex-status" --follow-mission "$MISSION_S" || result=$?
+if [ "${QUIET:-0}" = 1 ]; then
+  "$BIN/pex-status" --follow-mission "$MISSION_S" >"$OUT/progress.txt" || result=$?
+  tail -n 1 "$OUT/progress.txt"
+else
+  "$BIN/pex-status" --follow-mission "$MISSION_S" || result=$?
+fi
 echo "demo: health of the set:"
-"$BIN/pex-status" --seconds 1.5 --counters || true
+"$BIN/pex-status" --seconds 1.5 --counters >"$OUT/health.txt" || true
+[ "${QUIET:-0}" = 1 ] || cat "$OUT/health.txt"
 cleanup; pids=()
 trap - EXIT
 
 "$BIN/pex-render-map" --log "$OUT/demo.lcm" --svg "$OUT/map.svg" --png "$OUT/map.png" \
   && echo "demo: map written to $OUT/map.svg and $OUT/map.png"
-if [ "$result" -eq 0 ]; then
-  echo "demo: mission DONE: no reachable frontier left."
-else
-  echo "demo: mission not DONE within ${MISSION_S} s (see the last line above; MISSION_S sets the limit)."
-fi
+"$BIN/pex-explore-report" --world "worlds/$WORLD.wkt" --log "$OUT/demo.lcm" --json-out "$OUT/report.json" >/dev/null \
+  || echo "demo: no report (pex-explore-report failed)"
+
+# The last line says what happened, from the report: the phase the mission
+# ended in, how much of the reachable floor the map covers, collisions.
+field() { sed -n "s/.*\"$1\": *\"\{0,1\}\([^\",}]*\).*/\1/p" "$OUT/report.json" 2>/dev/null | head -n 1; }
+phase=$(field phase); coverage=$(field coverage); collisions=$(field collisions); left=$(field frontiers_left)
+facts="coverage ${coverage:-?} of the reachable floor, ${collisions:-?} collisions; report in $OUT/report.json"
+case "$result" in
+  0) echo "demo: mission DONE: no frontier left; $facts" ;;
+  2) echo "demo: mission DONE_WITH_UNREACHABLE: ${left:-some} frontier goals left that the robot cannot reach (why: $OUT/report.json); $facts" ;;
+  *) echo "demo: mission not done: ended ${phase:-without a state} within ${MISSION_S} s of mission time (MISSION_S sets the limit); $facts" ;;
+esac
+[ "$result" -eq 0 ]

@@ -1,14 +1,109 @@
 #include "planning/exploration_planner.hpp"
 
+#include "planning/path_matrix.hpp"
+
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <utility>
+
+#include <boost/geometry/index/rtree.hpp>
 
 namespace pex::planning {
+
+namespace bg = boost::geometry;
+namespace bgi = boost::geometry::index;
+
+namespace {
+
+// The map's obstacle edges, for line-of-sight tests.
+class ObstacleEdges {
+ public:
+  explicit ObstacleEdges(const TypedMultiPolygon& map) {
+    std::vector<Value> values;
+    mapping::for_each_edge(map, [&](const Point& a, const Point& b, EdgeType t) {
+      if (t == EdgeType::kObstacle) values.emplace_back(mapping::Segment(a, b), values.size());
+    });
+    tree_ = Tree(values.begin(), values.end());  // packed: built once, queried a few hundred times
+  }
+  // True if an obstacle edge shares a point with the segment a-b.
+  bool blocks(const Point& a, const Point& b) const {
+    for (auto it = tree_.qbegin(bgi::intersects(mapping::Segment(a, b))); it != tree_.qend(); ++it)
+      if (segments_intersect(a, b, it->first.first, it->first.second)) return true;
+    return false;
+  }
+
+ private:
+  using Value = std::pair<mapping::Segment, std::size_t>;
+  using Tree = bgi::rtree<Value, bgi::rstar<16>>;
+  Tree tree_;
+};
+
+// The nearest point of `piece` (a C-space polygon) within `range_m` of the
+// frontier point `f` from which f is in view, moved into the interior.
+// Points along the piece's boundary every kStep are tried nearest first.
+std::optional<Point> approach_point(const ConfigurationSpace& cspace, const mapping::TypedPolygon& piece,
+                                    const Point& f, double range_m, const ObstacleEdges& obstacles) {
+  constexpr double kStep = 0.25;       // m between tried points along the boundary
+  constexpr std::size_t kTries = 48;   // line-of-sight tests at most
+  std::vector<std::pair<double, Point>> near;
+  auto scan_ring = [&](const mapping::Ring& ring) {
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+      const Point& a = ring[i];
+      const Point& b = ring[i + 1];
+      if (distance(f, closest_point_on_segment(f, a, b)) > range_m) continue;
+      const double length = distance(a, b);
+      const int n = std::max(1, static_cast<int>(std::ceil(length / kStep)));
+      for (int k = 0; k < n; ++k) {
+        const double t = (k + 0.5) / n;
+        const Point q(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y()));
+        const double d = distance(f, q);
+        if (d <= range_m) near.emplace_back(d, q);
+      }
+    }
+  };
+  scan_ring(piece.geometry.outer());
+  for (const auto& hole : piece.geometry.inners()) scan_ring(hole);
+  // Ties by coordinates: the answer does not depend on the ring order.
+  std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
+    if (a.first != b.first) return a.first < b.first;
+    if (a.second.x() != b.second.x()) return a.second.x() < b.second.x();
+    return a.second.y() < b.second.y();
+  });
+  for (std::size_t i = 0; i < near.size() && i < kTries; ++i) {
+    const auto inside = cspace.nearest_interior_point(near[i].second, 0.05);
+    if (!inside || !bg::covered_by(*inside, piece.geometry)) continue;
+    // Stop 1 cm short of f: f lies on the map's boundary, often at the end
+    // of an obstacle edge, which is not a wall in the way.
+    const double d = distance(*inside, f);
+    if (d <= 0.01) return inside;
+    const Point short_of_f(f.x() + (inside->x() - f.x()) * 0.01 / d, f.y() + (inside->y() - f.y()) * 0.01 / d);
+    if (!obstacles.blocks(*inside, short_of_f)) return inside;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
 
 double wrap_angle(double angle_rad) {
   double a = std::remainder(angle_rad, 2.0 * std::numbers::pi);
   if (a <= -std::numbers::pi) a += 2.0 * std::numbers::pi;
   return a;
+}
+
+const char* to_string(GoalStrategy strategy) {
+  switch (strategy) {
+    case GoalStrategy::kGreedy: return "greedy";
+    case GoalStrategy::kTour: return "tour";
+  }
+  return "?";
+}
+
+std::optional<GoalStrategy> parse_goal_strategy(std::string_view name) {
+  if (name == "greedy") return GoalStrategy::kGreedy;
+  if (name == "tour") return GoalStrategy::kTour;
+  return std::nullopt;
 }
 
 int Plan::reachable_count() const {
@@ -33,29 +128,8 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(cspace.polygons()));
   plan.stats.reflex_nodes = static_cast<int>(cspace.reflex_nodes().size());
 
-  // 1. Candidates on the frontiers, moved into the C-space.
-  const auto chains = frontier_chains(map);
-  plan.stats.frontier_chains = static_cast<int>(chains.size());
-  const auto points = frontier_candidates(chains, options.frontier, &plan.stats.chains_too_short);
-  std::vector<Point> targets;
-  for (const auto& fp : points) {
-    const auto inside = cspace.nearest_interior_point(fp.point, options.candidate_snap_distance_m);
-    if (!inside) {
-      ++plan.stats.candidates_not_in_cspace;
-      continue;
-    }
-    GoalCandidate c;
-    c.frontier_point = fp.point;
-    c.position = *inside;
-    c.chain = fp.chain;
-    c.chain_length_m = fp.chain_length_m;
-    for (const auto& b : blacklist)
-      if (distance(b, c.position) <= options.blacklist_radius_m) c.blacklisted = true;
-    plan.candidates.push_back(std::move(c));
-    targets.push_back(*inside);
-  }
-
-  // 2. The robot's own node.
+  // 1. The robot's own node, and the C-space piece it is in: a polygon of
+  // the C-space is one connected piece, so only its points are reachable.
   const Point robot_point(robot.x, robot.y);
   const auto start = cspace.nearest_interior_point(robot_point, options.start_snap_distance_m);
   if (!start) {
@@ -63,16 +137,71 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
                  " m of the configuration space";
     return plan;
   }
+  const mapping::TypedPolygon* own_piece = nullptr;
+  for (const auto& polygon : cspace.polygons())
+    if (bg::covered_by(*start, polygon.geometry)) {
+      own_piece = &polygon;
+      break;
+    }
+  std::optional<ObstacleEdges> obstacles;  // built on first need
 
-  // 3. Shortest paths and the best candidate.
-  const auto paths = shortest_paths(cspace, *start, targets);
-  plan.stats.segment_tests = paths.segment_tests;
+  // 2. Candidates on the frontiers, moved into the C-space, or to an
+  // approach point when the C-space next to them is cut off from the robot.
+  const auto chains = frontier_chains(map);
+  plan.stats.frontier_chains = static_cast<int>(chains.size());
+  const auto points = frontier_candidates(chains, options.frontier, &plan.stats.chains_too_short);
+  std::vector<Point> targets;
+  for (const auto& fp : points) {
+    std::optional<Point> position = cspace.nearest_interior_point(fp.point, options.candidate_snap_distance_m);
+    bool approach = false;
+    if (own_piece && options.approach_range_m > 0.0 &&
+        (!position || !bg::covered_by(*position, own_piece->geometry))) {
+      if (!obstacles) obstacles.emplace(map);
+      if (auto a = approach_point(cspace, *own_piece, fp.point, options.approach_range_m, *obstacles)) {
+        position = a;
+        approach = true;
+        ++plan.stats.approach_candidates;
+      }
+    }
+    if (!position) {
+      ++plan.stats.candidates_not_in_cspace;
+      plan.narrow_frontier_points.push_back(fp.point);
+      continue;
+    }
+    GoalCandidate c;
+    c.frontier_point = fp.point;
+    c.position = *position;
+    c.approach = approach;
+    c.chain = fp.chain;
+    c.chain_length_m = fp.chain_length_m;
+    for (const auto& b : blacklist)
+      if (distance(b, c.position) <= options.blacklist_radius_m) c.blacklisted = true;
+    plan.candidates.push_back(std::move(c));
+    targets.push_back(*position);
+  }
+
+  // 3. Shortest paths from the robot (for the tour, between all candidates
+  // too) and each candidate's cost.
+  std::vector<double> length_m;
+  std::vector<std::vector<Point>> path;
+  PathMatrix matrix;
+  if (options.strategy == GoalStrategy::kTour) {
+    matrix = shortest_path_matrix(cspace, *start, targets);
+    plan.stats.segment_tests = matrix.segment_tests;
+    length_m = matrix.from_start_m;
+    path = matrix.path_from_start;
+  } else {
+    auto paths = shortest_paths(cspace, *start, targets);
+    plan.stats.segment_tests = paths.segment_tests;
+    length_m = std::move(paths.length_m);
+    path = std::move(paths.path);
+  }
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     auto& c = plan.candidates[i];
-    if (!std::isfinite(paths.length_m[i])) continue;
+    if (!std::isfinite(length_m[i])) continue;
     c.reachable = true;
-    c.path = paths.path[i];
-    c.path_length_m = paths.length_m[i];
+    c.path = std::move(path[i]);
+    c.path_length_m = length_m[i];
     if (distance(robot_point, *start) > 0.0) {
       c.path.insert(c.path.begin(), robot_point);
       c.path_length_m += distance(robot_point, *start);
@@ -84,10 +213,81 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       if (distance(a, b) > 1e-9) turn = std::abs(wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta));
     }
     c.cost = c.path_length_m + options.turn_cost_m_per_rad * turn;
-    if (c.blacklisted) continue;
-    if (plan.best < 0 || c.cost < plan.candidates[static_cast<std::size_t>(plan.best)].cost)
-      plan.best = static_cast<int>(i);
   }
+
+  // 4. The goal: the cheapest candidate (greedy), or the first of the
+  // shortest open tour from the robot through every candidate (tour).
+  // Blacklisted candidates are never goals and not part of the tour.
+  if (options.strategy == GoalStrategy::kTour) {
+    std::vector<double> first_leg(plan.candidates.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i)
+      if (plan.candidates[i].reachable && !plan.candidates[i].blacklisted) first_leg[i] = plan.candidates[i].cost;
+    std::vector<double> between = matrix.between_m;
+    const std::size_t n = plan.candidates.size();
+    for (std::size_t i = 0; i < n; ++i)  // keep the matrix finite where the solver needs it (reachable rows)
+      for (std::size_t j = 0; j < n; ++j)
+        if (!std::isfinite(first_leg[i]) || !std::isfinite(first_leg[j])) between[i * n + j] = 0.0;
+    const OpenTour tour = solve_open_tour(first_leg, between, options.tour);
+    plan.tour = tour.order;
+    if (!tour.order.empty()) plan.best = tour.order.front();
+  } else {
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
+      const auto& c = plan.candidates[i];
+      if (!c.reachable || c.blacklisted) continue;
+      if (plan.best < 0 || c.cost < plan.candidates[static_cast<std::size_t>(plan.best)].cost)
+        plan.best = static_cast<int>(i);
+    }
+  }
+  plan.ok = true;
+  return plan;
+}
+
+Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
+                  const PlannerOptions& options) {
+  Plan plan;
+  if (!std::isfinite(robot.x) || !std::isfinite(robot.y) || !std::isfinite(target.x()) ||
+      !std::isfinite(target.y())) {
+    plan.error = "robot pose or target is not finite";
+    return plan;
+  }
+  ConfigurationSpace cspace;
+  const auto built = cspace.build(map, options.cspace);
+  if (!built.ok) {
+    plan.error = built.error;
+    return plan;
+  }
+  plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(cspace.polygons()));
+  plan.stats.reflex_nodes = static_cast<int>(cspace.reflex_nodes().size());
+  const auto inside = cspace.nearest_interior_point(target, options.candidate_snap_distance_m);
+  if (!inside) {
+    ++plan.stats.candidates_not_in_cspace;
+    plan.ok = true;  // a valid answer: the target cannot be reached
+    return plan;
+  }
+  const Point robot_point(robot.x, robot.y);
+  const auto start = cspace.nearest_interior_point(robot_point, options.start_snap_distance_m);
+  if (!start) {
+    plan.error = "the robot is not within " + std::to_string(options.start_snap_distance_m) +
+                 " m of the configuration space";
+    return plan;
+  }
+  GoalCandidate c;
+  c.frontier_point = target;
+  c.position = *inside;
+  const auto paths = shortest_paths(cspace, *start, {*inside});
+  plan.stats.segment_tests = paths.segment_tests;
+  if (std::isfinite(paths.length_m[0])) {
+    c.reachable = true;
+    c.path = paths.path[0];
+    c.path_length_m = paths.length_m[0];
+    if (distance(robot_point, *start) > 0.0) {
+      c.path.insert(c.path.begin(), robot_point);
+      c.path_length_m += distance(robot_point, *start);
+    }
+    c.cost = c.path_length_m;
+    plan.best = 0;
+  }
+  plan.candidates.push_back(std::move(c));
   plan.ok = true;
   return plan;
 }

@@ -6,19 +6,34 @@
 // (the paper's cost), with a small tie-break for the turn it needs.
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "mapping/scan_polygon.hpp"
 #include "planning/cspace.hpp"
 #include "planning/frontier_goals.hpp"
+#include "planning/goal_tour.hpp"
 #include "planning/visibility_graph.hpp"
 
 namespace pex::planning {
 
 using mapping::Pose2;
 
+// How the goal is chosen among the reachable candidates (the seam of goal
+// selection; measured side by side in docs/exploration.md).
+enum class GoalStrategy : std::int8_t {
+  kGreedy,  // the paper's: the nearest candidate by path length (plus the turn tie-break)
+  kTour,    // the first candidate of the shortest open tour from the robot through all of them
+};
+const char* to_string(GoalStrategy strategy);
+// "greedy" / "tour"; nullopt for anything else.
+std::optional<GoalStrategy> parse_goal_strategy(std::string_view name);
+
 struct PlannerOptions {
+  GoalStrategy strategy = GoalStrategy::kGreedy;
+  TourOptions tour;  // kTour: how hard to look for the shortest order
   CSpaceOptions cspace;
   FrontierGoalOptions frontier;
   // A frontier candidate is moved to the nearest C-space point; farther than
@@ -31,6 +46,13 @@ struct PlannerOptions {
   double start_snap_distance_m = 0.5;
   // Candidates within this radius of a blacklisted point are not goals.
   double blacklist_radius_m = 0.5;
+  // A frontier whose nearby C-space is cut off from the robot (seen through
+  // a door at a grazing angle: the free wedge behind the door is narrower
+  // than the robot) is approached instead from the robot's own C-space
+  // piece: the nearest point of it within this distance that has the
+  // frontier point in view (no obstacle edge of the map between them).
+  // 0 = off. Well below the laser's range, so the robot sees the frontier from there.
+  double approach_range_m = 8.0;
   // Cost = path length + this times the turn the first leg needs (|rad|):
   // among nearly equal paths, prefer the one ahead.
   double turn_cost_m_per_rad = 0.1;
@@ -39,6 +61,10 @@ struct PlannerOptions {
 struct GoalCandidate {
   Point frontier_point;         // on the frontier
   Point position;               // in the C-space: where the robot goes
+  // The C-space point next to the frontier is cut off from the robot (or
+  // there is none): `position` is instead the nearest point of the robot's
+  // own C-space piece from which the frontier point is in view.
+  bool approach = false;
   int chain = -1;               // frontier chain index
   double chain_length_m = 0.0;  // length of that frontier chain
   bool blacklisted = false;
@@ -51,7 +77,8 @@ struct GoalCandidate {
 struct PlanStats {
   int frontier_chains = 0;
   int chains_too_short = 0;
-  int candidates_not_in_cspace = 0;  // no C-space point near enough
+  int candidates_not_in_cspace = 0;  // no C-space point near enough, nor an approach point
+  int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
   int cspace_vertices = 0;
   int reflex_nodes = 0;
   std::int64_t segment_tests = 0;
@@ -61,7 +88,9 @@ struct Plan {
   bool ok = false;
   std::string error;                    // why not ok
   std::vector<GoalCandidate> candidates;  // every candidate that got into the C-space
+  std::vector<Point> narrow_frontier_points;  // frontier candidates with no C-space point near them
   int best = -1;                        // index into candidates, -1: none reachable
+  std::vector<int> tour;                // kTour: the visiting order (indices into candidates), best first
   PlanStats stats;
 
   int reachable_count() const;
@@ -74,6 +103,12 @@ struct Plan {
 // Pure and deterministic.
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options);
+
+// A path from `robot` to `target` (e.g. the mission's start pose) in the
+// C-space of `map`: the plan's one candidate is `target` moved into the
+// C-space (at most candidate_snap_distance_m), best when it is reachable.
+Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
+                  const PlannerOptions& options);
 
 // Angle wrapped to (-pi, pi].
 double wrap_angle(double angle_rad);

@@ -24,21 +24,59 @@ const char* to_string(Phase phase) {
     case Phase::kMoving: return "MOVING";
     case Phase::kDone: return "DONE";
     case Phase::kFailed: return "FAILED";
+    case Phase::kDoneWithUnreachable: return "DONE_WITH_UNREACHABLE";
+    case Phase::kWaitingStart: return "WAITING_START";
+    case Phase::kPaused: return "PAUSED";
+    case Phase::kHoming: return "HOMING";
+    case Phase::kHome: return "HOME";
+    case Phase::kStopped: return "STOPPED";
   }
   return "?";
 }
 
-Mission::Mission(MissionOptions options) : options_(std::move(options)), follower_(options_.follower) {}
+bool is_finished(Phase phase) {
+  return phase == Phase::kDone || phase == Phase::kDoneWithUnreachable || phase == Phase::kFailed;
+}
+
+const char* to_string(MissionCommand command) {
+  switch (command) {
+    case MissionCommand::kStart: return "start";
+    case MissionCommand::kPause: return "pause";
+    case MissionCommand::kResume: return "resume";
+    case MissionCommand::kHome: return "home";
+    case MissionCommand::kStop: return "stop";
+  }
+  return "?";
+}
+
+PlanResult compute_plan(const PlanRequest& request) {
+  PlanResult result;
+  result.id = request.id;
+  if (!request.map) {
+    result.plan.error = "no map";
+    return result;
+  }
+  result.plan = request.home ? plan_path_to(*request.map, request.pose, *request.home, request.options)
+                             : plan_exploration(*request.map, request.pose, request.blacklist, request.options);
+  return result;
+}
+
+Mission::Mission(MissionOptions options) : options_(std::move(options)), follower_(options_.follower) {
+  if (!options_.autostart) {
+    phase_ = Phase::kWaitingStart;
+    status_ = "waiting for a start command";
+  }
+}
 
 void Mission::on_map(TypedMultiPolygon map, std::int64_t utime) {
   explored_area_m2_ = mapping::area(map);
-  map_ = std::move(map);
+  map_ = std::make_shared<const TypedMultiPolygon>(std::move(map));
   map_utime_ = utime;
 }
 
 void Mission::on_pose(const Pose2& pose, std::int64_t utime) {
   if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta)) return;
-  if (pose_) {
+  if (pose_ && phase_ != Phase::kWaitingStart) {  // a robot pushed before the start is not the mission's travel
     const double step = std::hypot(pose.x - pose_->x, pose.y - pose_->y);
     if (step <= options_.max_travel_step_m) travelled_m_ += step;
   }
@@ -51,66 +89,181 @@ void Mission::enter(Phase phase, std::string status) {
   status_ = std::move(status);
 }
 
-MissionOutput Mission::output(bool planned) const {
+void Mission::finish(Phase phase, std::string status, std::int64_t now_utime) {
+  follower_.clear();
+  goal_.reset();
+  outstanding_id_ = 0;
+  pending_request_.reset();
+  end_utime_ = now_utime;
+  enter(phase, std::move(status));
+}
+
+std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) {
+  switch (command) {
+    case MissionCommand::kStart:
+      if (phase_ == Phase::kWaitingStart || phase_ == Phase::kStopped || phase_ == Phase::kHome ||
+          is_finished(phase_)) {
+        // A new leg of the same mission: what was visited stays visited, but
+        // the frontiers given up get another chance and DONE is confirmed anew.
+        blacklist_ = visited_;
+        goal_failures_ = plan_failures_ = empty_plans_ = 0;
+        end_utime_ = -1;
+        want_tight_ = false;
+        enter(Phase::kIdle, "started");
+        return {};
+      }
+      return phase_ == Phase::kPaused ? "paused: resume it" : "";
+    case MissionCommand::kPause:
+      if (phase_ == Phase::kPaused) return {};
+      if (phase_ == Phase::kStopped || phase_ == Phase::kHome || phase_ == Phase::kWaitingStart || is_finished(phase_))
+        return std::string("nothing to pause in phase ") + to_string(phase_);
+      paused_from_ = phase_;
+      follower_.stop();
+      enter(Phase::kPaused, "paused by command");
+      return {};
+    case MissionCommand::kResume:
+      if (phase_ != Phase::kPaused) return phase_ == Phase::kWaitingStart ? "not started: send start" : "";
+      enter(paused_from_, "resumed");
+      progress_utime_ = now_utime;  // the pause was not the goal's fault
+      last_request_utime_ = -1;     // the world may have changed: plan again now
+      return {};
+    case MissionCommand::kHome:
+      if (phase_ == Phase::kHoming || phase_ == Phase::kHome) return {};
+      if (!home_) return "no start pose yet: the mission has not run";
+      goal_.reset();
+      follower_.clear();
+      outstanding_id_ = 0;
+      end_utime_ = -1;
+      enter(Phase::kHoming, format("going home to (%.2f, %.2f)", home_->x, home_->y));
+      last_request_utime_ = -1;
+      return {};
+    case MissionCommand::kStop:
+      if (phase_ == Phase::kStopped) return {};
+      finish(Phase::kStopped, "stopped by command", now_utime);
+      return {};
+  }
+  return "unknown command";
+}
+
+MissionOutput Mission::output() const {
   MissionOutput out;
   out.phase = phase_;
   out.status = status_;
   out.degraded = degraded_;
-  if (phase_ == Phase::kMoving && goal_) {
+  if ((phase_ == Phase::kMoving || phase_ == Phase::kHoming) && goal_) {
     out.goal = goal_;
     out.path = follower_.path();
   }
   out.goal_candidates = goal_candidates_;
+  out.frontiers = frontiers_;
   out.explored_area_m2 = explored_area_m2_;
   out.distance_travelled_m = travelled_m_;
-  out.planned = planned;
+  if (start_utime_ >= 0)
+    out.mission_time_s = static_cast<double>((end_utime_ >= 0 ? end_utime_ : now_utime_) - start_utime_) * 1e-6;
+  out.goals = outcomes_;
+  out.plans = plans_;
   out.plan_stats = plan_stats_;
   return out;
 }
 
-Plan Mission::run_planner(std::int64_t now_utime, bool tight) {
-  PlannerOptions planner = options_.planner;
-  if (tight) planner.cspace.clearance_margin_m = 0.0;
-  Plan plan = plan_exploration(*map_, *pose_, blacklist_, planner);
-  last_plan_utime_ = now_utime;
-  last_plan_map_utime_ = map_utime_;
-  plan_stats_ = plan.stats;
-  goal_candidates_ = static_cast<int>(plan.candidates.size());
-  if (plan.ok) {
-    plan_failures_ = 0;
-  } else if (++plan_failures_ >= options_.max_consecutive_failures) {
-    follower_.clear();
-    goal_.reset();
-    enter(Phase::kFailed, "planning failed " + std::to_string(plan_failures_) + " times in a row: " + plan.error);
-  }
-  return plan;
+void Mission::request_plan(std::int64_t now_utime, Purpose purpose, bool tight) {
+  PlanRequest r;
+  r.id = next_request_id_++;
+  r.map = map_;
+  r.map_utime = map_utime_;
+  r.pose = *pose_;
+  r.blacklist = blacklist_;
+  r.options = options_.planner;
+  r.tight = tight;
+  if (tight) r.options.cspace.clearance_margin_m = 0.0;
+  if (purpose == Purpose::kHome) r.home = Point(home_->x, home_->y);
+  outstanding_id_ = r.id;
+  outstanding_purpose_ = purpose;
+  outstanding_tight_ = tight;
+  outstanding_utime_ = now_utime;
+  last_request_utime_ = now_utime;
+  last_request_map_utime_ = map_utime_;
+  pending_request_ = std::move(r);
 }
 
-void Mission::plan_and_select(std::int64_t now_utime) {
-  const Plan plan = run_planner(now_utime, false);
-  if (phase_ == Phase::kFailed) return;
-  bool blocked = plan.stats.candidates_not_in_cspace > 0;
-  for (const auto& c : plan.candidates) blocked = blocked || (!c.blacklisted && !c.reachable);
-  if (plan.ok && !plan.best_candidate() && blocked && options_.tight_fallback &&
+bool Mission::plan_due(std::int64_t now_utime) const {
+  if (outstanding_id_ != 0) return now_utime - outstanding_utime_ >= options_.plan_timeout_us;
+  return last_request_utime_ < 0 || now_utime - last_request_utime_ >= options_.replan_period_us;
+}
+
+void Mission::count_plan_failure(const Plan& plan) {
+  if (++plan_failures_ >= options_.max_consecutive_failures)
+    finish(Phase::kFailed, "planning failed " + std::to_string(plan_failures_) + " times in a row: " + plan.error,
+           now_utime_);
+  else
+    status_ = "planning failed: " + plan.error;
+}
+
+void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
+  if (result.id == 0 || result.id != outstanding_id_) return;  // an answer nobody waits for any more
+  outstanding_id_ = 0;
+  now_utime_ = std::max(now_utime_, now_utime);
+  ++plans_;
+  const Plan& plan = result.plan;
+  plan_stats_ = plan.stats;
+  if (!plan.ok) {
+    count_plan_failure(plan);  // MOVING / HOMING keep following the last path meanwhile
+    return;
+  }
+  plan_failures_ = 0;
+  switch (outstanding_purpose_) {
+    case Purpose::kSelect:
+      if (phase_ == Phase::kSelecting) on_select_plan(plan, outstanding_tight_, now_utime);
+      break;
+    case Purpose::kFollow:
+      if (phase_ == Phase::kMoving) on_follow_plan(plan, now_utime);
+      break;
+    case Purpose::kHome:
+      if (phase_ == Phase::kHoming) on_home_plan(plan);
+      break;
+  }
+}
+
+void Mission::list_frontiers(const Plan& plan) {
+  goal_candidates_ = static_cast<int>(plan.candidates.size());
+  frontiers_.clear();
+  for (const auto& c : plan.candidates) {
+    FrontierReason why = FrontierReason::kReachable;
+    if (!c.reachable) {
+      why = FrontierReason::kNoPath;
+    } else if (c.blacklisted) {
+      bool visited = false;
+      for (const auto& v : visited_) visited = visited || distance(v, c.position) <= options_.planner.blacklist_radius_m;
+      why = visited ? FrontierReason::kVisited : FrontierReason::kGivenUp;
+    }
+    frontiers_.push_back({c.position, why});
+  }
+  for (const auto& p : plan.narrow_frontier_points) frontiers_.push_back({p, FrontierReason::kTooNarrow});
+}
+
+void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime) {
+  list_frontiers(plan);
+  if (!plan.best_candidate() && !tight && options_.tight_fallback &&
       options_.planner.cspace.clearance_margin_m > 0.0) {
-    const Plan tight = run_planner(now_utime, true);
-    if (phase_ == Phase::kFailed) return;
-    if (tight.ok && tight.best_candidate()) {
-      select(tight, now_utime);
-      goal_tight_ = true;
-      status_ += " (without clearance margin)";
+    bool blocked = plan.stats.candidates_not_in_cspace > 0;
+    for (const auto& c : plan.candidates) blocked = blocked || (!c.blacklisted && !c.reachable);
+    if (blocked) {
+      // Plan once more without the margin, right away, on the same map.
+      want_tight_ = true;
+      last_request_utime_ = -1;
       return;
     }
   }
+  want_tight_ = false;
   select(plan, now_utime);
+  if (tight && phase_ == Phase::kMoving) {
+    goal_tight_ = true;
+    status_ += " (without clearance margin)";
+  }
 }
 
 void Mission::select(const Plan& plan, std::int64_t now_utime) {
   goal_tight_ = false;
-  if (!plan.ok) {
-    if (phase_ != Phase::kFailed) status_ = "planning failed: " + plan.error;
-    return;
-  }
   const GoalCandidate* best = plan.best_candidate();
   if (!best) {
     follower_.clear();
@@ -120,22 +273,25 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       ++empty_plans_;
       last_empty_map_utime_ = map_utime_;
     }
-    int blacklisted = 0, unreachable = 0;
-    for (const auto& c : plan.candidates) {
-      if (c.blacklisted) ++blacklisted;
-      else if (!c.reachable) ++unreachable;
+    int given_up = 0, visited = 0, no_path = 0;
+    for (const auto& f : frontiers_) {
+      given_up += f.reason == FrontierReason::kGivenUp;
+      visited += f.reason == FrontierReason::kVisited;
+      no_path += f.reason == FrontierReason::kNoPath;
     }
+    const int narrow = plan.stats.candidates_not_in_cspace;
+    const bool nothing_left = plan.candidates.empty() && narrow == 0;
     std::string why;
-    if (plan.candidates.empty() && plan.stats.candidates_not_in_cspace == 0) {
+    if (nothing_left) {
       why = "no frontier left";
     } else {
-      why = std::to_string(plan.candidates.size() + static_cast<std::size_t>(plan.stats.candidates_not_in_cspace)) +
-            " frontier goals left, none reachable (" + std::to_string(blacklisted) + " given up or visited, " +
-            std::to_string(unreachable) + " without a path, " +
-            std::to_string(plan.stats.candidates_not_in_cspace) + " too narrow for the robot)";
+      why = std::to_string(plan.candidates.size() + static_cast<std::size_t>(narrow)) +
+            " frontier goals left, none reachable (" + std::to_string(no_path) + " without a path, " +
+            std::to_string(narrow) + " too narrow for the robot, " + std::to_string(given_up) + " given up, " +
+            std::to_string(visited) + " visited without clearing them)";
     }
     if (empty_plans_ >= options_.done_confirmations) {
-      enter(Phase::kDone, "exploration done: " + why);
+      finish(nothing_left ? Phase::kDone : Phase::kDoneWithUnreachable, "exploration done: " + why, now_utime);
     } else {
       status_ = "no goal on this map (" + why + "); confirming on a newer map";
     }
@@ -143,6 +299,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
   }
   empty_plans_ = 0;
   goal_ = best->position;
+  goal_frontier_ = best->frontier_point;
   progress_goal_ = best->position;
   best_remaining_m_ = best->path_length_m;
   progress_utime_ = now_utime;
@@ -155,23 +312,23 @@ void Mission::give_up_goal(const std::string& why) {
   if (goal_) blacklist_.push_back(*goal_);
   goal_.reset();
   follower_.clear();
-  last_plan_utime_ = -1;  // plan again at the next step
+  last_request_utime_ = -1;  // plan again at the next step
   if (++goal_failures_ >= options_.max_consecutive_failures) {
-    enter(Phase::kFailed, "gave up " + std::to_string(goal_failures_) + " goals in a row; the last: " + why);
+    finish(Phase::kFailed, "gave up " + std::to_string(goal_failures_) + " goals in a row; the last: " + why,
+           now_utime_);
   } else {
     enter(Phase::kSelecting, "gave up a goal: " + why);
   }
 }
 
-void Mission::replan_while_moving(std::int64_t now_utime) {
-  const Plan plan = run_planner(now_utime, goal_tight_);
-  if (!plan.ok) return;  // keep following the last path; run_planner counts failures
+void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
+  list_frontiers(plan);
   int match = -1;
   double match_distance = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
     if (c.blacklisted) continue;
-    const double d = distance(c.position, *goal_);
+    const double d = std::min(distance(c.position, *goal_), distance(c.frontier_point, goal_frontier_));
     if (d <= options_.goal_match_radius_m && d < match_distance) {
       match_distance = d;
       match = static_cast<int>(i);
@@ -179,10 +336,13 @@ void Mission::replan_while_moving(std::int64_t now_utime) {
   }
   if (match < 0) {
     // The frontier behind the goal has been seen: a success, choose anew.
+    ++outcomes_.seen;
     goal_failures_ = 0;
-    enter(Phase::kSelecting, "goal explored");
+    goal_.reset();
+    follower_.clear();
+    enter(Phase::kSelecting, "goal seen");
     if (goal_tight_) {
-      last_plan_utime_ = -1;  // select on a plan with the full clearance first
+      last_request_utime_ = -1;  // select on a plan with the full clearance first
     } else {
       select(plan, now_utime);
     }
@@ -190,15 +350,14 @@ void Mission::replan_while_moving(std::int64_t now_utime) {
   }
   const GoalCandidate& same = plan.candidates[static_cast<std::size_t>(match)];
   if (!same.reachable) {
+    ++outcomes_.blocked;
     give_up_goal("no path to it any more");
     return;
   }
-  const GoalCandidate* best = plan.best_candidate();
-  if (!goal_tight_ && best && best != &same && best->cost < same.cost - options_.switch_margin_m) {
-    select(plan, now_utime);
-    return;
-  }
+  // Commitment: the goal is kept even when another candidate is now cheaper;
+  // switching back and forth between goals is what makes a robot wander.
   goal_ = same.position;
+  goal_frontier_ = same.frontier_point;
   follower_.set_path(same.path);
   // Progress: the path got shorter, or the goal moved on with its frontier
   // (a corridor's end recedes as the robot drives down it).
@@ -210,27 +369,40 @@ void Mission::replan_while_moving(std::int64_t now_utime) {
   }
 }
 
+void Mission::on_home_plan(const Plan& plan) {
+  const GoalCandidate* home = plan.best_candidate();
+  if (!home) {
+    finish(Phase::kFailed, "cannot go home: no path to the start pose", now_utime_);
+    return;
+  }
+  goal_ = home->position;
+  follower_.set_path(home->path);
+}
+
 MissionOutput Mission::step(std::int64_t now_utime) {
   const double dt_s = last_step_utime_ < 0 ? 0.0 : static_cast<double>(now_utime - last_step_utime_) * 1e-6;
   last_step_utime_ = now_utime;
+  now_utime_ = now_utime;
+  pending_request_.reset();
 
-  if (phase_ == Phase::kDone || phase_ == Phase::kFailed) {
+  auto stopped = [&] {
     follower_.stop();
-    return output(false);
-  }
+    return output();
+  };
+  if (is_finished(phase_) || phase_ == Phase::kWaitingStart || phase_ == Phase::kStopped ||
+      phase_ == Phase::kHome || phase_ == Phase::kPaused)
+    return stopped();
   if (!map_ || !pose_) {
-    follower_.stop();
     phase_ = Phase::kIdle;
     status_ = !map_ && !pose_ ? "waiting for a map and a pose" : !map_ ? "waiting for a map" : "waiting for a pose";
-    return output(false);
+    return stopped();
   }
 
   const std::int64_t pose_age = now_utime - pose_utime_;
   const std::int64_t map_age = now_utime - map_utime_;
   if (pose_age > options_.pose_timeout_us || map_age > options_.map_timeout_us) {
     degraded_ = true;
-    follower_.stop();
-    MissionOutput out = output(false);
+    MissionOutput out = stopped();
     out.degraded_reason = pose_age > options_.pose_timeout_us ? "pose is stale" : "map is stale";
     out.status = pose_age > options_.pose_timeout_us
                      ? format("stopped: pose is stale (%.0f ms old)", static_cast<double>(pose_age) * 1e-3)
@@ -242,20 +414,24 @@ MissionOutput Mission::step(std::int64_t now_utime) {
     progress_utime_ = now_utime;  // the stop was not the goal's fault
   }
 
-  if (phase_ == Phase::kIdle) enter(Phase::kSelecting, "selecting the first goal");
+  if (phase_ == Phase::kIdle) {
+    if (!started_) {
+      started_ = true;
+      start_utime_ = now_utime;
+      home_ = pose_;
+    }
+    enter(Phase::kSelecting, "selecting the first goal");
+  }
 
-  bool planned = false;
   if (phase_ == Phase::kSelecting) {
     if (map_utime_ <= select_after_map_utime_) {
-      follower_.stop();
       status_ = "goal reached; waiting for the map to show it";
-      return output(false);
+      return stopped();
     }
-    if (map_utime_ != last_plan_map_utime_ || last_plan_utime_ < 0 ||
-        now_utime - last_plan_utime_ >= options_.replan_period_us) {
-      plan_and_select(now_utime);
-      planned = true;
-    }
+    // A new map, the period, or the tight retry: ask (once) for a plan.
+    const bool fresh_map = map_utime_ != last_request_map_utime_;
+    if (outstanding_id_ == 0 ? (fresh_map || want_tight_ || plan_due(now_utime)) : plan_due(now_utime))
+      request_plan(now_utime, Purpose::kSelect, want_tight_);
   }
 
   if (phase_ == Phase::kMoving) {
@@ -265,26 +441,47 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       // clear from there would otherwise pull the robot back for ever.
       visited_.push_back(*goal_);
       blacklist_.push_back(*goal_);
+      ++outcomes_.reached;
       goal_failures_ = 0;
       goal_.reset();
       follower_.clear();
+      outstanding_id_ = 0;  // a plan for the old goal is of no use
       select_after_map_utime_ = map_utime_;
       enter(Phase::kSelecting, format("goal (%.2f, %.2f) reached", visited_.back().x(), visited_.back().y()));
-      return output(planned);
+      return stopped();
     }
-    if (!planned && now_utime - last_plan_utime_ >= options_.replan_period_us) {
-      replan_while_moving(now_utime);
-      planned = true;
-    }
-    if (phase_ == Phase::kMoving && now_utime - progress_utime_ > options_.progress_timeout_us)
+    if (plan_due(now_utime)) request_plan(now_utime, Purpose::kFollow, goal_tight_);
+    if (now_utime - progress_utime_ > options_.progress_timeout_us) {
+      ++outcomes_.no_progress;
       give_up_goal(format("no progress for %.0f s", static_cast<double>(options_.progress_timeout_us) * 1e-6));
+    }
   }
 
-  MissionOutput out = output(planned);
-  if (phase_ == Phase::kMoving) {
+  if (phase_ == Phase::kHoming) {
+    const Point here(pose_->x, pose_->y);
+    if (distance(here, Point(home_->x, home_->y)) <= options_.follower.goal_tolerance_m) {
+      finish(Phase::kHome, format("home: back at (%.2f, %.2f)", home_->x, home_->y), now_utime);
+      return stopped();
+    }
+    if (plan_due(now_utime)) request_plan(now_utime, Purpose::kHome, false);
+  }
+
+  MissionOutput out = output();
+  if ((phase_ == Phase::kMoving || phase_ == Phase::kHoming) && goal_) {
     out.command = follower_.update(*pose_, dt_s);
   } else {
     follower_.stop();
+  }
+  out.plan_request = pending_request_;
+  return out;
+}
+
+MissionOutput step_with_inline_planning(Mission& mission, std::int64_t now_utime) {
+  MissionOutput out = mission.step(now_utime);
+  // Bounded: a select plan may ask for its tight retry, which may select.
+  for (int round = 0; round < 4 && out.plan_request; ++round) {
+    mission.on_plan(compute_plan(*out.plan_request), now_utime);
+    out = mission.step(now_utime);
   }
   return out;
 }

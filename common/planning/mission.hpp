@@ -1,22 +1,37 @@
 #pragma once
 // The exploration mission as a pure state machine (paper, Algorithm 1: repeat
-// "select a goal on the frontiers, go there" until no frontier is left).
+// "select a goal on the frontiers, go there" until no frontier is left), with
+// the operator's commands on top.
 //
-//   IDLE       no map or no pose yet
-//   SELECTING  plan on the newest map, pick the best candidate
-//   MOVING     follow the path; replan every replan_period_us:
-//                goal reached                -> SELECTING (after a newer map)
-//                goal gone (frontier seen)   -> SELECTING
-//                goal unreachable / no progress -> blacklist it, SELECTING
-//                a clearly better goal       -> switch to it
-//   DONE       no reachable candidate left (confirmed on done_confirmations maps),
-//              also without the clearance margin (tight_fallback)
-//   FAILED     max_consecutive_failures goals given up or plans failed in a row
+//   WAITING_START  autostart off: nothing moves until `start`
+//   IDLE           no map or no pose yet
+//   SELECTING      a plan on the newest map picks the goal (strategy: greedy or tour)
+//   MOVING         follow the path; replan every replan_period_us. The goal is
+//                  kept (no switching) until it is
+//                    reached                       -> SELECTING (after a newer map)
+//                    seen (its frontier is gone)   -> SELECTING
+//                    blocked (no path any more)    -> blacklisted, SELECTING
+//                    given up (no progress)        -> blacklisted, SELECTING
+//                  each outcome counted in GoalOutcomes.
+//   DONE           no frontier left (confirmed on done_confirmations maps)
+//   DONE_WITH_UNREACHABLE  frontiers are left, none reachable; each listed with why
+//   FAILED         max_consecutive_failures goals given up or plans failed in a row
+//   PAUSED         `pause`: wheels stopped, goal and state kept; `resume` goes on
+//   HOMING / HOME  `home`: back to the pose the mission started at, then stopped
+//   STOPPED        `stop`: wheels stopped until `start`
+//
+// Planning never runs inside step(): step() asks for a plan (MissionOutput::
+// plan_request) and the caller runs compute_plan() wherever it likes (the
+// explorer: a worker thread) and hands the result back with on_plan(). Until
+// then the robot keeps following its last path, so the control step never
+// waits for a plan. step_with_inline_planning() does both at once for tests
+// and offline tools.
 //
 // Stale inputs (pose or map older than its timeout) stop the robot and set
 // `degraded` without changing the phase; the mission resumes when they are
 // fresh again. No clock, no I/O: time comes in with every call.
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,20 +42,50 @@
 namespace pex::planning {
 
 // Values match pex::explore_state_t's PHASE_* constants.
-enum class Phase : std::int8_t { kIdle = 0, kSelecting = 1, kMoving = 2, kDone = 3, kFailed = 4 };
+enum class Phase : std::int8_t {
+  kIdle = 0,
+  kSelecting = 1,
+  kMoving = 2,
+  kDone = 3,
+  kFailed = 4,
+  kDoneWithUnreachable = 5,
+  kWaitingStart = 6,
+  kPaused = 7,
+  kHoming = 8,
+  kHome = 9,
+  kStopped = 10,
+};
 const char* to_string(Phase phase);
+// The mission has ended on its own (DONE, DONE_WITH_UNREACHABLE, FAILED).
+bool is_finished(Phase phase);
+
+// Values match pex::mission_cmd_t's CMD_* constants.
+enum class MissionCommand : std::int8_t { kStart = 1, kPause = 2, kResume = 3, kHome = 4, kStop = 5 };
+const char* to_string(MissionCommand command);
+
+// Values match pex::explore_state_t's FRONTIER_* constants.
+enum class FrontierReason : std::int8_t { kReachable = 0, kNoPath = 1, kTooNarrow = 2, kGivenUp = 3, kVisited = 4 };
+
+struct FrontierLeft {
+  Point position;  // the candidate (in the C-space), or the frontier point when it has no C-space point
+  FrontierReason reason = FrontierReason::kReachable;
+};
 
 struct MissionOptions {
   PlannerOptions planner;
   FollowerOptions follower;  // follower.goal_tolerance_m decides "goal reached"
+  // Explore as soon as map and pose are there; off: wait for a start command.
+  bool autostart = true;
   std::int64_t replan_period_us = 1'000'000;
   std::int64_t pose_timeout_us = 500'000;
   std::int64_t map_timeout_us = 5'000'000;
+  // A plan asked for and not answered within this time is asked for again
+  // (the answer to the old request is then ignored).
+  std::int64_t plan_timeout_us = 5'000'000;
   // After a replan, the candidate nearest the current goal within this radius
-  // is the same goal (frontiers move as the robot sees more).
+  // is the same goal (frontiers move as the robot sees more); so is one for a
+  // frontier point this near the goal's (its approach point may have moved).
   double goal_match_radius_m = 1.5;
-  // While moving, switch to another candidate only if it is this much cheaper.
-  double switch_margin_m = 1.0;
   // Give a goal up if neither its path has become progress_min_m shorter nor
   // the goal has moved on by progress_min_m (its frontier receding) within
   // progress_timeout_us.
@@ -58,18 +103,52 @@ struct MissionOptions {
   bool tight_fallback = true;
 };
 
+// How goals ended (counted over the mission).
+struct GoalOutcomes {
+  std::int64_t reached = 0;
+  std::int64_t seen = 0;         // its frontier was explored before the robot got there
+  std::int64_t blocked = 0;      // no path to it any more: blacklisted
+  std::int64_t no_progress = 0;  // the path did not shrink for progress_timeout_us: blacklisted
+  std::int64_t given_up() const { return blocked + no_progress; }
+};
+
+// What the planner is asked: everything it needs, copied, so it can run on
+// another thread while the mission goes on.
+struct PlanRequest {
+  std::uint64_t id = 0;
+  std::shared_ptr<const TypedMultiPolygon> map;
+  std::int64_t map_utime = 0;
+  Pose2 pose;
+  std::vector<Point> blacklist;
+  PlannerOptions options;      // clearance margin already dropped when tight
+  bool tight = false;          // planned without the clearance margin
+  std::optional<Point> home;   // set: a path to this point, not frontier goals
+};
+
+struct PlanResult {
+  std::uint64_t id = 0;  // the request's
+  Plan plan;
+};
+
+// Runs the request: plan_exploration(), or plan_path_to() for `home`. Pure.
+PlanResult compute_plan(const PlanRequest& request);
+
 struct MissionOutput {
   Phase phase = Phase::kIdle;
   std::string status;           // why the phase is what it is
   bool degraded = false;        // an input is stale: the robot is stopped
   std::string degraded_reason;  // "pose is stale" / "map is stale" (no numbers: stable while it lasts)
-  VelocityCommand command;      // zero unless MOVING and not degraded
+  VelocityCommand command;      // zero unless MOVING or HOMING and not degraded
   std::optional<Point> goal;
   std::vector<Point> path;      // robot to goal
   int goal_candidates = 0;      // candidates in the C-space in the last plan
+  std::vector<FrontierLeft> frontiers;  // every candidate of the last plan, with why it is left
   double explored_area_m2 = 0.0;
   double distance_travelled_m = 0.0;
-  bool planned = false;         // this step ran the planner
+  double mission_time_s = 0.0;  // since the mission started (frozen when it ends)
+  GoalOutcomes goals;
+  std::int64_t plans = 0;       // plan results used
+  std::optional<PlanRequest> plan_request;  // run compute_plan() on it and call on_plan()
   PlanStats plan_stats;         // of the last plan
 };
 
@@ -80,32 +159,49 @@ class Mission {
   // Inputs, with the time they arrived (us). A map replaces the previous one.
   void on_map(TypedMultiPolygon map, std::int64_t utime);
   void on_pose(const Pose2& pose, std::int64_t utime);
+  // An operator's command; idempotent (start while exploring does nothing).
+  // Returns "" when applied, else why not (e.g. resume while not paused).
+  std::string on_command(MissionCommand command, std::int64_t now_utime);
+  // The answer to a plan_request; an answer to an older request is ignored.
+  void on_plan(const PlanResult& result, std::int64_t now_utime);
 
-  // One control step at `now_utime`; call at the command rate.
+  // One control step at `now_utime`; call at the command rate. Never plans.
   MissionOutput step(std::int64_t now_utime);
 
   Phase phase() const { return phase_; }
   const std::vector<Point>& blacklist() const { return blacklist_; }
   const std::vector<Point>& visited_goals() const { return visited_; }
+  const GoalOutcomes& goal_outcomes() const { return outcomes_; }
   const MissionOptions& options() const { return options_; }
 
  private:
-  Plan run_planner(std::int64_t now_utime, bool tight);
-  // Plans (with the tight fallback) and selects a goal from the plan.
-  void plan_and_select(std::int64_t now_utime);
+  enum class Purpose : std::int8_t { kSelect, kFollow, kHome };
+  void request_plan(std::int64_t now_utime, Purpose purpose, bool tight);
+  bool plan_due(std::int64_t now_utime) const;
+  void on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime);
+  void on_follow_plan(const Plan& plan, std::int64_t now_utime);
+  void on_home_plan(const Plan& plan);
   void select(const Plan& plan, std::int64_t now_utime);
-  void replan_while_moving(std::int64_t now_utime);
   void give_up_goal(const std::string& why);
+  void count_plan_failure(const Plan& plan);
   void enter(Phase phase, std::string status);
-  MissionOutput output(bool planned) const;
+  void finish(Phase phase, std::string status, std::int64_t now_utime);
+  void list_frontiers(const Plan& plan);
+  MissionOutput output() const;
 
   MissionOptions options_;
   PathFollower follower_;
   Phase phase_ = Phase::kIdle;
+  Phase paused_from_ = Phase::kIdle;  // the phase a pause interrupted
   std::string status_ = "waiting for a map and a pose";
   bool degraded_ = false;
+  bool started_ = false;
+  std::int64_t start_utime_ = -1;
+  std::int64_t end_utime_ = -1;  // the mission ended (finished, home, stopped)
+  std::int64_t now_utime_ = 0;
+  std::optional<Pose2> home_;    // the pose at the start of the mission
 
-  std::optional<TypedMultiPolygon> map_;
+  std::shared_ptr<const TypedMultiPolygon> map_;
   std::int64_t map_utime_ = 0;
   double explored_area_m2_ = 0.0;
   std::optional<Pose2> pose_;
@@ -113,23 +209,39 @@ class Mission {
   double travelled_m_ = 0.0;
 
   std::int64_t last_step_utime_ = -1;
-  std::int64_t last_plan_utime_ = -1;
-  std::int64_t last_plan_map_utime_ = -1;
+  // The plan asked for: its id, when, for what; 0 = none outstanding.
+  std::uint64_t next_request_id_ = 1;
+  std::uint64_t outstanding_id_ = 0;
+  Purpose outstanding_purpose_ = Purpose::kSelect;
+  bool outstanding_tight_ = false;
+  std::int64_t outstanding_utime_ = 0;
+  std::optional<PlanRequest> pending_request_;  // made, not yet handed out
+  bool want_tight_ = false;                     // the next select plan goes without the margin
+  std::int64_t last_request_utime_ = -1;
+  std::int64_t last_request_map_utime_ = -1;
   std::int64_t select_after_map_utime_ = -1;  // SELECTING waits for a map newer than this
   std::int64_t last_empty_map_utime_ = -1;
   int empty_plans_ = 0;
   int goal_failures_ = 0;
   int plan_failures_ = 0;
+  std::int64_t plans_ = 0;
 
   std::optional<Point> goal_;
+  Point goal_frontier_;      // the frontier point the goal is for
   bool goal_tight_ = false;  // the goal was planned without the clearance margin
   double best_remaining_m_ = 0.0;
   Point progress_goal_;  // where the goal was at the last progress
   std::int64_t progress_utime_ = 0;
   int goal_candidates_ = 0;
+  std::vector<FrontierLeft> frontiers_;
   PlanStats plan_stats_;
   std::vector<Point> blacklist_;  // goals given up and goals reached
   std::vector<Point> visited_;
+  GoalOutcomes outcomes_;
 };
+
+// step(), then, while it asks for a plan, compute_plan() + on_plan() + step()
+// again at the same time: the synchronous mission for tests and offline tools.
+MissionOutput step_with_inline_planning(Mission& mission, std::int64_t now_utime);
 
 }  // namespace pex::planning

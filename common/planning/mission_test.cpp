@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
+
 #include "planning/test_maps.hpp"
 
 namespace pex::planning {
@@ -33,11 +35,11 @@ MissionOptions test_options() {
 
 TEST(Mission, IdleUntilItHasAMapAndAPose) {
   Mission m(test_options());
-  auto out = m.step(0);
+  auto out = step_with_inline_planning(m, 0);
   EXPECT_EQ(out.phase, Phase::kIdle);
   EXPECT_EQ(out.command.v_mps, 0.0);
   m.on_pose(Pose2{5, 1.5, 0}, 0);
-  out = m.step(100'000);
+  out = step_with_inline_planning(m, 100'000);
   EXPECT_EQ(out.phase, Phase::kIdle);
   EXPECT_NE(out.status.find("map"), std::string::npos);
 }
@@ -46,15 +48,15 @@ TEST(Mission, SelectsTheNearestGoalAndDrivesTowardIt) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);
   m.on_pose(Pose2{15, 1.5, 0}, 0);
-  auto out = m.step(0);
+  auto out = step_with_inline_planning(m, 0);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   ASSERT_TRUE(out.goal.has_value());
   EXPECT_NEAR(out.goal->x(), 20 - 0.35, 0.01);
   EXPECT_EQ(out.goal_candidates, 1);
-  EXPECT_TRUE(out.planned);
+  EXPECT_EQ(out.plans, 1);
   ASSERT_GE(out.path.size(), 2u);
   m.on_pose(Pose2{15, 1.5, 0}, 100'000);
-  out = m.step(100'000);
+  out = step_with_inline_planning(m, 100'000);
   EXPECT_GT(out.command.v_mps, 0.0);
   EXPECT_NEAR(out.explored_area_m2, 60.0, 1e-9);
 }
@@ -63,26 +65,26 @@ TEST(Mission, GoalReachedWaitsForANewerMapThenTakesTheNextGoal) {
   Mission m(test_options());
   m.on_map(corridor(true, true), 0);
   m.on_pose(Pose2{14, 1.5, 0}, 0);
-  auto out = m.step(0);
+  auto out = step_with_inline_planning(m, 0);
   ASSERT_EQ(out.phase, Phase::kMoving);
   const Point first = *out.goal;
   EXPECT_GT(first.x(), 10.0);  // the right end is nearer
   // The robot arrives.
   m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 200'000);
-  out = m.step(200'000);
+  out = step_with_inline_planning(m, 200'000);
   EXPECT_EQ(out.phase, Phase::kSelecting);
   EXPECT_NE(out.status.find("reached"), std::string::npos);
   EXPECT_EQ(out.command.v_mps, 0.0);
   ASSERT_EQ(m.visited_goals().size(), 1u);
   // The same map again: it waits.
-  out = m.step(1'500'000);
+  out = step_with_inline_planning(m, 1'500'000);
   EXPECT_EQ(out.phase, Phase::kSelecting);
-  EXPECT_FALSE(out.planned);
+  EXPECT_FALSE(out.plan_request.has_value());
   // A newer map in which the right frontier is still there (the laser could
   // not clear it): the visited goal is not offered again, the left end is.
   m.on_map(corridor(true, true), 1'600'000);
   m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 1'600'000);
-  out = m.step(1'700'000);
+  out = step_with_inline_planning(m, 1'700'000);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_LT(out.goal->x(), 1.0);
 }
@@ -91,18 +93,18 @@ TEST(Mission, DoneWhenNoFrontierIsLeftOnTwoMaps) {
   Mission m(test_options());
   m.on_map(corridor(false, false), 0);
   m.on_pose(Pose2{5, 1.5, 0}, 0);
-  auto out = m.step(0);
+  auto out = step_with_inline_planning(m, 0);
   EXPECT_EQ(out.phase, Phase::kSelecting);  // one map is not enough
-  out = m.step(2 * kSecond);                // the same map again does not count twice
+  out = step_with_inline_planning(m, 2 * kSecond);                // the same map again does not count twice
   EXPECT_EQ(out.phase, Phase::kSelecting);
   m.on_map(corridor(false, false), 2'100'000);
   m.on_pose(Pose2{5, 1.5, 0}, 2'100'000);
-  out = m.step(2'200'000);
+  out = step_with_inline_planning(m, 2'200'000);
   ASSERT_EQ(out.phase, Phase::kDone);
   EXPECT_NE(out.status.find("no frontier left"), std::string::npos);
   // DONE is final: the robot stays stopped.
   m.on_map(corridor(true, true), 3'000'000);
-  out = m.step(3'100'000);
+  out = step_with_inline_planning(m, 3'100'000);
   EXPECT_EQ(out.phase, Phase::kDone);
   EXPECT_EQ(out.command.v_mps, 0.0);
   EXPECT_EQ(out.command.omega_radps, 0.0);
@@ -112,23 +114,27 @@ TEST(Mission, GoalGoneOnANewMapChoosesAnother) {
   Mission m(test_options());
   m.on_map(corridor(true, true), 0);
   m.on_pose(Pose2{14, 1.5, 0}, 0);
-  auto out = m.step(0);
+  auto out = step_with_inline_planning(m, 0);
   ASSERT_EQ(out.phase, Phase::kMoving);
   EXPECT_GT(out.goal->x(), 10.0);
   // The right end turned out to be a wall.
   m.on_map(corridor(true, false), 900'000);
   m.on_pose(Pose2{14.5, 1.5, 0}, 1'000'000);
-  out = m.step(1'000'000);  // replan period reached
+  out = step_with_inline_planning(m, 1'000'000);  // replan period reached
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_LT(out.goal->x(), 1.0);
   EXPECT_TRUE(m.blacklist().empty());  // explored, not given up
 }
 
 TEST(Mission, BlockedGoalIsBlacklisted) {
-  Mission m(test_options());
+  // Without approach points: the frontier behind the gap would otherwise be
+  // approached (looked at through the gap) instead of being blocked.
+  MissionOptions o = test_options();
+  o.planner.approach_range_m = 0.0;
+  Mission m(o);
   m.on_map(corridor(true, true), 0);
   m.on_pose(Pose2{12, 1.5, 0}, 0);
-  auto out = m.step(0);
+  auto out = step_with_inline_planning(m, 0);
   ASSERT_EQ(out.phase, Phase::kMoving);
   ASSERT_GT(out.goal->x(), 10.0);
   // A wall across the corridor at x = 16 with a 0.4 m gap: the right end is
@@ -139,12 +145,12 @@ TEST(Mission, BlockedGoalIsBlacklisted) {
                              E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier}};
   m.on_map({typed_polygon(blocked)}, 900'000);
   m.on_pose(Pose2{12.5, 1.5, 0}, 1'000'000);
-  out = m.step(1'000'000);
-  EXPECT_EQ(out.phase, Phase::kSelecting);
-  EXPECT_NE(out.status.find("gave up"), std::string::npos);
+  out = step_with_inline_planning(m, 1'000'000);
+  // Given up and blacklisted, and (planning inline) the next goal chosen at once.
   ASSERT_EQ(m.blacklist().size(), 1u);
   EXPECT_GT(m.blacklist()[0].x(), 16.0);
-  out = m.step(1'100'000);
+  EXPECT_EQ(m.goal_outcomes().blocked, 1);
+  EXPECT_EQ(m.goal_outcomes().reached, 0);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_LT(out.goal->x(), 1.0);
 }
@@ -162,7 +168,7 @@ TEST(Mission, FailsAfterRepeatedGoalsWithoutProgress) {
     if (t % (5 * kSecond) == 0) m.on_map({typed_polygon(rectangle(0, 0, 20, 20, {E::kFrontier, E::kFrontier,
                                                                                     E::kFrontier, E::kObstacle}))},
                                          t);
-    const auto out = m.step(t);
+    const auto out = step_with_inline_planning(m, t);
     phase = out.phase;
     status = out.status;
     if (phase == Phase::kFailed) {
@@ -186,7 +192,7 @@ TEST(Mission, AGoalThatMovesOnWithItsFrontierIsProgress) {
   for (std::int64_t t = 0; t <= 30 * kSecond; t += 100'000) {
     if (t % kSecond == 0) m.on_map(receding(20.0 + 0.5 * static_cast<double>(t / kSecond)), t);
     m.on_pose(Pose2{15, 1.5, 0}, t);
-    const auto out = m.step(t);
+    const auto out = step_with_inline_planning(m, t);
     ASSERT_EQ(out.phase, Phase::kMoving) << "at " << t << ": " << out.status;
   }
   EXPECT_TRUE(m.blacklist().empty());
@@ -196,19 +202,19 @@ TEST(Mission, StaleInputsStopTheRobotUntilTheyAreFresh) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);
   m.on_pose(Pose2{5, 1.5, 0}, 0);
-  m.step(0);
+  step_with_inline_planning(m, 0);
   m.on_pose(Pose2{5, 1.5, 0}, 200'000);
-  auto out = m.step(200'000);
+  auto out = step_with_inline_planning(m, 200'000);
   ASSERT_EQ(out.phase, Phase::kMoving);
   ASSERT_GT(out.command.v_mps, 0.0);
-  out = m.step(1'500'000);  // the last pose is 1.3 s old
+  out = step_with_inline_planning(m, 1'500'000);  // the last pose is 1.3 s old
   EXPECT_TRUE(out.degraded);
   EXPECT_EQ(out.phase, Phase::kMoving);
   EXPECT_EQ(out.command.v_mps, 0.0);
   EXPECT_EQ(out.command.omega_radps, 0.0);
   EXPECT_NE(out.status.find("pose is stale"), std::string::npos);
   m.on_pose(Pose2{5, 1.5, 0}, 1'550'000);
-  out = m.step(1'600'000);
+  out = step_with_inline_planning(m, 1'600'000);
   EXPECT_FALSE(out.degraded);
   EXPECT_EQ(out.phase, Phase::kMoving);
 }
@@ -226,10 +232,11 @@ mapping::TypedMultiPolygon rooms_with_a_narrow_gap() {
 TEST(Mission, SqueezesThroughANarrowGapWithoutTheMarginOnlyWhenNothingElseIsLeft) {
   MissionOptions o = test_options();
   o.planner.cspace.clearance_margin_m = 0.05;
+  o.planner.approach_range_m = 0.0;  // the fallback alone (an approach point would look through the gap first)
   Mission m(o);
   m.on_map(rooms_with_a_narrow_gap(), 0);
   m.on_pose(Pose2{2, 2.5, 0}, 0);
-  auto out = m.step(0);
+  auto out = step_with_inline_planning(m, 0);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_NE(out.status.find("without clearance margin"), std::string::npos) << out.status;
   EXPECT_GT(out.goal->x(), 9.0);
@@ -238,11 +245,14 @@ TEST(Mission, SqueezesThroughANarrowGapWithoutTheMarginOnlyWhenNothingElseIsLeft
   Mission strict(o);
   strict.on_map(rooms_with_a_narrow_gap(), 0);
   strict.on_pose(Pose2{2, 2.5, 0}, 0);
-  EXPECT_EQ(strict.step(0).phase, Phase::kSelecting);
+  EXPECT_EQ(step_with_inline_planning(strict, 0).phase, Phase::kSelecting);
   strict.on_map(rooms_with_a_narrow_gap(), 1'000'000);
   strict.on_pose(Pose2{2, 2.5, 0}, 1'000'000);
-  out = strict.step(1'000'000);
-  EXPECT_EQ(out.phase, Phase::kDone);
+  out = step_with_inline_planning(strict, 1'000'000);
+  // Done, but truthfully: a frontier is left that the robot cannot reach.
+  EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable);
+  ASSERT_FALSE(out.frontiers.empty());
+  for (const auto& f : out.frontiers) EXPECT_NE(f.reason, FrontierReason::kReachable);
   EXPECT_NE(out.status.find("none reachable"), std::string::npos) << out.status;
 }
 
@@ -253,7 +263,141 @@ TEST(Mission, CountsDistanceTravelledButNotPoseJumps) {
   m.on_pose(Pose2{10, 0.4, 0}, 2);  // a SLAM jump
   m.on_pose(Pose2{10, 0.9, 0}, 3);
   m.on_pose(Pose2{std::nan(""), 0, 0}, 4);  // ignored
-  EXPECT_NEAR(m.step(5).distance_travelled_m, 1.0, 1e-12);
+  EXPECT_NEAR(step_with_inline_planning(m, 5).distance_travelled_m, 1.0, 1e-12);
+}
+
+TEST(Mission, KeepsItsGoalWhenAnotherBecomesCheaper) {
+  // Heading for the right end; then a new frontier opens right behind the
+  // robot. Greedy would turn round; a committed mission keeps its goal.
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{12, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point goal = *out.goal;
+  m.on_map(corridor(true, true), 900'000);
+  m.on_pose(Pose2{12.5, 1.5, 0}, 1'000'000);
+  m.on_map({typed_polygon(rectangle(0, 0, 20, 3, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle})),
+            typed_polygon(rectangle(10, 3, 11.5, 6, {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle}))},
+           1'000'000);
+  out = step_with_inline_planning(m, 1'000'000);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_NEAR(out.goal->x(), goal.x(), 0.1);
+  EXPECT_EQ(m.goal_outcomes().seen + m.goal_outcomes().given_up(), 0);
+}
+
+TEST(Mission, WaitsForStartWhenNotAutostarting) {
+  MissionOptions o = test_options();
+  o.autostart = false;
+  Mission m(o);
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  EXPECT_EQ(out.phase, Phase::kWaitingStart);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  EXPECT_FALSE(out.plan_request.has_value());
+  EXPECT_EQ(m.on_command(MissionCommand::kResume, 100'000), "not started: send start");
+  EXPECT_EQ(m.on_command(MissionCommand::kStart, 100'000), "");
+  m.on_pose(Pose2{10, 1.5, 0}, 200'000);
+  out = step_with_inline_planning(m, 200'000);
+  EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+}
+
+TEST(Mission, PauseStopsTheWheelsAndResumeGoesOnToTheSameGoal) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  step_with_inline_planning(m, 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 100'000);
+  auto out = step_with_inline_planning(m, 100'000);
+  ASSERT_GT(out.command.v_mps, 0.0);
+  const Point goal = *out.goal;
+  EXPECT_EQ(m.on_command(MissionCommand::kPause, 150'000), "");
+  EXPECT_EQ(m.on_command(MissionCommand::kPause, 160'000), "");  // idempotent
+  // Paused far longer than the progress timeout: no goal is given up.
+  for (std::int64_t t = 200'000; t <= 30 * kSecond; t += 100'000) {
+    m.on_pose(Pose2{10, 1.5, 0}, t);
+    if (t % kSecond == 0) m.on_map(corridor(false, true), t);
+    out = step_with_inline_planning(m, t);
+    ASSERT_EQ(out.phase, Phase::kPaused);
+    ASSERT_EQ(out.command.v_mps, 0.0);
+    ASSERT_EQ(out.command.omega_radps, 0.0);
+  }
+  EXPECT_EQ(m.on_command(MissionCommand::kResume, 30 * kSecond + 50'000), "");
+  m.on_pose(Pose2{10, 1.5, 0}, 30 * kSecond + 100'000);
+  out = step_with_inline_planning(m, 30 * kSecond + 100'000);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_NEAR(out.goal->x(), goal.x(), 1e-9);
+  EXPECT_GT(out.command.v_mps, 0.0);
+  EXPECT_TRUE(m.blacklist().empty());
+}
+
+TEST(Mission, HomeDrivesBackToTheStartPoseAndStopsThere) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{5, 1.5, 0}, 0);
+  step_with_inline_planning(m, 0);
+  // The robot got to x = 15; then: home.
+  m.on_pose(Pose2{15, 1.5, 0}, 5 * kSecond);
+  m.on_map(corridor(false, true), 5 * kSecond);
+  step_with_inline_planning(m, 5 * kSecond);
+  EXPECT_EQ(m.on_command(MissionCommand::kHome, 5 * kSecond + 10'000), "");
+  m.on_pose(Pose2{15, 1.5, 0}, 5 * kSecond + 100'000);
+  auto out = step_with_inline_planning(m, 5 * kSecond + 100'000);
+  ASSERT_EQ(out.phase, Phase::kHoming) << out.status;
+  ASSERT_TRUE(out.goal.has_value());
+  EXPECT_NEAR(out.goal->x(), 5.0, 1e-6);
+  EXPECT_NEAR(out.goal->y(), 1.5, 1e-6);
+  ASSERT_GE(out.path.size(), 2u);
+  m.on_pose(Pose2{15, 1.5, std::numbers::pi}, 5 * kSecond + 200'000);
+  out = step_with_inline_planning(m, 5 * kSecond + 200'000);
+  EXPECT_GT(out.command.v_mps, 0.0);  // heading home (west)
+  m.on_pose(Pose2{5.1, 1.5, std::numbers::pi}, 30 * kSecond);
+  m.on_map(corridor(false, true), 30 * kSecond);
+  out = step_with_inline_planning(m, 30 * kSecond);
+  EXPECT_EQ(out.phase, Phase::kHome) << out.status;
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  // Home is a stop: a newer map changes nothing until a new start.
+  m.on_map(corridor(true, true), 31 * kSecond);
+  m.on_pose(Pose2{5.1, 1.5, 0}, 31 * kSecond);
+  EXPECT_EQ(step_with_inline_planning(m, 31 * kSecond).phase, Phase::kHome);
+  EXPECT_EQ(m.on_command(MissionCommand::kStart, 31 * kSecond + 10'000), "");
+  m.on_pose(Pose2{5.1, 1.5, 0}, 31 * kSecond + 100'000);
+  EXPECT_EQ(step_with_inline_planning(m, 31 * kSecond + 100'000).phase, Phase::kMoving);
+}
+
+TEST(Mission, StopEndsTheMissionAndFreezesItsClock) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  step_with_inline_planning(m, 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 2 * kSecond);
+  step_with_inline_planning(m, 2 * kSecond);
+  EXPECT_EQ(m.on_command(MissionCommand::kStop, 2 * kSecond), "");
+  m.on_pose(Pose2{10, 1.5, 0}, 9 * kSecond);
+  const auto out = step_with_inline_planning(m, 9 * kSecond);
+  EXPECT_EQ(out.phase, Phase::kStopped);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  EXPECT_NEAR(out.mission_time_s, 2.0, 1e-9);
+}
+
+TEST(Mission, AnswersToOldPlanRequestsAreIgnored) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = m.step(0);
+  ASSERT_TRUE(out.plan_request.has_value());
+  const PlanRequest old = *out.plan_request;
+  // Unanswered past plan_timeout_us: asked again with a new id.
+  m.on_pose(Pose2{10, 1.5, 0}, 6 * kSecond);
+  m.on_map(corridor(false, true), 6 * kSecond);
+  out = m.step(6 * kSecond);
+  ASSERT_TRUE(out.plan_request.has_value());
+  EXPECT_NE(out.plan_request->id, old.id);
+  m.on_plan(compute_plan(old), 6 * kSecond);
+  EXPECT_EQ(m.step(6 * kSecond + 1).phase, Phase::kSelecting);
+  m.on_plan(compute_plan(*out.plan_request), 6 * kSecond + 2);
+  EXPECT_EQ(m.step(6 * kSecond + 3).phase, Phase::kMoving);
 }
 
 }  // namespace

@@ -1,11 +1,22 @@
 #include "explorer_node.hpp"
 
+#include <chrono>
 #include <cmath>
 
 namespace pex::explorer {
 
-ExplorerNode::ExplorerNode(ExplorerOptions options)
-    : options_(std::move(options)), mission_(options_.mission) {}
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+ExplorerNode::ExplorerNode(ExplorerOptions options, Planning planning)
+    : options_(std::move(options)), mission_(options_.mission) {
+  if (planning == Planning::kWorkerThread) worker_ = std::make_unique<PlanWorker>();
+}
 
 std::string ExplorerNode::on_map(const pex::polygon_map_t& msg, std::int64_t now_utime) {
   DecodedMap decoded = decode_map(msg, options_.map);
@@ -23,14 +34,41 @@ std::string ExplorerNode::on_pose(const pex::pose_t& msg, std::int64_t now_utime
   return {};
 }
 
+std::string ExplorerNode::on_command(const pex::mission_cmd_t& msg, std::int64_t now_utime) {
+  if (msg.command < pex::mission_cmd_t::CMD_START || msg.command > pex::mission_cmd_t::CMD_STOP)
+    return "refused: unknown mission command " + std::to_string(msg.command);
+  const auto command = static_cast<planning::MissionCommand>(msg.command);
+  std::string why = mission_.on_command(command, now_utime);
+  if (why.empty()) counters_.commands_applied++;
+  return why;
+}
+
+void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
+  if (!worker_) return;
+  if (auto timed = worker_->take_result()) {
+    plan_ms_.add(timed->compute_ms);
+    mission_.on_plan(timed->result, now_utime);
+  }
+}
+
 pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
-  const std::size_t visited_before = mission_.visited_goals().size();
-  const std::size_t blacklisted_before = mission_.blacklist().size();
-  last_ = mission_.step(now_utime);
-  if (last_.planned) counters_.plans++;
-  const std::size_t reached = mission_.visited_goals().size() - visited_before;
-  counters_.goals_reached += static_cast<std::int64_t>(reached);
-  counters_.goals_given_up += static_cast<std::int64_t>(mission_.blacklist().size() - blacklisted_before - reached);
+  const auto started = std::chrono::steady_clock::now();
+  if (worker_) {
+    last_ = mission_.step(now_utime);
+    if (last_.plan_request) worker_->submit(std::move(*last_.plan_request));
+  } else {
+    // Inline: the plan runs here (tests); its time is measured apart.
+    last_ = mission_.step(now_utime);
+    for (int round = 0; round < 4 && last_.plan_request; ++round) {
+      const auto plan_started = std::chrono::steady_clock::now();
+      const auto result = planning::compute_plan(*last_.plan_request);
+      plan_ms_.add(ms_since(plan_started));
+      mission_.on_plan(result, now_utime);
+      last_ = mission_.step(now_utime);
+    }
+  }
+  last_.plan_request.reset();
+  if (worker_) control_ms_.add(ms_since(started));
   pex::velocity_cmd_t cmd = stop_command(now_utime);
   cmd.v = last_.command.v_mps;
   cmd.omega = last_.command.omega_radps;
@@ -51,6 +89,8 @@ pex::explore_state_t ExplorerNode::state_message(std::int64_t now_utime) const {
   s.utime = now_utime;
   s.phase = static_cast<std::int8_t>(last_.phase);
   s.status = last_.degraded ? "DEGRADED: " + last_.status : last_.status;
+  s.strategy = planning::to_string(options_.mission.planner.strategy);
+  s.has_goal = last_.goal.has_value();
   if (last_.goal) {
     s.goal_x = last_.goal->x();
     s.goal_y = last_.goal->y();
@@ -63,6 +103,16 @@ pex::explore_state_t ExplorerNode::state_message(std::int64_t now_utime) const {
   s.npath = static_cast<std::int32_t>(s.path_x.size());
   s.explored_area_m2 = last_.explored_area_m2;
   s.distance_travelled_m = last_.distance_travelled_m;
+  s.mission_time_s = last_.mission_time_s;
+  s.goals_reached = static_cast<std::int32_t>(last_.goals.reached);
+  s.goals_given_up = static_cast<std::int32_t>(last_.goals.given_up());
+  s.plans = static_cast<std::int32_t>(last_.plans);
+  for (const auto& f : last_.frontiers) {
+    s.frontier_x.push_back(f.position.x());
+    s.frontier_y.push_back(f.position.y());
+    s.frontier_reason.push_back(static_cast<std::int8_t>(f.reason));
+  }
+  s.nfrontiers = static_cast<std::int32_t>(s.frontier_x.size());
   return s;
 }
 

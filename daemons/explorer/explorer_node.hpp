@@ -1,16 +1,21 @@
 #pragma once
 // The explorer's adapter between LCM messages and the mission
-// (planning/mission.hpp): checked inputs in, BASE_CMD and EXPLORE_STATE out.
-// No LCM calls here, so tests can drive it without a bus.
+// (planning/mission.hpp): checked inputs in, BASE_CMD and EXPLORE_STATE out,
+// plans on a worker thread (or inline, for tests). No LCM calls here, so
+// tests can drive it without a bus.
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include <pex/explore_state_t.hpp>
+#include <pex/mission_cmd_t.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
 
 #include "explorer_options.hpp"
+#include "latency_stats.hpp"
+#include "plan_worker.hpp"
 #include "planning/mission.hpp"
 
 namespace pex::explorer {
@@ -19,21 +24,29 @@ struct ExplorerCounters {
   std::int64_t maps_accepted = 0;
   std::int64_t map_polygons_dropped = 0;
   std::int64_t map_rings_reoriented = 0;
-  std::int64_t plans = 0;
-  std::int64_t goals_reached = 0;
-  std::int64_t goals_given_up = 0;
+  std::int64_t commands_applied = 0;
+  std::int64_t plan_results_late = 0;  // finished after the mission stopped waiting for them
 };
 
 class ExplorerNode {
  public:
-  explicit ExplorerNode(ExplorerOptions options);
+  enum class Planning { kWorkerThread, kInline };
+  explicit ExplorerNode(ExplorerOptions options, Planning planning = Planning::kInline);
 
   // Inputs with their arrival time. Return "" when accepted, else why the
   // message was refused (the caller counts it as bad input).
   std::string on_map(const pex::polygon_map_t& msg, std::int64_t now_utime);
   std::string on_pose(const pex::pose_t& msg, std::int64_t now_utime);
+  // A MISSION_CMD. Returns "" when applied or already in effect; "refused: ..."
+  // for a command that is not a command (bad input); other text: why it does
+  // not apply now (e.g. resume while not paused).
+  std::string on_command(const pex::mission_cmd_t& msg, std::int64_t now_utime);
+  // Takes a finished plan from the worker (call when plan_fd() is readable).
+  void on_plan_ready(std::int64_t now_utime);
+  // The worker's eventfd (-1 with inline planning).
+  int plan_fd() const { return worker_ ? worker_->fd() : -1; }
 
-  // One control step: the command to publish now.
+  // One control step: the command to publish now. Never waits for a plan.
   pex::velocity_cmd_t step(std::int64_t now_utime);
   // The state after the last step.
   pex::explore_state_t state_message(std::int64_t now_utime) const;
@@ -43,12 +56,17 @@ class ExplorerNode {
   const planning::MissionOutput& last_output() const { return last_; }
   const ExplorerCounters& counters() const { return counters_; }
   const ExplorerOptions& options() const { return options_; }
+  const LatencyStats& plan_ms() const { return plan_ms_; }
+  const LatencyStats& control_ms() const { return control_ms_; }
 
  private:
   ExplorerOptions options_;
   planning::Mission mission_;
+  std::unique_ptr<PlanWorker> worker_;
   planning::MissionOutput last_;
   ExplorerCounters counters_;
+  LatencyStats plan_ms_;
+  LatencyStats control_ms_;
 };
 
 }  // namespace pex::explorer

@@ -81,6 +81,11 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
     throw runtime::ConfigError(config.origin() + ": turn_in_place_exit_rad must not exceed turn_in_place_rad");
 
   // Mission.
+  m.autostart = config.get<bool>("autostart", m.autostart);
+  planner.strategy = *planning::parse_goal_strategy(config.get<std::string>(
+      "goal_strategy", planning::to_string(planner.strategy), runtime::one_of({"greedy", "tour"})));
+  m.plan_timeout_us =
+      us_from_ms(config.get<int>("plan_timeout_ms", static_cast<int>(m.plan_timeout_us / 1000), in_range(100, 600'000)));
   m.replan_period_us =
       us_from_ms(config.get<int>("replan_period_ms", static_cast<int>(m.replan_period_us / 1000), in_range(50, 60'000)));
   m.pose_timeout_us =
@@ -91,7 +96,6 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<int>("progress_timeout_ms", static_cast<int>(m.progress_timeout_us / 1000), in_range(1000, 3'600'000)));
   m.progress_min_m = config.get<double>("progress_min_m", m.progress_min_m, positive<double>());
   m.goal_match_radius_m = config.get<double>("goal_match_radius_m", m.goal_match_radius_m, positive<double>());
-  m.switch_margin_m = config.get<double>("switch_margin_m", m.switch_margin_m, non_negative<double>());
   m.max_consecutive_failures =
       config.get<int>("max_consecutive_failures", m.max_consecutive_failures, in_range(1, 1000));
   m.done_confirmations = config.get<int>("done_confirmations", m.done_confirmations, in_range(1, 100));

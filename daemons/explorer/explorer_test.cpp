@@ -7,6 +7,7 @@
 #include "explorer_options.hpp"
 #include "map_message.hpp"
 #include "runtime/config.hpp"
+#include "runtime/daemon.hpp"
 
 namespace pex::explorer {
 namespace {
@@ -106,13 +107,18 @@ TEST(DecodeMap, EncodeDecodeRoundTrip) {
 }
 
 TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
-  for (const char* file : {"/config/explorer.toml"}) {
+  for (const char* file : {"/config/explorer.toml", "/config/robot/explorer.toml"}) {
     auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + file);
-    config.get<int>("heartbeat_period_ms", 1000);  // read by run_daemon
+    const auto runtime_options = runtime::load_runtime_options(config);  // read by run_daemon
     const auto o = load_options(config);
     EXPECT_NO_THROW(config.finish()) << file;
     EXPECT_EQ(o.pose_channel, "SLAM_POSE");
     EXPECT_EQ(o.mission.planner.cspace.robot_radius_m, 0.27);
+    // The simulator's set explores at once on the sim's clock; a robot that
+    // boots waits for a start command and runs on the system clock.
+    const bool robot = std::string(file).find("/robot/") != std::string::npos;
+    EXPECT_EQ(o.mission.autostart, !robot) << file;
+    EXPECT_EQ(runtime_options.clock, robot ? runtime::ClockSource::kSystem : runtime::ClockSource::kSim) << file;
   }
 }
 
@@ -123,6 +129,8 @@ TEST(ExplorerOptions, RejectsBadValues) {
     auto config = runtime::ConfigReader::from_string(text, "test.toml");
     EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
   }
+  auto strategy = runtime::ConfigReader::from_string("goal_strategy = \"nearest\"", "test.toml");
+  EXPECT_THROW(load_options(strategy), runtime::ConfigError);
   auto sim = runtime::ConfigReader::from_string("pose_channel = \"SIM_TRUTH\"", "test.toml");
   EXPECT_EQ(load_options(sim).pose_channel, "SIM_TRUTH");
 }

@@ -13,6 +13,7 @@
 #include <pex/daemon_status_t.hpp>
 #include <pex/explore_state_t.hpp>
 
+#include "planning/mission.hpp"
 #include "runtime/channels.hpp"
 
 namespace {
@@ -41,19 +42,24 @@ void on_explore(const lcm::ReceiveBuffer* rb, const std::string&, pex::explore_s
 }
 
 const char* phase_name(int8_t p) {
-  switch (p) {
-    case pex::explore_state_t::PHASE_IDLE: return "IDLE";
-    case pex::explore_state_t::PHASE_SELECTING: return "SELECTING";
-    case pex::explore_state_t::PHASE_MOVING: return "MOVING";
-    case pex::explore_state_t::PHASE_DONE: return "DONE";
-    case pex::explore_state_t::PHASE_FAILED: return "FAILED";
-    default: return "?";
-  }
+  if (p < 0 || p > static_cast<int8_t>(pex::planning::Phase::kStopped)) return "?";
+  return pex::planning::to_string(static_cast<pex::planning::Phase>(p));
 }
 
-// Follows EXPLORE_STATE until the mission is DONE or FAILED or `seconds` pass,
-// printing progress every `every_s`. Exit 0 on DONE, 1 otherwise.
-int follow_mission(lcm::LCM& lcm, double seconds, double every_s) {
+// The mission is over on its own, or by command.
+bool mission_over(int8_t p) {
+  using pex::planning::Phase;
+  if (p < 0) return false;
+  const auto phase = static_cast<Phase>(p);
+  return pex::planning::is_finished(phase) || phase == Phase::kHome || phase == Phase::kStopped;
+}
+
+// Follows EXPLORE_STATE until the mission is over or has run `seconds` of its
+// own clock (the explorer's: simulated time with clock = "sim", so the limit
+// means the same at any simulator speed), printing progress every `every_s`
+// of wall time. `wall_limit_s` guards against a mission clock that stands
+// still. Exit 0 on DONE, 2 on DONE_WITH_UNREACHABLE, 1 otherwise.
+int follow_mission(lcm::LCM& lcm, double seconds, double every_s, double wall_limit_s) {
   pex::explore_state_t latest{};
   latest.phase = -1;
   lcm.subscribeFunction(std::string(pex::runtime::channels::kExploreState), &on_explore, &latest);
@@ -62,22 +68,26 @@ int follow_mission(lcm::LCM& lcm, double seconds, double every_s) {
   while (true) {
     lcm.handleTimeout(100);
     const auto now = std::chrono::steady_clock::now();
-    const double t = std::chrono::duration<double>(now - start).count();
-    const bool over = latest.phase == pex::explore_state_t::PHASE_DONE ||
-                      latest.phase == pex::explore_state_t::PHASE_FAILED;
-    if (now >= next_print || over || t >= seconds) {
+    const double wall = std::chrono::duration<double>(now - start).count();
+    const double t = latest.phase < 0 ? 0.0 : latest.mission_time_s;
+    const bool over = mission_over(latest.phase);
+    const bool out_of_time = t >= seconds || wall >= wall_limit_s;
+    if (now >= next_print || over || out_of_time) {
       if (latest.phase < 0)
         std::printf("%6.0f s  no EXPLORE_STATE yet\n", t);
       else
-        std::printf("%6.0f s  %-9s explored %7.1f m2  driven %6.1f m  candidates %3d  %s\n", t,
+        std::printf("%6.0f s  %-9s explored %7.1f m2  driven %6.1f m  goals %3d  candidates %3d  %s\n", t,
                     phase_name(latest.phase), latest.explored_area_m2, latest.distance_travelled_m,
-                    latest.goal_candidates, latest.status.c_str());
+                    latest.goals_reached, latest.goal_candidates, latest.status.c_str());
       std::fflush(stdout);
       next_print = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                              std::chrono::duration<double>(every_s));
     }
-    if (over) return latest.phase == pex::explore_state_t::PHASE_DONE ? 0 : 1;
-    if (t >= seconds) return 1;
+    if (over) {
+      if (latest.phase == pex::explore_state_t::PHASE_DONE) return 0;
+      return latest.phase == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ? 2 : 1;
+    }
+    if (out_of_time) return 1;
   }
 }
 
@@ -95,7 +105,13 @@ int main(int argc, char** argv) {
   app.add_flag("--counters", counters, "also print each daemon's own counters");
   double mission_s = 0.0;
   app.add_option("--follow-mission", mission_s,
-                 "instead: follow EXPLORE_STATE until DONE/FAILED or this many seconds (exit 0 on DONE)")
+                 "instead: follow EXPLORE_STATE until the mission is over or has run this many seconds of its "
+                 "own clock (exit 0 on DONE, 2 on DONE_WITH_UNREACHABLE, 1 otherwise)")
+      ->check(CLI::PositiveNumber);
+  double wall_limit_s = 0.0;
+  app.add_option("--wall-limit", wall_limit_s,
+                 "with --follow-mission: give up after this many wall-clock seconds (default: 3 x the mission "
+                 "limit + 120, for a mission clock that stands still)")
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
 
@@ -104,7 +120,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-status: cannot open LCM at '%s'\n", url.c_str());
     return 1;
   }
-  if (mission_s > 0) return follow_mission(lcm, mission_s, 5.0);
+  if (mission_s > 0) return follow_mission(lcm, mission_s, 5.0, wall_limit_s > 0 ? wall_limit_s : 3 * mission_s + 120);
   std::map<std::string, pex::daemon_status_t> latest;
   lcm.subscribeFunction(std::string(pex::runtime::channels::kDaemonStatus), &on_status, &latest);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);

@@ -1,0 +1,137 @@
+#include "planning/exploration_planner.hpp"
+
+#include <gtest/gtest.h>
+
+#include "planning/test_maps.hpp"
+
+namespace pex::planning {
+namespace {
+
+using E = mapping::EdgeType;
+using testing::typed_polygon;
+
+// A corridor 20 x 3 m and, through a door at x 15..15.5 seen at a grazing
+// angle, a 4 x 3 m piece of the room behind it: the free neck between them is
+// 0.5 m wide, narrower than the robot, so the room's C-space is cut off from
+// the corridor's. The room's far side (y = 7) and the neck's sides are frontier.
+mapping::TypedMultiPolygon corridor_with_a_room_seen_through_a_door() {
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(20, 0), Point(20, 3), Point(15.5, 3), Point(15.5, 4), Point(18, 4), Point(18, 7),
+       Point(14, 7), Point(14, 4), Point(15, 4), Point(15, 3), Point(0, 3)},
+      {E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kFrontier,
+       E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}})};
+}
+
+PlannerOptions options() {
+  PlannerOptions o;
+  o.cspace.robot_radius_m = 0.27;
+  o.cspace.clearance_margin_m = 0.05;
+  o.turn_cost_m_per_rad = 0.0;
+  return o;
+}
+
+TEST(PlanExploration, AFrontierCutOffFromTheRobotIsApproachedFromWhereItIsInView) {
+  const auto map = corridor_with_a_room_seen_through_a_door();
+  const Plan plan = plan_exploration(map, Pose2{2, 1.5, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  // The room's far frontier (y = 7) gets a candidate that the robot can reach:
+  // in the corridor, in front of the door, with the frontier point in view.
+  const GoalCandidate* far = nullptr;
+  for (const auto& c : plan.candidates)
+    if (c.frontier_point.y() > 6.9) far = &c;
+  ASSERT_NE(far, nullptr);
+  EXPECT_TRUE(far->approach);
+  EXPECT_TRUE(far->reachable);
+  EXPECT_LT(far->position.y(), 3.0);
+  EXPECT_GT(far->position.x(), 14.0);
+  EXPECT_LT(far->position.x(), 16.5);
+  EXPECT_GE(plan.stats.approach_candidates, 1);
+  EXPECT_EQ(plan.stats.candidates_not_in_cspace, 0);
+  EXPECT_EQ(plan.reachable_count(), static_cast<int>(plan.candidates.size()));
+}
+
+TEST(PlanExploration, WithoutApproachTheSameFrontierHasNoPath) {
+  // The cause the approach fixes: the C-space next to the frontier is another piece.
+  PlannerOptions o = options();
+  o.approach_range_m = 0.0;
+  const Plan plan = plan_exploration(corridor_with_a_room_seen_through_a_door(), Pose2{2, 1.5, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  bool unreachable_far = false;
+  for (const auto& c : plan.candidates)
+    if (c.frontier_point.y() > 6.9) unreachable_far = !c.reachable;
+  EXPECT_TRUE(unreachable_far);
+}
+
+TEST(PlanExploration, NoApproachThroughAWall) {
+  // The same room behind a solid wall (no neck): its frontier is not in view
+  // from the corridor, so there is no approach point and no candidate for it.
+  const mapping::TypedMultiPolygon map = {
+      typed_polygon(testing::rectangle(0, 0, 20, 3, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle})),
+      typed_polygon(testing::rectangle(14, 4, 18, 7, {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle}))};
+  const Plan plan = plan_exploration(map, Pose2{2, 1.5, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  for (const auto& c : plan.candidates) {
+    if (c.frontier_point.y() < 6.9) continue;
+    EXPECT_FALSE(c.approach);
+    EXPECT_FALSE(c.reachable);
+  }
+}
+
+// A corridor 30 x 3 m whose top wall has 1 m windows of frontier at x = 8,
+// 11 and 15. From x = 10 the nearest is 11; but 8, 11, 15 in that order is
+// the shorter way through all three (9 m against 11 m for 11, 8, 15).
+mapping::TypedMultiPolygon corridor_with_windows() {
+  std::vector<Point> pts = {Point(0, 0), Point(30, 0), Point(30, 3)};
+  std::vector<E> types = {E::kObstacle, E::kObstacle, E::kObstacle};
+  for (double x : {15.0, 11.0, 8.0}) {
+    pts.push_back(Point(x + 0.5, 3));
+    types.push_back(E::kFrontier);
+    pts.push_back(Point(x - 0.5, 3));
+    types.push_back(E::kObstacle);
+  }
+  pts.push_back(Point(0, 3));
+  types.push_back(E::kObstacle);
+  return {typed_polygon(testing::RingSpec{pts, types})};
+}
+
+TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
+  PlannerOptions o = options();
+  const Pose2 robot{10, 2.5, 0};
+  const Plan greedy = plan_exploration(corridor_with_windows(), robot, {}, o);
+  ASSERT_TRUE(greedy.ok) << greedy.error;
+  ASSERT_NE(greedy.best_candidate(), nullptr);
+  EXPECT_NEAR(greedy.best_candidate()->frontier_point.x(), 11.0, 0.01);
+  EXPECT_TRUE(greedy.tour.empty());
+
+  o.strategy = GoalStrategy::kTour;
+  const Plan tour = plan_exploration(corridor_with_windows(), robot, {}, o);
+  ASSERT_TRUE(tour.ok) << tour.error;
+  ASSERT_NE(tour.best_candidate(), nullptr);
+  EXPECT_NEAR(tour.best_candidate()->frontier_point.x(), 8.0, 0.01);
+  ASSERT_EQ(tour.tour.size(), 3u);
+  EXPECT_NEAR(tour.candidates[static_cast<std::size_t>(tour.tour[1])].frontier_point.x(), 11.0, 0.01);
+  EXPECT_NEAR(tour.candidates[static_cast<std::size_t>(tour.tour[2])].frontier_point.x(), 15.0, 0.01);
+  // The same paths either way: only the choice differs.
+  for (std::size_t i = 0; i < tour.candidates.size(); ++i)
+    EXPECT_NEAR(tour.candidates[i].path_length_m, greedy.candidates[i].path_length_m, 1e-6);
+
+  // A blacklisted candidate is not in the tour.
+  const Plan without = plan_exploration(corridor_with_windows(), robot, {tour.best_candidate()->position}, o);
+  ASSERT_NE(without.best_candidate(), nullptr);
+  EXPECT_EQ(without.tour.size(), 2u);
+  EXPECT_NEAR(without.best_candidate()->frontier_point.x(), 11.0, 0.01);
+}
+
+TEST(PlanPathTo, FindsThePathHomeOrSaysItIsUnreachable) {
+  const auto map = corridor_with_a_room_seen_through_a_door();
+  const Plan home = plan_path_to(map, Pose2{18, 1.5, 0}, Point(2, 1.5), options());
+  ASSERT_TRUE(home.ok) << home.error;
+  ASSERT_NE(home.best_candidate(), nullptr);
+  EXPECT_NEAR(home.best_candidate()->path_length_m, 16.0, 1e-2);
+  const Plan room = plan_path_to(map, Pose2{18, 1.5, 0}, Point(16, 5.5), options());
+  ASSERT_TRUE(room.ok);
+  EXPECT_EQ(room.best_candidate(), nullptr);  // behind the 0.5 m neck
+}
+
+}  // namespace
+}  // namespace pex::planning

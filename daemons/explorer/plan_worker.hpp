@@ -1,0 +1,46 @@
+#pragma once
+// Runs the mission's plans on a thread of their own, so the explorer's 10 Hz
+// control step never waits for a plan (planning takes from a millisecond to
+// tens of milliseconds on a big map). One request at a time: a newer request
+// replaces one that has not started yet. When a result is ready the worker
+// makes fd() readable, so the daemon's poll loop picks it up at once.
+#include <condition_variable>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "planning/mission.hpp"
+
+namespace pex::explorer {
+
+struct TimedPlanResult {
+  planning::PlanResult result;
+  double compute_ms = 0.0;  // CPU-side duration of compute_plan (steady clock)
+};
+
+class PlanWorker {
+ public:
+  PlanWorker();
+  ~PlanWorker();  // stops and joins the thread
+  PlanWorker(const PlanWorker&) = delete;
+  PlanWorker& operator=(const PlanWorker&) = delete;
+
+  void submit(planning::PlanRequest request);
+  // The newest finished result, if any (clears fd()'s readiness).
+  std::optional<TimedPlanResult> take_result();
+  // An eventfd, readable while a result waits.
+  int fd() const { return event_fd_; }
+
+ private:
+  void run();
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::optional<planning::PlanRequest> next_;
+  std::optional<TimedPlanResult> done_;
+  bool stop_ = false;
+  int event_fd_ = -1;
+  std::thread thread_;
+};
+
+}  // namespace pex::explorer
