@@ -209,7 +209,7 @@ TEST(World, ShippedWorldsLoadAndHaveTheirSize) {
     double min_w, min_h;
   };
   for (auto [name, min_w, min_h] : {Expect{"office", 38, 18}, Expect{"lab", 28, 28}, Expect{"loop", 60, 40},
-                                    Expect{"campus", 150, 150}}) {
+                                    Expect{"campus", 150, 150}, Expect{"two_rooms", 11, 6}, Expect{"intel", 28, 28}}) {
     const std::string path = std::string(PEX_SOURCE_DIR) + "/worlds/" + name + ".wkt";
     std::ifstream in(path);
     ASSERT_TRUE(in) << path;
