@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
-#include <queue>
 #include <utility>
 
 namespace pex::planning {
@@ -31,26 +29,29 @@ double node_offset(const ConfigurationSpace& cspace, std::uint32_t edge) {
 }
 
 // The boundary at the reflex nodes, as arrays (the pair loop below runs
-// over all of them for each node): per node its vertex v, the neighbours p
+// over all of them for each node): per node n its vertex v, the neighbours p
 // (before) and q (after), the edge vectors v - p ("in") and q - v ("out"),
 // and slack_p2 / slack_q2, the squares of how deep a line through the node
 // may pass beyond p or q and still be on a shortest path of the node graph
-// (see below). The node is v moved interior_offset_m inward with both edges
-// kept parallel, so the edge vectors are also the directions of the
+// (see drops()). The node is v moved interior_offset_m inward with both
+// edges kept parallel, so the edge vectors are also the directions of the
 // boundary moved to the node.
 struct Corners {
   std::vector<double> x, y;  // the node
   std::vector<double> in_x, in_y, out_x, out_y;
   std::vector<double> slack_p2, slack_q2;
-  std::vector<Point> p, v, q;
+  // p - n, v - n, q - n; and orient(p, v, n), orient(v, q, n), both > 0
+  // (the node is on the free side, the left, of both edges).
+  std::vector<double> pn_x, pn_y, vn_x, vn_y, qn_x, qn_y, in_side, out_side;
 
   Corners(const ConfigurationSpace& cspace, const std::vector<Point>& nodes) {
     for (std::size_t k = 0; k < cspace.reflex_edges().size(); ++k) {
       const std::uint32_t e = cspace.reflex_edges()[k];
       const auto& in = cspace.edges()[e];
       const auto& out = cspace.edges()[in.next];
-      x.push_back(nodes[k].x());
-      y.push_back(nodes[k].y());
+      const Point& n = nodes[k];
+      x.push_back(n.x());
+      y.push_back(n.y());
       in_x.push_back(in.b.x() - in.a.x());
       in_y.push_back(in.b.y() - in.a.y());
       out_x.push_back(out.b.x() - out.a.x());
@@ -58,53 +59,75 @@ struct Corners {
       const double slack_p = 2.0 * node_offset(cspace, in.prev), slack_q = 2.0 * node_offset(cspace, in.next);
       slack_p2.push_back(slack_p * slack_p);
       slack_q2.push_back(slack_q * slack_q);
-      p.push_back(in.a);
-      v.push_back(in.b);
-      q.push_back(out.b);
+      pn_x.push_back(in.a.x() - n.x());
+      pn_y.push_back(in.a.y() - n.y());
+      vn_x.push_back(in.b.x() - n.x());
+      vn_y.push_back(in.b.y() - n.y());
+      qn_x.push_back(out.b.x() - n.x());
+      qn_y.push_back(out.b.y() - n.y());
+      in_side.push_back(in_x.back() * -pn_y.back() + in_y.back() * pn_x.back());
+      out_side.push_back(out_x.back() * -vn_y.back() + out_y.back() * vn_x.back());
     }
   }
 
-  // Which graph edges from reflex node k, in direction (ux, uy), are worth
-  // a segment test.
+  // Whether a graph edge from reflex node k to the point at k's node + u
+  // can be dropped before its segment test.
   //
   // The obstacle at the node is the wedge between the directions back along
   // the incoming edge and on along the outgoing one (less than 180 degrees:
   // the free space's corner is reflex).
-  // - behind(): -u inside the wedge (the line runs on behind the node into
-  //   the obstacle). A path that bends at the node onto this edge keeps the
+  // - behind: -u inside the wedge (the line runs on behind the node into the
+  //   obstacle). A path that bends at the node onto this edge keeps the
   //   obstacle on the outside of the bend and is shortened by cutting the
-  //   bend, so the edge is never on a shortest path. This is most of the
-  //   pruning: the classic rule that a shortest path bends only along lines
-  //   tangent to the boundary (both edges on one side of the line).
-  // - blocked_here(): u inside the wedge and the edge crosses one of the
-  //   node's own two boundary edges (exact; no index needed).
-  // - otherwise (tangent, or into the wedge but not across those two
-  //   edges): tested.
+  //   bend, so the edge is never on a shortest path. This is the classic
+  //   rule that a shortest path bends only along lines tangent to the
+  //   boundary (both edges on one side of the line).
+  // - across: the edge properly crosses one of the node's own two boundary
+  //   edges, so the segment test would fail (strict orientation tests:
+  //   touching is left to the segment test).
   // The nodes sit interior_offset_m off the vertices, so in the node graph
   // that shortest_paths searches a path may cut a corner by about that
   // much: pass a short boundary edge's far vertex without bending at its
   // node, or bend at a node along a line that runs that little into the
-  // wedge behind it. So "inside the wedge" in behind() means deeper at a
-  // neighbouring vertex (the line's distance from it) than twice the offset
-  // of that vertex's own node. (With this slack the matrix equals the full
-  // graph's lengths on every random map tried; with none it was up to
-  // 3e-5 m longer.)
+  // wedge behind it. So "inside the wedge" means deeper at a neighbouring
+  // vertex (the line's distance from it) than twice the offset of that
+  // vertex's own node. (With this slack the matrix equals the full graph's
+  // lengths on every random map tried; with none it was up to 3e-5 m
+  // longer.)
   //
   // a and b are |u| times how far p and q lie from the line, signed so that
-  // both are negative when the wedge lies behind the node, both positive
-  // when ahead; no square root, and no branch, for the pair loop.
-  bool behind(std::size_t k, double ux, double uy) const {
+  // both are negative when the wedge lies behind the node. Each condition
+  // is written as "max of terms < 0" and the result is their min, so that
+  // the loop over all pairs of nodes has no branch, no square root, and
+  // vectorises (SSE2 has no conversion of a comparison to an integer).
+  double score(std::size_t k, double ux, double uy) const {
     const double a = ux * in_y[k] - uy * in_x[k];
     const double b = ux * out_y[k] - uy * out_x[k];
     const double u2 = ux * ux + uy * uy;
-    return (a < 0.0) & (b < 0.0) & (a * a > slack_p2[k] * u2) & (b * b > slack_q2[k] * u2);
+    // behind: a < 0, b < 0, a^2 > slack_p2 u2, b^2 > slack_q2 u2.
+    const double behind = std::max(std::max(a, b), std::max(slack_p2[k] * u2 - a * a, slack_q2[k] * u2 - b * b));
+    // across edge p-v: orient(n, n + u, p) and orient(n, n + u, v) differ
+    // in sign, and n + u is beyond the edge's line: orient(p, v, n + u) =
+    // in_side - a < 0. Likewise for edge v-q.
+    const double op = ux * pn_y[k] - uy * pn_x[k];
+    const double ov = ux * vn_y[k] - uy * vn_x[k];
+    const double oq = ux * qn_y[k] - uy * qn_x[k];
+    const double across_in = std::max(op * ov, in_side[k] - a);
+    const double across_out = std::max(ov * oq, out_side[k] - b);
+    return std::min(behind, std::min(across_in, across_out));
   }
-  bool blocked_here(std::size_t k, const Point& node, const Point& other) const {
-    const double ux = other.x() - node.x(), uy = other.y() - node.y();
-    const double a = ux * in_y[k] - uy * in_x[k];
-    const double b = ux * out_y[k] - uy * out_x[k];
-    return a > 0.0 && b > 0.0 &&
-           (segments_intersect(node, other, p[k], v[k]) || segments_intersect(node, other, v[k], q[k]));
+  bool drops(std::size_t k, double ux, double uy) const { return score(k, ux, uy) < 0.0; }
+
+  // out[t] < 0: drops() at either end of the edge i-j, for j = first + t,
+  // t < count. `out` should be a local array: then the compiler knows it
+  // does not alias the corners' arrays, and vectorises.
+  void scores(std::size_t i, std::size_t first, std::size_t count, double* out) const {
+    const double xi = x[i], yi = y[i];
+    for (std::size_t t = 0; t < count; ++t) {
+      const std::size_t j = first + t;
+      const double ux = x[j] - xi, uy = y[j] - yi;
+      out[t] = std::min(score(i, ux, uy), score(j, -ux, -uy));
+    }
   }
 };
 
@@ -145,28 +168,83 @@ Graph compress(const EdgeList& edges, std::size_t nodes) {
   return g;
 }
 
-// Dijkstra from `source` until every node >= `first_wanted` is settled (or
-// nothing is left). Nodes >= `first_point` are path ends: they are settled
-// but never relaxed from, except the source. `dist`, `parent`, `settled`
-// must be +inf / -1 / 0 on entry; `touched` lists what was set, for a cheap
-// reset.
-void dijkstra(const Graph& g, std::uint32_t source, std::uint32_t first_point, std::uint32_t first_wanted,
-              std::vector<double>& dist, std::vector<std::int32_t>& parent, std::vector<char>& settled,
-              std::vector<std::uint32_t>& touched) {
-  using Entry = std::pair<double, std::uint32_t>;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
-  const auto nodes = static_cast<std::uint32_t>(g.offset.size() - 1);
-  std::uint32_t wanted_left = nodes - std::min(first_wanted, nodes);
+// A 4-ary min-heap of node ids keyed by dist[] (ties: lower id first), with
+// decrease-key: each node is in it at most once, so a search pops each node
+// once (a heap of (distance, node) pairs with lazy deletion pops every
+// improvement, about three times as many, and the pops were most of the
+// matrix's time).
+class NodeHeap {
+ public:
+  explicit NodeHeap(std::size_t nodes) : position_(nodes, kAbsent) {}
+
+  bool empty() const { return heap_.empty(); }
+  // Inserts v or moves it up after dist[v] decreased.
+  void push_or_decrease(std::uint32_t v, const std::vector<double>& dist) {
+    std::size_t i = position_[v];
+    if (i == kAbsent) {
+      i = heap_.size();
+      heap_.push_back(v);
+    }
+    while (i > 0) {
+      const std::size_t up = (i - 1) / 4;
+      if (!less(v, heap_[up], dist)) break;
+      place(heap_[up], i);
+      i = up;
+    }
+    place(v, i);
+  }
+  std::uint32_t pop(const std::vector<double>& dist) {
+    const std::uint32_t top = heap_.front();
+    position_[top] = kAbsent;
+    const std::uint32_t last = heap_.back();
+    heap_.pop_back();
+    if (heap_.empty()) return top;
+    std::size_t i = 0;
+    for (;;) {
+      const std::size_t first_child = 4 * i + 1;
+      if (first_child >= heap_.size()) break;
+      std::size_t best = first_child;
+      const std::size_t end = std::min(first_child + 4, heap_.size());
+      for (std::size_t c = first_child + 1; c < end; ++c)
+        if (less(heap_[c], heap_[best], dist)) best = c;
+      if (!less(heap_[best], last, dist)) break;
+      place(heap_[best], i);
+      i = best;
+    }
+    place(last, i);
+    return top;
+  }
+
+ private:
+  static constexpr std::size_t kAbsent = static_cast<std::size_t>(-1);
+  static bool less(std::uint32_t a, std::uint32_t b, const std::vector<double>& dist) {
+    return dist[a] < dist[b] || (dist[a] == dist[b] && a < b);
+  }
+  void place(std::uint32_t v, std::size_t i) {
+    heap_[i] = v;
+    position_[v] = i;
+  }
+  std::vector<std::uint32_t> heap_;
+  std::vector<std::size_t> position_;
+};
+
+// Dijkstra from `source` until every node marked `wanted` (there are
+// `wanted_left`) is settled, or nothing is left. Nodes >= `first_point` are
+// path ends: they are settled but never relaxed from, except the source.
+// `dist`, `parent`, `settled` must be +inf / -1 / 0 on entry and `heap`
+// empty; `touched` lists what was set, for a cheap reset.
+void dijkstra(const Graph& g, std::uint32_t source, std::uint32_t first_point, const std::vector<char>& wanted,
+              std::uint32_t wanted_left, std::vector<double>& dist, std::vector<std::int32_t>& parent,
+              std::vector<char>& settled, std::vector<std::uint32_t>& touched, NodeHeap& heap) {
   dist[source] = 0.0;
   touched.push_back(source);
-  queue.emplace(0.0, source);
-  while (!queue.empty() && wanted_left > 0) {
-    const auto [d, u] = queue.top();
-    queue.pop();
-    if (settled[u]) continue;
+  heap.push_or_decrease(source, dist);
+  while (!heap.empty() && wanted_left > 0) {
+    const std::uint32_t u = heap.pop(dist);
     settled[u] = 1;
-    if (u >= first_wanted) --wanted_left;
+    if (wanted[u]) --wanted_left;
     if (u >= first_point && u != source) continue;
+    const double d = dist[u];
     for (std::uint32_t k = g.offset[u]; k < g.offset[u + 1]; ++k) {
       const std::uint32_t v = g.to[k];
       const double candidate = d + g.length[k];
@@ -174,9 +252,10 @@ void dijkstra(const Graph& g, std::uint32_t source, std::uint32_t first_point, s
       if (dist[v] == kInf) touched.push_back(v);
       dist[v] = candidate;
       parent[v] = static_cast<std::int32_t>(u);
-      queue.emplace(candidate, v);
+      heap.push_or_decrease(v, dist);
     }
   }
+  while (!heap.empty()) heap.pop(dist);
 }
 
 }  // namespace
@@ -202,61 +281,63 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
   // No point-point edges: a path between points that bends, bends at reflex
   // vertices only.
   EdgeList edges;
-  std::vector<char> drop(r);
   for (std::uint32_t i = 0; i < r; ++i) {
-    // The cheap test for all j > i at once (both ends), then the rest.
-    const double xi = corners.x[i], yi = corners.y[i];
-    for (std::uint32_t j = i + 1; j < r; ++j) {
-      const double ux = corners.x[j] - xi, uy = corners.y[j] - yi;
-      drop[j] = prune & (corners.behind(i, ux, uy) | corners.behind(j, -ux, -uy));
-    }
-    for (std::uint32_t j = i + 1; j < r; ++j) {
-      if (drop[j]) continue;
-      if (prune && (corners.blocked_here(i, nodes[i], nodes[j]) || corners.blocked_here(j, nodes[j], nodes[i])))
-        continue;
-      if (!cspace.segment_free(nodes[i], nodes[j])) continue;
-      edges.add(i, j, length(nodes[i], nodes[j]));
+    // The cheap test for a block of j > i at once (both ends), then segment
+    // tests for what it keeps.
+    constexpr std::uint32_t kBlock = 256;
+    double score[kBlock];
+    for (std::uint32_t first = i + 1; first < r; first += kBlock) {
+      const std::uint32_t count = std::min(kBlock, r - first);
+      if (prune) corners.scores(i, first, count, score);
+      for (std::uint32_t t = 0; t < count; ++t) {
+        const std::uint32_t j = first + t;
+        if ((prune && score[t] < 0.0) || !cspace.segment_free(nodes[i], nodes[j])) continue;
+        edges.add(i, j, length(nodes[i], nodes[j]));
+      }
     }
   }
   for (std::uint32_t i = 0; i < r; ++i) {
     for (std::uint32_t p = first_point; p < total; ++p) {
-      if (prune && (corners.behind(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y()) ||
-                    corners.blocked_here(i, nodes[i], nodes[p])))
-        continue;
+      if (prune && corners.drops(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y())) continue;
       if (!cspace.segment_free(nodes[i], nodes[p])) continue;
       edges.add(i, p, length(nodes[i], nodes[p]));
     }
   }
   const Graph graph = compress(edges, total);
 
-  // 2. One Dijkstra per point, for the points after it; then the straight
-  // segment wherever it would be shorter than the bending path.
+  // 2. From each point to the points after it: the straight segment where
+  // it is free, else one Dijkstra for all the others. In open space most
+  // pairs see each other and the search stops early or is not needed.
   PathMatrix out;
   out.from_start_m.assign(n, kInf);
   out.path_from_start.resize(n);
-  out.between_m.assign(n * n, kInf);
-  for (std::size_t i = 0; i < n; ++i) out.between_m[i * n + i] = 0.0;
+  if (options.between_targets) {
+    out.between_m.assign(n * n, kInf);
+    for (std::size_t i = 0; i < n; ++i) out.between_m[i * n + i] = 0.0;
+  }
   std::vector<double> dist(total, kInf);
   std::vector<std::int32_t> parent(total, -1);
-  std::vector<char> settled(total, 0);
+  std::vector<char> settled(total, 0), wanted(total, 0), straight(total, 0);
   std::vector<std::uint32_t> touched;
-  for (std::uint32_t p = first_point; p + 1 < total; ++p) {
-    dijkstra(graph, p, first_point, p + 1, dist, parent, settled, touched);
+  NodeHeap heap(total);
+  const std::uint32_t sources_end = options.between_targets ? total - 1 : std::min(total - 1, first_point + 1);
+  for (std::uint32_t p = first_point; p < sources_end; ++p) {
+    std::uint32_t wanted_count = 0;
+    for (std::uint32_t q = first_point; q < total; ++q) {
+      straight[q] = q > p && cspace.segment_free(nodes[p], nodes[q]);
+      wanted[q] = q > p && !straight[q];
+      wanted_count += wanted[q];
+    }
+    if (wanted_count > 0) dijkstra(graph, p, first_point, wanted, wanted_count, dist, parent, settled, touched, heap);
     for (std::uint32_t q = p + 1; q < total; ++q) {
-      double d = dist[q];
-      bool straight = false;
-      const double direct = length(nodes[p], nodes[q]);
-      if (direct < d && cspace.segment_free(nodes[p], nodes[q])) {
-        d = direct;
-        straight = true;
-      }
+      const double d = straight[q] ? length(nodes[p], nodes[q]) : dist[q];
       const std::size_t tq = q - first_point - 1;
       if (p == first_point) {
         out.from_start_m[tq] = d;
         if (d == kInf) continue;
         std::vector<Point>& path = out.path_from_start[tq];
         path.push_back(nodes[q]);
-        if (!straight)
+        if (!straight[q])
           for (std::int32_t v = parent[q]; v >= 0; v = parent[static_cast<std::size_t>(v)])
             path.push_back(nodes[static_cast<std::size_t>(v)]);
         else

@@ -13,8 +13,8 @@
 // a slack for the nodes' offset from the vertices, so that the lengths stay
 // those of shortest_paths' graph). Each candidate and the start are joined to
 // the reflex vertices they see the same way; one Dijkstra per candidate over
-// this sparse graph gives the lengths that bend at least once, and the
-// straight segment is tested only where it would be shorter than that.
+// this sparse graph gives the lengths that bend, for the pairs that do not
+// see each other along a straight segment.
 
 #include <cstddef>
 #include <cstdint>
@@ -29,6 +29,9 @@ struct PathMatrixOptions {
   // Drop graph edges that cannot be on a shortest path before testing them
   // (see above). false: every visible pair is an edge (tests compare).
   bool tangent_pruning = true;
+  // false: only the lengths and paths from the start, between_m is left
+  // empty (what the greedy strategy needs, over the same sparse graph).
+  bool between_targets = true;
 };
 
 struct PathMatrix {
@@ -39,7 +42,8 @@ struct PathMatrix {
   std::vector<std::vector<Point>> path_from_start;
   // n x n, row-major: between_m[i * n + j] is the length of the shortest path
   // between targets i and j. Exactly symmetric, 0 on the diagonal, +inf when
-  // the targets lie in different connected pieces of the C-space.
+  // the targets lie in different connected pieces of the C-space. Empty when
+  // not asked for (PathMatrixOptions::between_targets).
   std::vector<double> between_m;
 
   // Statistics.

@@ -196,6 +196,13 @@ TEST(PathMatrix, AgreesWithShortestPathsOnRandomMaps) {
       }
     }
 
+    // Only from the start (the greedy strategy's search): the same row.
+    const auto start_only = shortest_path_matrix(cs, start, targets, PathMatrixOptions{.between_targets = false});
+    EXPECT_EQ(start_only.from_start_m, m.from_start_m);
+    EXPECT_TRUE(start_only.between_m.empty());
+    for (std::size_t i = 0; i < targets.size(); ++i)
+      EXPECT_EQ(start_only.path_from_start[i].size(), m.path_from_start[i].size());
+
     // Without the pruning: the same lengths from many more edges.
     const auto full = shortest_path_matrix(cs, start, targets, PathMatrixOptions{.tangent_pruning = false});
     for (std::size_t i = 0; i < targets.size(); ++i) {
