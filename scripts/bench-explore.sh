@@ -34,4 +34,41 @@ for world in "${worlds[@]}"; do
     fi
   done
 done
-"$BIN/pex-explore-report" --table "$results" --doc docs/exploration.md
+
+# The table: one row per run, then the path summed per strategy over the
+# worlds every strategy finished, and the tour/greedy ratio.
+table="$OUT/table.md"
+awk -v speed="$SPEED" '
+  function field(name,   v) {  # flat JSON of pex-explore-report: no commas inside values
+    v = $0
+    if (!sub(".*\"" name "\": *", "", v)) return "?"
+    sub(/[,}].*/, "", v); gsub(/"/, "", v)
+    return v
+  }
+  BEGIN {
+    print "| world | strategy | phase | sim time (s) | path (m) | explored (m²) | reachable (m²) | coverage | IoU | obstacle on wall | collisions | goals | plans | plan p50 (ms) | plan p99 (ms) | control p99 (ms) |"
+    print "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  }
+  {
+    w = field("world"); s = field("strategy")
+    printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", w, s, field("phase"),
+      field("sim_time_s"), field("path_m"), field("explored_m2"), field("reachable_m2"), field("coverage"), field("iou"),
+      field("obstacle_on_wall"), field("collisions"), field("goals"), field("plans"), field("plan_ms_p50"),
+      field("plan_ms_p99"), field("control_ms_p99")
+    if (field("phase") == "done" || field("phase") == "done_with_unreachable") { path[w, s] = field("path_m"); worlds[w] = 1; strategies[s] = 1 }
+  }
+  END {
+    printf "\nSimulator at x%s, every daemon on SIM_CLOCK. Path summed over the worlds every strategy finished:", speed
+    n = 0
+    for (w in worlds) { ok = 1; for (s in strategies) if (!((w, s) in path)) ok = 0; if (ok) { for (s in strategies) sum[s] += path[w, s]; n++ } }
+    for (s in strategies) printf " %s %.1f m;", s, sum[s]
+    if (sum["greedy"] > 0 && ("tour" in strategies)) printf " tour / greedy = %.3f", sum["tour"] / sum["greedy"]
+    printf " (%d worlds).\n", n
+  }' "$results" >"$table"
+cat "$table"
+# Into docs/exploration.md, between its markers.
+awk -v table="$table" '
+  /<!-- exploration-benchmark:begin -->/ { print; while ((getline line < table) > 0) print line; skip = 1; next }
+  /<!-- exploration-benchmark:end -->/ { skip = 0 }
+  !skip { print }' docs/exploration.md >"$OUT/exploration.md" && mv "$OUT/exploration.md" docs/exploration.md
+echo "bench explore: table written to docs/exploration.md" >&2

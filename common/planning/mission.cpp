@@ -118,13 +118,15 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
       if (phase_ == Phase::kStopped || phase_ == Phase::kHome || phase_ == Phase::kWaitingStart || is_finished(phase_))
         return std::string("nothing to pause in phase ") + to_string(phase_);
       paused_from_ = phase_;
+      pause_utime_ = now_utime;
       follower_.stop();
       enter(Phase::kPaused, "paused by command");
       return {};
     case MissionCommand::kResume:
       if (phase_ != Phase::kPaused) return phase_ == Phase::kWaitingStart ? "not started: send start" : "";
       enter(paused_from_, "resumed");
-      progress_utime_ = now_utime;  // the pause was not the goal's fault
+      goal_deadline_utime_ += now_utime - pause_utime_;  // the pause was not the goal's fault
+      progress_utime_ = now_utime;
       last_request_utime_ = -1;     // the world may have changed: plan again now
       return {};
     case MissionCommand::kHome:
@@ -300,9 +302,14 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
   empty_plans_ = 0;
   goal_ = best->position;
   goal_frontier_ = best->frontier_point;
-  progress_goal_ = best->position;
+  progress_goal_ = best->frontier_point;
   best_remaining_m_ = best->path_length_m;
   progress_utime_ = now_utime;
+  // However the goal seems to progress, it gets at most this long: four times
+  // its path at full speed plus the progress timeout (a goal that keeps
+  // "moving on" without ever being reached is what makes a robot wander).
+  goal_deadline_utime_ = now_utime + options_.progress_timeout_us +
+                         static_cast<std::int64_t>(4e6 * best->path_length_m / options_.follower.max_speed_mps);
   follower_.set_path(best->path);
   enter(Phase::kMoving, format("moving to goal (%.2f, %.2f), path %.1f m, %.0f candidates", best->position.x(),
                                best->position.y(), best->path_length_m, static_cast<double>(plan.candidates.size())));
@@ -359,12 +366,14 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   goal_ = same.position;
   goal_frontier_ = same.frontier_point;
   follower_.set_path(same.path);
-  // Progress: the path got shorter, or the goal moved on with its frontier
-  // (a corridor's end recedes as the robot drives down it).
+  // Progress: the path got shorter, or the frontier moved on (a corridor's
+  // end recedes as the robot drives down it). The goal point moving alone
+  // is not progress: it may jump between a frontier's approach point and its
+  // own C-space point from one map to the next.
   if (same.path_length_m < best_remaining_m_ - options_.progress_min_m ||
-      distance(same.position, progress_goal_) >= options_.progress_min_m) {
+      distance(same.frontier_point, progress_goal_) >= options_.progress_min_m) {
     best_remaining_m_ = same.path_length_m;
-    progress_goal_ = same.position;
+    progress_goal_ = same.frontier_point;
     progress_utime_ = now_utime;
   }
 }
@@ -454,6 +463,9 @@ MissionOutput Mission::step(std::int64_t now_utime) {
     if (now_utime - progress_utime_ > options_.progress_timeout_us) {
       ++outcomes_.no_progress;
       give_up_goal(format("no progress for %.0f s", static_cast<double>(options_.progress_timeout_us) * 1e-6));
+    } else if (now_utime > goal_deadline_utime_) {
+      ++outcomes_.no_progress;
+      give_up_goal("not reached in four times its path's driving time");
     }
   }
 

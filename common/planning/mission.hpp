@@ -11,7 +11,8 @@
 //                    reached                       -> SELECTING (after a newer map)
 //                    seen (its frontier is gone)   -> SELECTING
 //                    blocked (no path any more)    -> blacklisted, SELECTING
-//                    given up (no progress)        -> blacklisted, SELECTING
+//                    given up (no progress, or not reached within
+//                      progress timeout + 4 x its path's driving time) -> blacklisted, SELECTING
 //                  each outcome counted in GoalOutcomes.
 //   DONE           no frontier left (confirmed on done_confirmations maps)
 //   DONE_WITH_UNREACHABLE  frontiers are left, none reachable; each listed with why
@@ -230,8 +231,10 @@ class Mission {
   Point goal_frontier_;      // the frontier point the goal is for
   bool goal_tight_ = false;  // the goal was planned without the clearance margin
   double best_remaining_m_ = 0.0;
-  Point progress_goal_;  // where the goal was at the last progress
+  Point progress_goal_;  // where the goal's frontier point was at the last progress
   std::int64_t progress_utime_ = 0;
+  std::int64_t goal_deadline_utime_ = 0;  // given up (no progress) after this, whatever the progress
+  std::int64_t pause_utime_ = 0;
   int goal_candidates_ = 0;
   std::vector<FrontierLeft> frontiers_;
   PlanStats plan_stats_;

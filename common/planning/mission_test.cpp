@@ -198,6 +198,26 @@ TEST(Mission, AGoalThatMovesOnWithItsFrontierIsProgress) {
   EXPECT_TRUE(m.blacklist().empty());
 }
 
+TEST(Mission, AGoalThatMovesOnForEverIsGivenUpAtItsDeadline) {
+  // The same receding frontier, but the robot never gets anywhere: progress
+  // by the frontier alone does not keep a goal for ever.
+  Mission m(test_options());
+  auto receding = [](double length_m) {
+    return mapping::TypedMultiPolygon{typed_polygon(
+        rectangle(0, 0, length_m, 3, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}))};
+  };
+  std::int64_t given_up_at = -1;
+  for (std::int64_t t = 0; t <= 200 * kSecond && given_up_at < 0; t += 100'000) {
+    if (t % kSecond == 0) m.on_map(receding(20.0 + 0.5 * static_cast<double>(t / kSecond)), t);
+    m.on_pose(Pose2{15, 1.5, 0}, t);
+    step_with_inline_planning(m, t);
+    if (m.goal_outcomes().no_progress > 0) given_up_at = t;
+  }
+  // Deadline: progress timeout (5 s) + 4 x the first path (4.65 m) at 0.4 m/s = 51.5 s.
+  ASSERT_GT(given_up_at, 0);
+  EXPECT_NEAR(static_cast<double>(given_up_at) * 1e-6, 51.5, 0.5);
+}
+
 TEST(Mission, StaleInputsStopTheRobotUntilTheyAreFresh) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);
