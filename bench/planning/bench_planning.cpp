@@ -1,0 +1,371 @@
+// pex-bench-planning: what goal selection by a tour costs per plan (issue
+// 10): the C-space, the greedy strategy's one search (shortest_paths from the
+// robot; and the robot's row alone over the path matrix's sparse graph), the
+// path matrix over all candidates (shortest_path_matrix) and the tour on it
+// (solve_open_tour), for 10, 30 and 60 candidates, on two maps:
+//   campus: a synthetic 160 x 160 m campus, the buildings of
+//           worlds/campus.wkt and 40 round trees (16-gons of 0.5 m radius),
+//           everything known (the largest map a campus run plans on);
+//   intel:  the planning map the mapper builds from the Intel lab log's
+//           scans (raw odometry; real, noisy walls and frontiers), grown to
+//           about 5000 vertices.
+// Candidates are the map's own frontier candidates (intel; as the planner
+// makes them) in the robot's piece of the C-space and, where there are fewer
+// than asked for, random interior points of that piece (fixed seed); the
+// robot is at the first scan pose (intel) or the campus start. Figures are reported (docs/), never asserted;
+// CPU time, since the machine is shared. The last stdout line is one JSON
+// object.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "evaluation/carmen_log.hpp"
+#include "mapping/polygon_map.hpp"
+#include "mapping/scan_polygon.hpp"
+#include "planning/cspace.hpp"
+#include "planning/frontier_goals.hpp"
+#include "planning/goal_tour.hpp"
+#include "planning/path_matrix.hpp"
+#include "planning/test_maps.hpp"
+#include "planning/visibility_graph.hpp"
+
+namespace {
+
+using namespace pex::planning;
+using pex::mapping::Point;
+using pex::mapping::TypedMultiPolygon;
+
+constexpr std::size_t kMaxCandidates = 60;
+
+// The planner's defaults as config/explorer.toml sets them.
+CSpaceOptions cspace_options() {
+  CSpaceOptions o;
+  o.robot_radius_m = 0.27;
+  o.clearance_margin_m = 0.05;
+  o.points_per_circle = 16;
+  o.simplify_epsilon_m = 0.01;
+  return o;
+}
+
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
+
+struct Scene {
+  std::string name;
+  TypedMultiPolygon map;
+  std::unique_ptr<ConfigurationSpace> cspace;
+  Point start;
+  std::vector<Point> candidates;  // kMaxCandidates; the first `frontier_candidates` from frontiers
+  int frontier_candidates = 0;
+  std::size_t map_vertices = 0;
+  std::string error;
+};
+
+// Candidates: those of `given` in the robot's piece of the C-space first
+// (in order), then random interior points of that piece until there are
+// kMaxCandidates: every candidate is reachable.
+void fill_candidates(Scene& scene, const std::vector<Point>& given) {
+  const pex::mapping::Polygon* piece = nullptr;
+  for (const auto& p : scene.cspace->polygons())
+    if (boost::geometry::covered_by(scene.start, p.geometry)) piece = &p.geometry;
+  if (!piece) return;
+  scene.candidates.clear();
+  for (const auto& p : given)
+    if (scene.candidates.size() < kMaxCandidates && boost::geometry::covered_by(p, *piece)) scene.candidates.push_back(p);
+  scene.frontier_candidates = static_cast<int>(scene.candidates.size());
+  const auto box = boost::geometry::return_envelope<pex::mapping::Box>(*piece);
+  std::mt19937_64 rng(7);
+  for (int attempt = 0; attempt < 100000 && scene.candidates.size() < kMaxCandidates; ++attempt) {
+    const Point p(uniform(rng, box.min_corner().x(), box.max_corner().x()),
+                  uniform(rng, box.min_corner().y(), box.max_corner().y()));
+    if (!boost::geometry::covered_by(p, *piece)) continue;
+    if (const auto inside = scene.cspace->nearest_interior_point(p, 0.0)) scene.candidates.push_back(*inside);
+  }
+}
+
+std::unique_ptr<Scene> build_campus() {
+  using pex::planning::testing::RingSpec;
+  auto scene = std::make_unique<Scene>();
+  scene->name = "campus";
+  // The buildings of worlds/campus.wkt (holes, clockwise); the courtyard
+  // building as its outline, the L-shaped one as an L.
+  const double buildings[][4] = {{20, 20, 50, 35},    {70, 15, 95, 45},    {115, 20, 145, 30}, {20, 60, 35, 100},
+                                 {55, 65, 100, 80},   {120, 55, 140, 95},  {25, 120, 60, 140}, {75, 105, 90, 145},
+                                 {110, 120, 150, 135}, {100, 100, 110, 110}};
+  std::vector<RingSpec> holes;
+  std::vector<pex::mapping::Box> taken;
+  for (const auto& b : buildings) {
+    holes.push_back(testing::rectangle_hole(b[0], b[1], b[2], b[3]));
+    taken.emplace_back(Point(b[0], b[1]), Point(b[2], b[3]));
+  }
+  holes.push_back(RingSpec{{Point(55, 90), Point(55, 100), Point(60, 100), Point(60, 95), Point(70, 95), Point(70, 90)}, {}});
+  taken.emplace_back(Point(55, 90), Point(70, 100));
+  // 40 trees, 0.5 m radius, at least 2 m from buildings, fence and each other.
+  std::mt19937_64 rng(2019);
+  int trees = 0;
+  for (int attempt = 0; attempt < 10000 && trees < 40; ++attempt) {
+    const double cx = uniform(rng, 3, 157), cy = uniform(rng, 3, 157);
+    const pex::mapping::Box reach(Point(cx - 2.5, cy - 2.5), Point(cx + 2.5, cy + 2.5));
+    bool apart = true;
+    for (const auto& t : taken) apart = apart && !boost::geometry::intersects(reach, t);
+    if (!apart) continue;
+    taken.emplace_back(Point(cx - 0.5, cy - 0.5), Point(cx + 0.5, cy + 0.5));
+    RingSpec tree;
+    for (int k = 0; k < 16; ++k) {
+      const double a = -2.0 * M_PI * k / 16;
+      tree.points.emplace_back(cx + 0.5 * std::cos(a), cy + 0.5 * std::sin(a));
+    }
+    holes.push_back(tree);
+    ++trees;
+  }
+  scene->map = {testing::typed_polygon(testing::rectangle(0, 0, 160, 160), holes)};
+  scene->map_vertices = pex::mapping::vertex_count(scene->map);
+  scene->cspace = std::make_unique<ConfigurationSpace>();
+  const auto built = scene->cspace->build(scene->map, cspace_options());
+  if (!built.ok) {
+    scene->error = built.error;
+    return scene;
+  }
+  scene->start = Point(8.0, 8.0);  // the campus world's START
+  fill_candidates(*scene, {});
+  return scene;
+}
+
+// The Intel lab log inserted as bench_mapping does (a scan after 0.2 m or
+// 0.25 rad of motion) until the planning map has about `target_vertices`.
+std::unique_ptr<Scene> build_intel(std::size_t target_vertices) {
+  auto scene = std::make_unique<Scene>();
+  scene->name = "intel";
+  std::ifstream in(std::string(PEX_SHARED_DIR) + "/data/intel.clf");
+  if (!in) {
+    scene->error = "no " + std::string(PEX_SHARED_DIR) + "/data/intel.clf";
+    return scene;
+  }
+  const auto log = pex::evaluation::parse_carmen_log(in);
+  pex::mapping::PolygonMap map;
+  const pex::mapping::ScanPolygonOptions options;
+  std::optional<pex::mapping::Pose2> first, last;
+  for (const auto& laser : log.lasers) {
+    const pex::mapping::Pose2 pose{laser.laser_pose.x_m, laser.laser_pose.y_m, laser.laser_pose.theta_rad};
+    if (last && std::hypot(pose.x - last->x, pose.y - last->y) < 0.2 &&
+        std::abs(std::remainder(pose.theta - last->theta, 2 * M_PI)) < 0.25)
+      continue;
+    last = pose;
+    if (!first) first = pose;
+    std::vector<float> ranges = laser.ranges_m;
+    for (auto& r : ranges)
+      if (r >= laser.max_range_m) r = std::numeric_limits<float>::infinity();
+    auto scan = pex::mapping::scan_to_polygon(ranges, laser.angle_min_rad, laser.angle_increment_rad, pose, options);
+    if (scan.ok) map.insert(scan.polygon);
+    if (map.planning_vertex_count() >= target_vertices) break;
+  }
+  auto merged = map.planning_map();
+  if (!merged.ok || !first) {
+    scene->error = "the Intel planning map failed: " + merged.error;
+    return scene;
+  }
+  scene->map = std::move(merged.polygons);
+  scene->map_vertices = pex::mapping::vertex_count(scene->map);
+  scene->cspace = std::make_unique<ConfigurationSpace>();
+  const auto built = scene->cspace->build(scene->map, cspace_options());
+  if (!built.ok) {
+    scene->error = built.error;
+    return scene;
+  }
+  const auto start = scene->cspace->nearest_interior_point(Point(first->x, first->y), 0.5);
+  if (!start) {
+    scene->error = "the first Intel pose is not in the C-space";
+    return scene;
+  }
+  scene->start = *start;
+  // The planner's candidates: on the frontiers, moved into the C-space.
+  FrontierGoalOptions frontier;
+  frontier.sensor_range_m = 4.0;
+  frontier.min_frontier_length_m = 0.4;
+  std::vector<Point> given;
+  for (const auto& fp : frontier_candidates(frontier_chains(scene->map), frontier))
+    if (const auto inside = scene->cspace->nearest_interior_point(fp.point, 1.0)) given.push_back(*inside);
+  fill_candidates(*scene, given);
+  return scene;
+}
+
+Scene& scene(int which) {
+  static std::map<int, std::unique_ptr<Scene>> cache;
+  auto& slot = cache[which];
+  if (!slot) slot = which == 0 ? build_campus() : build_intel(5000);
+  return *slot;
+}
+
+std::vector<Point> candidates(const Scene& s, std::size_t n) {
+  return {s.candidates.begin(), s.candidates.begin() + static_cast<std::ptrdiff_t>(std::min(n, s.candidates.size()))};
+}
+
+bool usable(benchmark::State& state, const Scene& s) {
+  if (!s.error.empty() || s.candidates.size() < kMaxCandidates) {
+    state.SkipWithError((s.name + ": " + (s.error.empty() ? "too few candidates" : s.error)).c_str());
+    return false;
+  }
+  state.SetLabel(s.name);
+  return true;
+}
+
+void map_counters(benchmark::State& state, const Scene& s) {
+  state.counters["map_vertices"] = static_cast<double>(s.map_vertices);
+  state.counters["reflex"] = static_cast<double>(s.cspace->reflex_nodes().size());
+  state.counters["frontier_cands"] = s.frontier_candidates;
+}
+
+void BM_CSpace(benchmark::State& state) {
+  Scene& s = scene(static_cast<int>(state.range(0)));
+  if (!usable(state, s)) return;
+  for (auto _ : state) {
+    ConfigurationSpace cs;
+    benchmark::DoNotOptimize(cs.build(s.map, cspace_options()));
+  }
+  map_counters(state, s);
+}
+
+// The greedy strategy's search: one lazy Dijkstra from the robot.
+void BM_ShortestPaths(benchmark::State& state) {
+  Scene& s = scene(static_cast<int>(state.range(0)));
+  if (!usable(state, s)) return;
+  const auto targets = candidates(s, static_cast<std::size_t>(state.range(1)));
+  std::int64_t tests = 0;
+  for (auto _ : state) {
+    auto sp = shortest_paths(*s.cspace, s.start, targets);
+    tests = sp.segment_tests;
+    benchmark::DoNotOptimize(sp);
+  }
+  map_counters(state, s);
+  state.counters["segment_tests"] = static_cast<double>(tests);
+}
+
+// The same sparse graph, the robot's row only: what the greedy strategy
+// could use instead of shortest_paths.
+void BM_StartRow(benchmark::State& state) {
+  Scene& s = scene(static_cast<int>(state.range(0)));
+  if (!usable(state, s)) return;
+  const auto targets = candidates(s, static_cast<std::size_t>(state.range(1)));
+  PathMatrix m;
+  for (auto _ : state) {
+    m = shortest_path_matrix(*s.cspace, s.start, targets, PathMatrixOptions{.between_targets = false});
+    benchmark::DoNotOptimize(m);
+  }
+  map_counters(state, s);
+  state.counters["segment_tests"] = static_cast<double>(m.segment_tests);
+}
+
+void BM_PathMatrix(benchmark::State& state) {
+  Scene& s = scene(static_cast<int>(state.range(0)));
+  if (!usable(state, s)) return;
+  const auto targets = candidates(s, static_cast<std::size_t>(state.range(1)));
+  PathMatrix m;
+  for (auto _ : state) {
+    m = shortest_path_matrix(*s.cspace, s.start, targets);
+    benchmark::DoNotOptimize(m);
+  }
+  map_counters(state, s);
+  state.counters["graph_edges"] = static_cast<double>(m.graph_edges);
+  state.counters["segment_tests"] = static_cast<double>(m.segment_tests);
+  int reachable = 0;
+  for (const double d : m.from_start_m) reachable += std::isfinite(d) ? 1 : 0;
+  state.counters["reachable"] = reachable;
+}
+
+void BM_Tour(benchmark::State& state) {
+  Scene& s = scene(static_cast<int>(state.range(0)));
+  if (!usable(state, s)) return;
+  const auto m = shortest_path_matrix(*s.cspace, s.start, candidates(s, static_cast<std::size_t>(state.range(1))));
+  OpenTour tour;
+  for (auto _ : state) {
+    tour = solve_open_tour(m);
+    benchmark::DoNotOptimize(tour);
+  }
+  const auto greedy = nearest_neighbour_tour(m.from_start_m, m.between_m);
+  state.counters["tour_over_greedy"] = greedy.length_m > 0 ? tour.length_m / greedy.length_m : 1.0;
+  state.counters["moves"] = tour.improving_moves;
+}
+
+// What a tour plan adds up to without the frontier extraction: C-space,
+// matrix, tour.
+void BM_PlanTour(benchmark::State& state) {
+  Scene& s = scene(static_cast<int>(state.range(0)));
+  if (!usable(state, s)) return;
+  const auto targets = candidates(s, static_cast<std::size_t>(state.range(1)));
+  for (auto _ : state) {
+    ConfigurationSpace cs;
+    cs.build(s.map, cspace_options());
+    const auto m = shortest_path_matrix(cs, s.start, targets);
+    benchmark::DoNotOptimize(solve_open_tour(m));
+  }
+  map_counters(state, s);
+}
+
+void maps(benchmark::internal::Benchmark* b) { b->ArgNames({"map"})->Arg(0)->Arg(1); }
+void maps_and_counts(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"map", "n"});
+  for (const int map : {0, 1})
+    for (const int n : {10, 30, 60}) b->Args({map, n});
+}
+
+BENCHMARK(BM_CSpace)->Apply(maps)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_ShortestPaths)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_StartRow)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_PathMatrix)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_Tour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+
+// Collects the medians for the JSON line while printing the usual table.
+class MedianCollector : public benchmark::ConsoleReporter {
+ public:
+  std::map<std::string, double> median_ms;
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const auto& run : runs)
+      if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median")
+        median_ms[run.run_name.function_name + "/" + run.run_name.args] = run.GetAdjustedCPUTime();
+    ConsoleReporter::ReportRuns(runs);
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  MedianCollector reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  auto get = [&](const std::string& name) {
+    const auto it = reporter.median_ms.find(name);
+    return it == reporter.median_ms.end() ? -1.0 : it->second;
+  };
+  std::printf("{");
+  const char* sep = "";
+  for (const int map : {0, 1}) {
+    const char* name = map == 0 ? "campus" : "intel";
+    for (const int n : {10, 30, 60}) {
+      const std::string args = "map:" + std::to_string(map) + "/n:" + std::to_string(n);
+      std::printf("%s\"%s_matrix_ms_%d\":%.3f,\"%s_tour_ms_%d\":%.3f,\"%s_plan_tour_ms_%d\":%.3f,"
+                  "\"%s_greedy_search_ms_%d\":%.3f,\"%s_start_row_ms_%d\":%.3f",
+                  sep, name, n, get("BM_PathMatrix/" + args), name, n, get("BM_Tour/" + args), name, n,
+                  get("BM_PlanTour/" + args), name, n, get("BM_ShortestPaths/" + args), name, n,
+                  get("BM_StartRow/" + args));
+      sep = ",";
+    }
+    std::printf(",\"%s_cspace_ms\":%.3f", name, get("BM_CSpace/map:" + std::to_string(map)));
+  }
+  std::printf("}\n");
+  return 0;
+}
