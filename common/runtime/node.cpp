@@ -94,7 +94,7 @@ int64_t Node::monotonic_us() const { return driven_clock_ ? clock_now_us_ : stea
 void Node::advance_clock(int64_t now_us) {
   clock_now_us_ = now_us;
   clock_started_ = true;
-  fire_due_timers(timers_, now_us);
+  if (!in_live_loop_) fire_due_timers(timers_, now_us);
 }
 
 void Node::on_sim_clock(const void* data, int size) {
@@ -299,6 +299,14 @@ void Node::run() {
   sd_notify(0, "READY=1");
   publish_status();
 
+  // Every message waiting (LCM hands out one per call), at most this many,
+  // so a flood on the bus cannot starve the fds.
+  constexpr int kMaxMessagesPerTurn = 1000;
+  const auto handle_waiting_messages = [this] {
+    for (int i = 0; i < kMaxMessagesPerTurn && lcm_->handleTimeout(0) > 0; ++i) {
+    }
+  };
+  in_live_loop_ = true;
   std::vector<pollfd> fds;
   while (!stop_) {
     const int64_t now = steady_us();
@@ -329,9 +337,13 @@ void Node::run() {
         stop_ = true;
         break;
       }
-      if (fds[0].revents & POLLIN) lcm_->handleTimeout(0);
+      if (fds[0].revents & POLLIN) handle_waiting_messages();
       for (size_t i = 0; i < watches.size(); ++i) {
         if (!(fds[first_watch + i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+        // On "sim", an fd's data (CAN frames, TCP telegrams) is timed with the
+        // clock: take in the newest SIM_CLOCK first, or data the simulator sent
+        // after a clock tick would be stamped with the tick before.
+        if (options_.clock == ClockSource::kSim) handle_waiting_messages();
         // Still watched? An earlier callback may have removed it.
         const bool live = std::any_of(watches_.begin(), watches_.end(),
                                       [&](const Watch& w) { return w.id == watches[i].id; });
@@ -344,9 +356,15 @@ void Node::run() {
       }
     }
     fire_due_timers(system_timers_, steady_us());
-    // On "sim", the node's timers fire from on_sim_clock() instead.
-    if (!driven_clock_) fire_due_timers(timers_, steady_us());
+    // On "sim", once per turn at the newest SIM_CLOCK: a node that fell behind
+    // and finds a backlog of clock messages runs each timer once, skipping the
+    // missed periods as on the system clock, rather than a burst of them.
+    if (!driven_clock_)
+      fire_due_timers(timers_, steady_us());
+    else if (clock_started_)
+      fire_due_timers(timers_, clock_now_us_);
   }
+  in_live_loop_ = false;
   shutdown();
 }
 

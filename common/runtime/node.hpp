@@ -185,7 +185,8 @@ class Node {
   void add_timer(std::vector<Timer>& timers, std::chrono::microseconds period, std::function<void(int64_t)> fn);
   void fire_due_timers(std::vector<Timer>& timers, int64_t now_us);
   // The one path by which a driven clock (offline: log time; "sim": SIM_CLOCK)
-  // moves: sets the time and fires the node's due timers.
+  // moves: sets the time and fires the node's due timers (inside the live
+  // loop, at the end of the loop's turn instead: see run()).
   void advance_clock(int64_t now_us);
   void on_sim_clock(const void* data, int size);
   void check_sim_clock_silence();
@@ -214,6 +215,7 @@ class Node {
   // True when the clock is driven by events (offline, or live "sim") rather than read.
   bool driven_clock_ = false;
   bool clock_started_ = false;
+  bool in_live_loop_ = false;          // run() fires the "sim" timers once per turn
   int64_t clock_now_us_ = 0;           // driven clock: its time (0 = none yet)
   int64_t last_clock_steady_us_ = 0;   // "sim": steady time of the last good SIM_CLOCK
   int8_t clock_problem_state_ = 0;     // "sim": state the clock imposes (with a reason) ...

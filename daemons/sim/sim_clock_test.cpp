@@ -55,7 +55,9 @@ TEST(SimClock, StepsInSimulatedTimeWithTruthOnTheSameTimeLineAndCountsContacts) 
     const auto& c = clocks[i];
     EXPECT_EQ(c.utime - c.sim_time_us, epoch) << i;  // utime = wall time at start + simulated time
     EXPECT_EQ(c.speed_factor, 4.0);
-    if (i > 0) EXPECT_EQ(c.sim_time_us - clocks[i - 1].sim_time_us, 10'000) << i;  // 100 Hz of simulated time
+    if (i > 0) {
+      EXPECT_EQ(c.sim_time_us - clocks[i - 1].sim_time_us, 10'000) << i;  // 100 Hz of simulated time
+    }
     EXPECT_EQ(c.collisions, 1) << i;
     EXPECT_EQ(c.collision_steps, 0) << i;  // nothing moved into the wall
   }

@@ -172,6 +172,10 @@ std::string Lms111Protocol::answer(ColaClient& client, const cola::Telegram& t) 
   return error_reply(kErrorUnknownCommand);
 }
 
+std::uint32_t Lms111Protocol::transmission_delay_us() const {
+  return static_cast<std::uint32_t>(1e6 / options_.laser.rate_hz * 0.75);
+}
+
 void Lms111Protocol::begin_scan() {
   ++scan_counter_;
   ++telegram_counter_;
@@ -186,7 +190,7 @@ cola::ScanData Lms111Protocol::make_scan(const std::vector<float>& ranges_m, std
   s.telegram_counter = telegram_counter_;
   s.scan_counter = scan_counter_;
   s.time_since_startup_us = device_time_us;
-  s.time_of_transmission_us = device_time_us + static_cast<std::uint32_t>(1e6 / options_.laser.rate_hz * 0.75);
+  s.time_of_transmission_us = device_time_us + transmission_delay_us();
   s.scan_frequency_centihz = device_config_.frequency_centihz;
   s.measurement_frequency_100hz = static_cast<std::uint32_t>(
       std::lround(options_.laser.rate_hz * static_cast<double>(360.0 / options_.laser.step_deg) / 100.0));
@@ -324,6 +328,7 @@ void Simulator::physics_step() {
     next_clock_us_ += static_cast<std::int64_t>(std::llround(1e6 / options_.clock_rate_hz));
     publish_clock();
   }
+  if (send_scan_us_ != 0 && sim_time_us_ >= send_scan_us_) send_scan();
   if (sim_time_us_ >= next_laser_us_) {
     next_laser_us_ += static_cast<std::int64_t>(std::llround(1e6 / options_.laser.rate_hz));
     laser_step();
@@ -350,12 +355,23 @@ void Simulator::publish_clock() {
 }
 
 void Simulator::laser_step() {
-  const std::vector<float> ranges = laser_->scan(*caster_, plant_->pose());
+  // The scan is the world at this instant; the device sends it once the
+  // mirror has swept its field of view, at the time of transmission the
+  // telegram states. Sent then, the reader's clock at reception maps the
+  // device time onto simulated time exactly, as SIM_TRUTH is stamped.
+  pending_scan_ = laser_->scan(*caster_, plant_->pose());
+  pending_scan_device_us_ = static_cast<std::uint32_t>(sim_time_us_);  // wraps as the device's does
+  send_scan_us_ = sim_time_us_ + protocol_.transmission_delay_us();
   ++node_.counter("scans");
   protocol_.begin_scan();
+}
+
+void Simulator::send_scan() {
+  send_scan_us_ = 0;
   // One telegram per channel configuration among the streaming clients.
   std::string encoded[2][2];
-  const auto device_time = static_cast<std::uint32_t>(sim_time_us_);  // wraps as the device's does
+  const std::vector<float>& ranges = pending_scan_;
+  const std::uint32_t device_time = pending_scan_device_us_;
   for (auto& client : clients_) {
     if (!client->streaming || client->closed) continue;
     std::string& bytes = encoded[client->remission][client->remission_16bit];

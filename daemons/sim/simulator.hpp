@@ -73,6 +73,9 @@ class Lms111Protocol {
   cola::ScanData make_scan(const std::vector<float>& ranges_m, std::uint32_t device_time_us,
                            bool remission, bool remission_16bit);
   std::uint16_t scan_counter() const { return scan_counter_; }
+  // From the start of a scan to its transmission: the mirror sweeps the
+  // 270 deg field of view in 3/4 of a turn.
+  std::uint32_t transmission_delay_us() const;
 
  private:
   const SimOptions& options_;
@@ -102,6 +105,7 @@ class Simulator {
   void physics_step();
   void publish_clock();
   void laser_step();
+  void send_scan();
   // SIM_CLOCK's utime, and every stamp of ours: the wall time the simulation
   // started plus the simulated time since.
   std::int64_t sim_utime() const { return wall_start_utime_ + sim_time_us_; }
@@ -125,6 +129,11 @@ class Simulator {
 
   std::int64_t sim_time_us_ = 0;
   std::int64_t next_laser_us_ = 0;
+  // The scan taken at pending_scan_device_us_, sent at its time of
+  // transmission (send_scan_us_; 0 = none pending), as the device does.
+  std::vector<float> pending_scan_;
+  std::uint32_t pending_scan_device_us_ = 0;
+  std::int64_t send_scan_us_ = 0;
   std::int64_t next_truth_us_ = 0;
   std::int64_t next_clock_us_ = 0;
   std::int64_t wall_start_utime_ = 0;
