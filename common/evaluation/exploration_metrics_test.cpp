@@ -1,6 +1,7 @@
 #include "evaluation/exploration_metrics.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <random>
@@ -121,6 +122,38 @@ TEST(ReachableFreeSpace, ShippedTwoRoomsMatchesItsStatedFreeAreaLessCorners) {
   }
   EXPECT_GT(checked, 19000);
   EXPECT_EQ(disagree, 0);
+}
+
+// Every shipped world: a valid reachable space holding START, and the
+// Minkowski sum checked on random points.
+TEST(ReachableFreeSpace, EveryShippedWorld) {
+  int worlds = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(PEX_SOURCE_DIR) + "/worlds")) {
+    if (entry.path().extension() != ".wkt") continue;
+    ++worlds;
+    SCOPED_TRACE(entry.path().filename().string());
+    std::ifstream in(entry.path());
+    std::stringstream text;
+    text << in.rdbuf();
+    const auto world = world_from(text.str());
+    const auto cfree = configuration_free_component(world, kR, world.start);
+    const auto reachable = reachable_free_space(world, kR, world.start);
+    ASSERT_FALSE(reachable.empty());
+    EXPECT_TRUE(bg::is_valid(reachable));
+    EXPECT_TRUE(bg::covered_by(Point(world.start.x_m, world.start.y_m), cfree));
+    EXPECT_LE(bg::area(reachable), (world.max_x - world.min_x) * (world.max_y - world.min_y));
+    EXPECT_GT(bg::area(reachable), bg::area(cfree));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> ux(world.min_x, world.max_x), uy(world.min_y, world.max_y);
+    int disagree = 0;
+    for (int i = 0; i < 2000; ++i) {
+      const Point p(ux(rng), uy(rng));
+      const double d = bg::distance(p, cfree);
+      if (std::abs(d - kR) >= 1e-3 && (d <= kR) != bg::covered_by(p, reachable)) ++disagree;
+    }
+    EXPECT_EQ(disagree, 0);
+  }
+  EXPECT_GE(worlds, 5);
 }
 
 TEST(MapScores, MapEqualToTheReachableSpaceScoresOne) {
