@@ -51,7 +51,11 @@ int main(int argc, char** argv) {
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
   app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed) to this SVG");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 64;  // --help: 0; a bad command line: 64, as the daemons
+  }
 
   std::ifstream world_file(world_path);
   if (!world_file) return fail(66, "cannot read world file " + world_path);
