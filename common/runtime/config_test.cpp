@@ -152,7 +152,7 @@ TEST(ShippedConfig, EveryDaemonOnTheSimClockHasACompleteRobotFileOnTheSystemCloc
     leaf_keys(robot, "", robot_keys);
     for (const auto& k : sim_keys) EXPECT_TRUE(robot_keys.count(k)) << robot_path << " lacks " << k;
   }
-  EXPECT_GE(on_sim, 2);  // lidar_reader and base_driver at least
+  EXPECT_GE(on_sim, 5);  // lidar_reader, base_driver, slam, polygon_mapper, explorer
   // The simulator is the clock: it never runs on its own.
   EXPECT_NE(toml::parse_file((config_dir / "sim.toml").string())["clock"].value_or(std::string()), "sim");
 }

@@ -7,6 +7,7 @@
 
 #include "mapping/test_support.hpp"
 #include "runtime/config.hpp"
+#include "runtime/daemon.hpp"
 
 namespace pex::polygon_mapper {
 namespace {
@@ -107,7 +108,7 @@ TEST(Mapper, ScanNewerThanEveryPoseWaitsForOne) {
 TEST(MapperOptions, ShippedConfigLoadsAndNamesTheSlamSource) {
   auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + "/config/polygon_mapper.toml");
   const auto options = load_options(config);
-  config.get<int>("heartbeat_period_ms", 1000);  // read by run_daemon in the daemon
+  runtime::load_runtime_options(config);  // heartbeat_period_ms and clock: read by run_daemon
   EXPECT_NO_THROW(config.finish());
   EXPECT_EQ(options.pose_source, "slam");
   auto bogus = runtime::ConfigReader::from_string("pose_source = \"gps\"\n", "test");

@@ -1,5 +1,7 @@
 #include "simulator.hpp"
 
+#include "runtime/channels.hpp"
+
 #include <cmath>
 #include <numbers>
 
@@ -20,6 +22,12 @@ SimOptions load_options(runtime::ConfigReader& config) {
   o.clock_rate_hz = config.get<double>("clock_rate_hz", o.clock_rate_hz, in_range(1.0, 2000.0));
   // The clock moves in physics steps: it cannot tick more often than they do.
   if (o.clock_rate_hz > o.physics_rate_hz) config.fail("clock_rate_hz", "must be <= physics_rate_hz");
+  o.pacing.channels = config.get<std::vector<std::string>>("pace_channels", o.pacing.channels);
+  for (const auto& name : o.pacing.channels)
+    if (!runtime::channels::find(name)) config.fail("pace_channels", "'" + name + "' is not a registered channel");
+  o.pacing.max_lag_us =
+      1000ll * config.get<int>("pace_max_lag_ms", static_cast<int>(o.pacing.max_lag_us / 1000), in_range(0, 10'000));
+  o.pacing.silence_wall_s = config.get<double>("pace_silence_s", o.pacing.silence_wall_s, in_range(0.1, 60.0));
   std::vector<double> start = config.get<std::vector<double>>("start_pose_m_m_rad", {});
   if (!start.empty()) {
     if (start.size() != 3 || !std::isfinite(start[0]) || !std::isfinite(start[1]) || !std::isfinite(start[2])) {
@@ -246,7 +254,11 @@ sim::World load_world(const std::string& path) {
 }  // namespace
 
 Simulator::Simulator(runtime::Node& node, SimOptions options)
-    : node_(node), options_(std::move(options)), world_(load_world(options_.world_file)), protocol_(options_) {
+    : node_(node),
+      options_(std::move(options)),
+      world_(load_world(options_.world_file)),
+      protocol_(options_),
+      pacer_(options_.pacing) {
   caster_ = std::make_unique<sim::RayCaster>(world_);
   // Independent streams for the laser noise and the wheel slip, both from the seed.
   laser_ = std::make_unique<sim::Laser>(options_.laser, options_.seed * 2 + 1);
@@ -285,6 +297,18 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   // the simulated clock (wall time x speed) is due, so the simulation is the
   // same whatever the timer's jitter.
   node_.every(std::chrono::milliseconds(2), [this](std::int64_t) { tick(); });
+  // Pacing: the newest stamp of each paced channel. Every message of ours
+  // starts with its int64 utime right after LCM's 8-byte fingerprint
+  // (docs/channels.md), so no channel's type needs decoding here.
+  for (std::size_t i = 0; i < options_.pacing.channels.size(); ++i) {
+    node_.subscribe_raw(options_.pacing.channels[i], [this, i](const void* data, int size, std::int64_t) {
+      if (size < 16) return;
+      const auto* b = static_cast<const unsigned char*>(data) + 8;
+      std::uint64_t v = 0;
+      for (int k = 0; k < 8; ++k) v = (v << 8) | b[k];
+      pacer_.on_stamp(i, static_cast<std::int64_t>(v), node_.monotonic_us() * 1e-6);
+    });
+  }
   node_.set_state(pex::daemon_status_t::STATE_OK);
   spdlog::info("world {} ({} walls), start ({:.2f}, {:.2f}, {:.2f}), CoLa on 127.0.0.1:{}, CAN {}, speed x{}",
                world_.origin, world_.walls.size(), plant_->pose().x_m, plant_->pose().y_m,
@@ -296,17 +320,27 @@ Simulator::~Simulator() = default;
 void Simulator::tick() {
   drop_closed_clients();
   const double step_s = 1.0 / options_.physics_rate_hz;
-  const auto due =
-      static_cast<std::int64_t>((node_.monotonic_us() * 1e-6 - wall_start_s_) * options_.speed_factor / step_s);
+  const double wall_s = node_.monotonic_us() * 1e-6;
+  const auto due = static_cast<std::int64_t>((wall_s - wall_start_s_) * options_.speed_factor / step_s);
   // At most 0.25 s of simulated time per call, so the loop stays responsive
   // when the host cannot keep up (the simulation then runs slower than asked).
   const std::int64_t limit = steps_done_ + static_cast<std::int64_t>(options_.physics_rate_hz / 4) + 1;
+  bool held = false;
   while (steps_done_ < std::min(due, limit)) {
+    // The set lags: the world waits for it (pacer.hpp).
+    if (!pacer_.may_advance(sim_utime(), wall_s)) {
+      held = true;
+      break;
+    }
     ++steps_done_;
     sim_time_us_ = static_cast<std::int64_t>(std::llround(steps_done_ * step_s * 1e6));
     physics_step();
   }
-  if (due > limit) {
+  if (held) {
+    // Waiting is not a backlog: the clock resumes at the asked speed.
+    wall_start_s_ = wall_s - static_cast<double>(steps_done_) * step_s / options_.speed_factor;
+    ++node_.counter("paced_holds");
+  } else if (due > limit) {
     // Behind: forget the backlog instead of bursting.
     wall_start_s_ += (due - limit) * step_s / options_.speed_factor;
     ++node_.counter("physics_overruns");

@@ -11,6 +11,7 @@
 #include "cola/cola.hpp"
 #include "hwio/hwio.hpp"
 #include "kinematics/kinematics.hpp"
+#include "pacer.hpp"
 #include "runtime/config.hpp"
 #include "sim/sim.hpp"
 
@@ -23,6 +24,7 @@ struct SimOptions {
   double physics_rate_hz = 200.0;   // plant and drives step rate (simulated time)
   double truth_rate_hz = 50.0;      // SIM_TRUTH publication rate (simulated time)
   double clock_rate_hz = 100.0;     // SIM_CLOCK publication rate (simulated time, <= physics_rate_hz)
+  PacingOptions pacing;             // hold the clock while the set lags (pacer.hpp)
   // Override of the world's START pose (all three or none).
   bool start_override = false;
   kinematics::Pose2 start;
@@ -122,6 +124,7 @@ class Simulator {
   std::unique_ptr<sim::Laser> laser_;
   std::unique_ptr<sim::DiffDrivePlant> plant_;
   Lms111Protocol protocol_;
+  Pacer pacer_;
   hwio::TcpListener listener_;
   std::vector<std::unique_ptr<ColaClient>> clients_;
   std::unique_ptr<hwio::FrameTransport> can_;

@@ -75,8 +75,9 @@ TEST(LiveChain, IntelHeadThroughLogplayerSlamAndPerParticleMapper) {
     ++maps;
     last_map = m;
   });
-  auto slam = start_daemon("slam", dir);
-  auto mapper = start_daemon("polygon_mapper", dir);
+  // Real data, no simulator: the robot's configs (clock = "system"; they name no device).
+  auto slam = start_daemon("slam", dir, {}, source_path("config/robot/slam.toml"));
+  auto mapper = start_daemon("polygon_mapper", dir, {}, source_path("config/robot/polygon_mapper.toml"));
   ASSERT_TRUE(bus.spin_until([&] { return bus.all_ok({"slam", "polygon_mapper"}); }, 5s));
 
   Process player({"/usr/bin/lcm-logplayer", "--speed=5", std::string("--lcm-url=") + kTestLcmUrl, head},
