@@ -446,6 +446,17 @@ MissionOutput Mission::step(std::int64_t now_utime) {
   if (phase_ == Phase::kMoving) {
     const Point here(pose_->x, pose_->y);
     if (distance(here, *goal_) <= options_.follower.goal_tolerance_m) {
+      // There: face the frontier first, or the laser may never have seen it
+      // (a goal right behind the robot at the start is the common case).
+      const double to_frontier = distance(here, goal_frontier_);
+      const double bearing = std::atan2(goal_frontier_.y() - here.y(), goal_frontier_.x() - here.x());
+      if (options_.look_tolerance_rad > 0.0 && to_frontier > 0.05 &&
+          std::abs(wrap_angle(bearing - pose_->theta)) > options_.look_tolerance_rad) {
+        MissionOutput out = output();
+        out.command = follower_.turn_to(*pose_, bearing, dt_s);
+        out.status = status_;
+        return out;
+      }
       // Reached. The goal is not offered again: a frontier the laser cannot
       // clear from there would otherwise pull the robot back for ever.
       visited_.push_back(*goal_);

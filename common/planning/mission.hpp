@@ -8,7 +8,8 @@
 //   SELECTING      a plan on the newest map picks the goal (strategy: greedy or tour)
 //   MOVING         follow the path; replan every replan_period_us. The goal is
 //                  kept (no switching) until it is
-//                    reached                       -> SELECTING (after a newer map)
+//                    reached (there, and turned to face its frontier point)
+//                                                  -> SELECTING (after a newer map)
 //                    seen (its frontier is gone)   -> SELECTING
 //                    blocked (no path any more)    -> blacklisted, SELECTING
 //                    given up (no progress, or not reached within
@@ -96,6 +97,10 @@ struct MissionOptions {
   // Plans on this many different maps in a row must find no candidate
   // before the mission is DONE (a map may lag behind the robot).
   int done_confirmations = 2;
+  // At a goal the robot turns to face the goal's frontier point until it is
+  // within this angle (the laser sees 270 degrees, not what is behind it): a
+  // goal is reached when the robot is there and looking. 0: no turning.
+  double look_tolerance_rad = 0.5;
   // Pose jumps longer than this (a SLAM correction) do not count as travel.
   double max_travel_step_m = 1.0;
   // When no candidate is reachable but some have no path or no C-space point

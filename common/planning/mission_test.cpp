@@ -89,6 +89,27 @@ TEST(Mission, GoalReachedWaitsForANewerMapThenTakesTheNextGoal) {
   EXPECT_LT(out.goal->x(), 1.0);
 }
 
+TEST(Mission, AtTheGoalItTurnsToFaceTheFrontierBeforeItCountsAsReached) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{14, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point goal = *out.goal;
+  // At the goal, but facing west (away from the frontier at x = 20).
+  m.on_pose(Pose2{goal.x() - 0.05, goal.y(), std::numbers::pi}, 200'000);
+  out = step_with_inline_planning(m, 200'000);
+  EXPECT_EQ(out.phase, Phase::kMoving);
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  EXPECT_NE(out.command.omega_radps, 0.0);
+  EXPECT_EQ(m.goal_outcomes().reached, 0);
+  // Facing it: reached.
+  m.on_pose(Pose2{goal.x() - 0.05, goal.y(), 0.2}, 300'000);
+  out = step_with_inline_planning(m, 300'000);
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_EQ(m.goal_outcomes().reached, 1);
+}
+
 TEST(Mission, DoneWhenNoFrontierIsLeftOnTwoMaps) {
   Mission m(test_options());
   m.on_map(corridor(false, false), 0);

@@ -100,4 +100,14 @@ VelocityCommand PathFollower::update(const Pose2& pose, double dt_s) {
   return last_;
 }
 
+VelocityCommand PathFollower::turn_to(const Pose2& pose, double heading_rad, double dt_s) {
+  dt_s = std::clamp(std::isfinite(dt_s) ? dt_s : 0.0, 0.0, 0.5);
+  const double error = wrap_angle(heading_rad - pose.theta);
+  const double wanted =
+      std::clamp(options_.turn_gain_per_s * error, -options_.max_omega_radps, options_.max_omega_radps);
+  last_.v_mps = step_toward(last_.v_mps, 0.0, options_.max_accel_mps2 * dt_s);
+  last_.omega_radps = step_toward(last_.omega_radps, wanted, options_.max_angular_accel_radps2 * dt_s);
+  return last_;
+}
+
 }  // namespace pex::planning

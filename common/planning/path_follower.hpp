@@ -53,6 +53,10 @@ class PathFollower {
   // change of v and omega). Zero once the end of the path is reached.
   VelocityCommand update(const Pose2& pose, double dt_s);
 
+  // Turns on the spot toward `heading_rad` (v = 0; omega from turn_gain_per_s
+  // within the limits), e.g. to face the frontier a goal was chosen for.
+  VelocityCommand turn_to(const Pose2& pose, double heading_rad, double dt_s);
+
   bool goal_reached() const { return reached_; }
   bool turning_in_place() const { return turning_; }
   const std::vector<Point>& path() const { return path_; }

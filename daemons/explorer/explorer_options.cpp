@@ -99,6 +99,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   m.max_consecutive_failures =
       config.get<int>("max_consecutive_failures", m.max_consecutive_failures, in_range(1, 1000));
   m.done_confirmations = config.get<int>("done_confirmations", m.done_confirmations, in_range(1, 100));
+  m.look_tolerance_rad = config.get<double>("look_tolerance_rad", m.look_tolerance_rad, in_range(0.0, 3.2));
   m.max_travel_step_m = config.get<double>("max_travel_step_m", m.max_travel_step_m, positive<double>());
   m.tight_fallback = config.get<bool>("tight_fallback", m.tight_fallback);
   return o;
