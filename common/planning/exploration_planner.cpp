@@ -84,6 +84,38 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, const mapp
   return std::nullopt;
 }
 
+// The C-space of `map` and the robot's node in it, with their statistics in
+// `plan`; nullopt (and plan.error) when there is none.
+struct Setup {
+  ConfigurationSpace cspace;
+  Point robot_point;
+  Point start;
+};
+std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, const PlannerOptions& options,
+                            Plan& plan) {
+  if (!std::isfinite(robot.x) || !std::isfinite(robot.y) || !std::isfinite(robot.theta)) {
+    plan.error = "robot pose is not finite";
+    return std::nullopt;
+  }
+  Setup s;
+  const auto built = s.cspace.build(map, options.cspace);
+  if (!built.ok) {
+    plan.error = built.error;
+    return std::nullopt;
+  }
+  plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(s.cspace.polygons()));
+  plan.stats.reflex_nodes = static_cast<int>(s.cspace.reflex_nodes().size());
+  s.robot_point = Point(robot.x, robot.y);
+  const auto start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
+  if (!start) {
+    plan.error = "the robot is not within " + std::to_string(options.start_snap_distance_m) +
+                 " m of the configuration space";
+    return std::nullopt;
+  }
+  s.start = *start;
+  return s;
+}
+
 }  // namespace
 
 double wrap_angle(double angle_rad) {
@@ -115,28 +147,13 @@ int Plan::reachable_count() const {
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options) {
   Plan plan;
-  if (!std::isfinite(robot.x) || !std::isfinite(robot.y) || !std::isfinite(robot.theta)) {
-    plan.error = "robot pose is not finite";
-    return plan;
-  }
-  ConfigurationSpace cspace;
-  const auto built = cspace.build(map, options.cspace);
-  if (!built.ok) {
-    plan.error = built.error;
-    return plan;
-  }
-  plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(cspace.polygons()));
-  plan.stats.reflex_nodes = static_cast<int>(cspace.reflex_nodes().size());
-
-  // 1. The robot's own node, and the C-space piece it is in: a polygon of
-  // the C-space is one connected piece, so only its points are reachable.
-  const Point robot_point(robot.x, robot.y);
-  const auto start = cspace.nearest_interior_point(robot_point, options.start_snap_distance_m);
-  if (!start) {
-    plan.error = "the robot is not within " + std::to_string(options.start_snap_distance_m) +
-                 " m of the configuration space";
-    return plan;
-  }
+  // 1. The C-space, the robot's own node, and the C-space piece it is in: a
+  // polygon of the C-space is one connected piece, so only its points are reachable.
+  auto setup = set_up(map, robot, options, plan);
+  if (!setup) return plan;
+  const ConfigurationSpace& cspace = setup->cspace;
+  const Point& robot_point = setup->robot_point;
+  const std::optional<Point> start = setup->start;
   const mapping::TypedPolygon* own_piece = nullptr;
   for (const auto& polygon : cspace.polygons())
     if (bg::covered_by(*start, polygon.geometry)) {
@@ -240,30 +257,19 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
                   const PlannerOptions& options) {
   Plan plan;
-  if (!std::isfinite(robot.x) || !std::isfinite(robot.y) || !std::isfinite(target.x()) ||
-      !std::isfinite(target.y())) {
-    plan.error = "robot pose or target is not finite";
+  if (!std::isfinite(target.x()) || !std::isfinite(target.y())) {
+    plan.error = "target is not finite";
     return plan;
   }
-  ConfigurationSpace cspace;
-  const auto built = cspace.build(map, options.cspace);
-  if (!built.ok) {
-    plan.error = built.error;
-    return plan;
-  }
-  plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(cspace.polygons()));
-  plan.stats.reflex_nodes = static_cast<int>(cspace.reflex_nodes().size());
+  auto setup = set_up(map, robot, options, plan);
+  if (!setup) return plan;
+  const ConfigurationSpace& cspace = setup->cspace;
+  const Point& robot_point = setup->robot_point;
+  const std::optional<Point> start = setup->start;
   const auto inside = cspace.nearest_interior_point(target, options.candidate_snap_distance_m);
   if (!inside) {
     ++plan.stats.candidates_not_in_cspace;
     plan.ok = true;  // a valid answer: the target cannot be reached
-    return plan;
-  }
-  const Point robot_point(robot.x, robot.y);
-  const auto start = cspace.nearest_interior_point(robot_point, options.start_snap_distance_m);
-  if (!start) {
-    plan.error = "the robot is not within " + std::to_string(options.start_snap_distance_m) +
-                 " m of the configuration space";
     return plan;
   }
   GoalCandidate c;
