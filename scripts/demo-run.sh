@@ -74,11 +74,11 @@ fi
 # The last line says what happened, from the report: the phase the mission
 # ended in, how much of the reachable floor the map covers, collisions.
 field() { sed -n "s/.*\"$1\": *\"\{0,1\}\([^\",}]*\).*/\1/p" "$OUT/report.json" 2>/dev/null | head -n 1; }
-phase=$(field phase); coverage=$(field coverage); collisions=$(field collisions); left=$(field frontiers_left)
+phase=$(field phase); coverage=$(field coverage); collisions=$(field collisions)
 facts="coverage ${coverage:-?} of the reachable floor, ${collisions:-?} collisions; report in $OUT/report.json"
 case "$result" in
   0) echo "demo: mission DONE: no frontier left; $facts" ;;
-  2) echo "demo: mission DONE_WITH_UNREACHABLE: ${left:-some} frontier goals left that the robot cannot reach (why: $OUT/report.json); $facts" ;;
+  2) echo "demo: mission DONE_WITH_UNREACHABLE: frontier goals are left that the robot cannot reach (the explorer's last status above says how many and why); $facts" ;;
   *) echo "demo: mission not done: ended ${phase:-without a state} within ${MISSION_S} s of mission time (MISSION_S sets the limit); $facts" ;;
 esac
 [ "$result" -eq 0 ]

@@ -96,6 +96,7 @@ mapping::TypedMultiPolygon corridor_with_windows() {
 
 TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
   PlannerOptions o = options();
+  o.strategy = GoalStrategy::kGreedy;
   const Pose2 robot{10, 2.5, 0};
   const Plan greedy = plan_exploration(corridor_with_windows(), robot, {}, o);
   ASSERT_TRUE(greedy.ok) << greedy.error;
