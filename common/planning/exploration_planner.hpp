@@ -32,7 +32,7 @@ const char* to_string(GoalStrategy strategy);
 std::optional<GoalStrategy> parse_goal_strategy(std::string_view name);
 
 struct PlannerOptions {
-  GoalStrategy strategy = GoalStrategy::kTour;  // the default: shorter missions (docs/exploration.md)
+  GoalStrategy strategy = GoalStrategy::kGreedy;  // the default: shorter missions summed over the worlds (docs/exploration.md)
   TourOptions tour;  // kTour: how hard to look for the shortest order
   CSpaceOptions cspace;
   FrontierGoalOptions frontier;
