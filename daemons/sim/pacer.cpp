@@ -20,7 +20,8 @@ std::string Pacer::holding(std::int64_t sim_utime_us, double wall_s) const {
   for (std::size_t i = 0; i < channels_.size(); ++i) {
     const Channel& c = channels_[i];
     if (!c.heard || wall_s - c.wall_s > options_.silence_wall_s) continue;
-    if (sim_utime_us - c.stamp_us > options_.max_lag_us) return options_.channels[i];
+    const std::int64_t period = i < options_.periods_us.size() ? options_.periods_us[i] : 0;
+    if (sim_utime_us - c.stamp_us > options_.max_lag_us + period) return options_.channels[i];
   }
   return {};
 }

@@ -8,8 +8,9 @@
 // behind the world, so a fast simulation must not let it either: the pacer
 // watches the newest stamp (simulated utime) of a few channels the set
 // publishes as it keeps up (SLAM_POSE: the end of the sensing chain;
-// BASE_CMD: the end of the control chain) and the simulator advances only
-// while none of them is more than max_lag_us behind. Then a run's outcome does
+// BASE_CMD: the end of the control chain; MAP: the mapper, whose inserts are
+// the slowest work) and the simulator advances only while none of them is
+// more than max_lag_us (plus its own period) behind. Then a run's outcome does
 // not depend on the speed factor or the machine's load, only its wall time.
 //
 // A channel that has gone silent (a daemon died or never started) stops
@@ -23,6 +24,10 @@ namespace pex::simd {
 
 struct PacingOptions {
   std::vector<std::string> channels = {"SLAM_POSE", "BASE_CMD"};
+  // Each channel's publication period (us, parallel to channels; missing or 0:
+  // none): a channel published every period_us is that much behind at worst
+  // while keeping up, so it may lag max_lag_us + its period.
+  std::vector<std::int64_t> periods_us;
   std::int64_t max_lag_us = 150'000;  // simulated time a channel may lag (0: pacing off)
   double silence_wall_s = 2.0;        // wall time after which a silent channel no longer holds
 };

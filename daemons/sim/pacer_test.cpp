@@ -6,7 +6,7 @@ namespace pex::simd {
 namespace {
 
 TEST(Pacer, HoldsTheClockWhileAChannelLagsAndLetsGoWhenItCatchesUp) {
-  Pacer p(PacingOptions{{"SLAM_POSE", "BASE_CMD"}, 150'000, 2.0});
+  Pacer p(PacingOptions{{"SLAM_POSE", "BASE_CMD"}, {}, 150'000, 2.0});
   EXPECT_TRUE(p.may_advance(1'000'000, 0.0));  // nothing heard yet: nothing to wait for
   p.on_stamp(0, 1'000'000, 0.0);
   p.on_stamp(1, 1'000'000, 0.0);
@@ -20,7 +20,7 @@ TEST(Pacer, HoldsTheClockWhileAChannelLagsAndLetsGoWhenItCatchesUp) {
 }
 
 TEST(Pacer, ASilentChannelStopsHoldingAfterItsWallTimeAndHoldsAgainWhenHeard) {
-  Pacer p(PacingOptions{{"SLAM_POSE"}, 150'000, 2.0});
+  Pacer p(PacingOptions{{"SLAM_POSE"}, {}, 150'000, 2.0});
   p.on_stamp(0, 1'000'000, 10.0);
   EXPECT_FALSE(p.may_advance(2'000'000, 11.9));
   EXPECT_TRUE(p.may_advance(2'000'000, 12.1));  // slam died: the world goes on
@@ -30,8 +30,21 @@ TEST(Pacer, ASilentChannelStopsHoldingAfterItsWallTimeAndHoldsAgainWhenHeard) {
   EXPECT_TRUE(p.may_advance(2'000'000, 20.5));
 }
 
+TEST(Pacer, AChannelMayLagByItsPeriodMore) {
+  // MAP at 1 Hz: a second old while the mapper keeps up.
+  Pacer p(PacingOptions{{"BASE_CMD", "MAP"}, {100'000, 1'000'000}, 150'000, 2.0});
+  p.on_stamp(0, 10'000'000, 0.0);
+  p.on_stamp(1, 9'000'000, 0.0);
+  EXPECT_TRUE(p.may_advance(10'150'000, 0.0));
+  EXPECT_FALSE(p.may_advance(10'150'001, 0.0));
+  EXPECT_EQ(p.holding(10'150'001, 0.0), "MAP");
+  p.on_stamp(1, 10'000'000, 0.1);
+  EXPECT_TRUE(p.may_advance(10'250'000, 0.1));
+  EXPECT_EQ(p.holding(10'250'001, 0.1), "BASE_CMD");
+}
+
 TEST(Pacer, ZeroLagIsOff) {
-  Pacer p(PacingOptions{{"SLAM_POSE"}, 0, 2.0});
+  Pacer p(PacingOptions{{"SLAM_POSE"}, {}, 0, 2.0});
   p.on_stamp(0, 0, 0.0);
   EXPECT_TRUE(p.may_advance(100'000'000, 0.0));
 }

@@ -23,8 +23,12 @@ SimOptions load_options(runtime::ConfigReader& config) {
   // The clock moves in physics steps: it cannot tick more often than they do.
   if (o.clock_rate_hz > o.physics_rate_hz) config.fail("clock_rate_hz", "must be <= physics_rate_hz");
   o.pacing.channels = config.get<std::vector<std::string>>("pace_channels", o.pacing.channels);
-  for (const auto& name : o.pacing.channels)
-    if (!runtime::channels::find(name)) config.fail("pace_channels", "'" + name + "' is not a registered channel");
+  for (const auto& name : o.pacing.channels) {
+    const auto* info = runtime::channels::find(name);
+    if (!info) config.fail("pace_channels", "'" + name + "' is not a registered channel");
+    // A timer-driven channel (MAP at 1 Hz) is up to one period old while it keeps up.
+    o.pacing.periods_us.push_back(info->expected_rate_hz > 0 ? static_cast<std::int64_t>(1e6 / info->expected_rate_hz) : 0);
+  }
   o.pacing.max_lag_us =
       1000ll * config.get<int>("pace_max_lag_ms", static_cast<int>(o.pacing.max_lag_us / 1000), in_range(0, 10'000));
   o.pacing.silence_wall_s = config.get<double>("pace_silence_s", o.pacing.silence_wall_s, in_range(0.1, 60.0));
