@@ -25,7 +25,6 @@ struct ExplorerCounters {
   std::int64_t map_polygons_dropped = 0;
   std::int64_t map_rings_reoriented = 0;
   std::int64_t commands_applied = 0;
-  std::int64_t plan_results_late = 0;  // finished after the mission stopped waiting for them
 };
 
 class ExplorerNode {

@@ -152,6 +152,15 @@ TEST(Hardware, ScansAt25HzAndOneMetreDriveMatchesTheTruth) {
   EXPECT_GT(decel_start - last_cmd_utime, 150'000) << "stopped before the timeout";
   EXPECT_LT(decel_start - last_cmd_utime, 250'000 + 250'000);
   EXPECT_LT(stopped_at - last_cmd_utime, 250'000 + 250'000 + 500'000);
+  // The timeout is counted; DAEMON_STATUS comes at 1 Hz of wall time, so wait
+  // for the status that carries it (the sim's pacing may have held the clock
+  // up to pace_silence_s after the test's own commands stopped).
+  bus.spin_until(
+      [&] {
+        auto it = bus.status().find("base_driver");
+        return it != bus.status().end() && counter_of(it->second, "cmd_timeouts") >= 1;
+      },
+      5s);
   auto driver_status = bus.status().at("base_driver");
   EXPECT_GE(counter_of(driver_status, "cmd_timeouts"), 1);
 
