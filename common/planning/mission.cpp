@@ -282,10 +282,16 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       no_path += f.reason == FrontierReason::kNoPath;
     }
     const int narrow = plan.stats.candidates_not_in_cspace;
-    const bool nothing_left = plan.candidates.empty() && narrow == 0;
+    // DONE when every frontier goal left has been visited: the robot stood
+    // there facing it, so driving cannot show more (the map keeps a frontier
+    // the laser could not clear). Any frontier it could not get to (no path,
+    // too narrow, given up) makes it DONE_WITH_UNREACHABLE. Both list them.
+    const bool nothing_left = no_path == 0 && given_up == 0 && narrow == 0;
     std::string why;
-    if (nothing_left) {
+    if (plan.candidates.empty() && narrow == 0) {
       why = "no frontier left";
+    } else if (nothing_left) {
+      why = "every frontier left visited (" + std::to_string(visited) + " visited without clearing them)";
     } else {
       why = std::to_string(plan.candidates.size() + static_cast<std::size_t>(narrow)) +
             " frontier goals left, none reachable (" + std::to_string(no_path) + " without a path, " +

@@ -15,8 +15,11 @@
 //                    given up (no progress, or not reached within
 //                      progress timeout + 4 x its path's driving time) -> blacklisted, SELECTING
 //                  each outcome counted in GoalOutcomes.
-//   DONE           no frontier left (confirmed on done_confirmations maps)
-//   DONE_WITH_UNREACHABLE  frontiers are left, none reachable; each listed with why
+//   DONE           no frontier left, or only frontiers already visited (the robot
+//                  stood at their goal facing them: driving cannot show more);
+//                  confirmed on done_confirmations maps
+//   DONE_WITH_UNREACHABLE  frontiers are left that the robot could not get to
+//                  (no path, too narrow, given up); each listed with why
 //   FAILED         max_consecutive_failures goals given up or plans failed in a row
 //   PAUSED         `pause`: wheels stopped, goal and state kept; `resume` goes on
 //   HOMING / HOME  `home`: back to the pose the mission started at, then stopped

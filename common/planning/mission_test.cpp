@@ -131,6 +131,28 @@ TEST(Mission, DoneWhenNoFrontierIsLeftOnTwoMaps) {
   EXPECT_EQ(out.command.omega_radps, 0.0);
 }
 
+TEST(Mission, DoneWhenEveryFrontierLeftWasVisited) {
+  // The robot gets to the right end's goal facing it, but the maps keep the
+  // frontier (the laser cannot clear it): nothing more to see by driving.
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{14, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point goal = *out.goal;
+  m.on_pose(Pose2{goal.x() - 0.05, goal.y(), 0}, 200'000);
+  step_with_inline_planning(m, 200'000);
+  for (std::int64_t t = 1; t <= 3; ++t) {
+    m.on_map(corridor(false, true), t * kSecond);
+    m.on_pose(Pose2{goal.x() - 0.05, goal.y(), 0}, t * kSecond);
+    out = step_with_inline_planning(m, t * kSecond + 1);
+  }
+  EXPECT_EQ(out.phase, Phase::kDone) << out.status;
+  EXPECT_NE(out.status.find("visited"), std::string::npos) << out.status;
+  ASSERT_EQ(out.frontiers.size(), 1u);
+  EXPECT_EQ(out.frontiers[0].reason, FrontierReason::kVisited);
+}
+
 TEST(Mission, GoalGoneOnANewMapChoosesAnother) {
   Mission m(test_options());
   m.on_map(corridor(true, true), 0);
