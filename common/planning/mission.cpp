@@ -505,11 +505,12 @@ MissionOutput Mission::step(std::int64_t now_utime) {
   return out;
 }
 
-MissionOutput step_with_inline_planning(Mission& mission, std::int64_t now_utime) {
+MissionOutput step_with_inline_planning(Mission& mission, std::int64_t now_utime,
+                                        const std::function<PlanResult(const PlanRequest&)>& plan) {
   MissionOutput out = mission.step(now_utime);
   // Bounded: a select plan may ask for its tight retry, which may select.
   for (int round = 0; round < 4 && out.plan_request; ++round) {
-    mission.on_plan(compute_plan(*out.plan_request), now_utime);
+    mission.on_plan(plan(*out.plan_request), now_utime);
     out = mission.step(now_utime);
   }
   return out;

@@ -36,6 +36,7 @@
 // `degraded` without changing the phase; the mission resumes when they are
 // fresh again. No clock, no I/O: time comes in with every call.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -253,6 +254,9 @@ class Mission {
 
 // step(), then, while it asks for a plan, compute_plan() + on_plan() + step()
 // again at the same time: the synchronous mission for tests and offline tools.
-MissionOutput step_with_inline_planning(Mission& mission, std::int64_t now_utime);
+// `plan` runs a request (default compute_plan; a caller may wrap it, e.g. to time it).
+MissionOutput step_with_inline_planning(
+    Mission& mission, std::int64_t now_utime,
+    const std::function<PlanResult(const PlanRequest&)>& plan = compute_plan);
 
 }  // namespace pex::planning

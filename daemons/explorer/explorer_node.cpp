@@ -58,14 +58,12 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
     if (last_.plan_request) worker_->submit(std::move(*last_.plan_request));
   } else {
     // Inline: the plan runs here (tests); its time is measured apart.
-    last_ = mission_.step(now_utime);
-    for (int round = 0; round < 4 && last_.plan_request; ++round) {
+    last_ = planning::step_with_inline_planning(mission_, now_utime, [this](const planning::PlanRequest& request) {
       const auto plan_started = std::chrono::steady_clock::now();
-      const auto result = planning::compute_plan(*last_.plan_request);
+      auto result = planning::compute_plan(request);
       plan_ms_.add(ms_since(plan_started));
-      mission_.on_plan(result, now_utime);
-      last_ = mission_.step(now_utime);
-    }
+      return result;
+    });
   }
   last_.plan_request.reset();
   if (worker_) control_ms_.add(ms_since(started));

@@ -31,7 +31,6 @@ class LatencyStats {
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
     return v[k];
   }
-  std::size_t count() const { return static_cast<std::size_t>(seen_); }
 
  private:
   std::size_t max_samples_;
