@@ -73,7 +73,12 @@ Node::Node(NodeOptions options) : options_(std::move(options)) {
       throw std::runtime_error("cannot write log '" + options_.offline_output_log + "'");
   }
   if (!options_.offline && options_.clock == ClockSource::kSim) {
-    subscribe_raw(channels::kSimClock, [this](const void* data, int size, int64_t) { on_sim_clock(data, size); });
+    // On a udpm bus the clock comes through our own socket, read in this
+    // thread (bus_tap.hpp says why); on other LCM providers through LCM.
+    if (const auto address = parse_udpm_url(options_.lcm_url))
+      clock_tap_ = std::make_unique<BusTap>(*address, std::string(channels::kSimClock));
+    else
+      subscribe_raw(channels::kSimClock, [this](const void* data, int size, int64_t) { on_sim_clock(data, size); });
     counters_["sim_clock_rejected"] = 0;
     set_clock_problem(pex::daemon_status_t::STATE_DEGRADED,
                       "waiting for the simulator's clock on " + std::string(channels::kSimClock));
@@ -125,6 +130,18 @@ void Node::on_sim_clock(const void* data, int size) {
   }
   if (published_state() != before && !shut_down_) publish_status();
   advance_clock(c.utime);
+}
+
+void Node::take_clock_ticks() {
+  if (!clock_tap_) return;
+  clock_tap_->drain([this](const void* data, int size) {
+    try {
+      on_sim_clock(data, size);
+      ++msgs_in_;
+    } catch (const BadInput& e) {
+      reject(channels::kSimClock, std::string(channels::kSimClock) + ": " + e.what());
+    }
+  });
 }
 
 void Node::check_sim_clock_silence() {
@@ -303,6 +320,7 @@ void Node::run() {
   // so a flood on the bus cannot starve the fds.
   constexpr int kMaxMessagesPerTurn = 1000;
   const auto handle_waiting_messages = [this] {
+    take_clock_ticks();  // a message the simulator sent after a tick is handled at that tick
     for (int i = 0; i < kMaxMessagesPerTurn && lcm_->handleTimeout(0) > 0; ++i) {
     }
   };
@@ -319,6 +337,7 @@ void Node::run() {
     fds.clear();
     fds.push_back({lcm_->getFileno(), POLLIN, 0});
     fds.push_back({signal_fd_, POLLIN, 0});
+    if (clock_tap_) fds.push_back({clock_tap_->fd(), POLLIN, 0});
     const size_t first_watch = fds.size();
     // Copy: a handler may unwatch or watch fds while we iterate.
     const std::vector<Watch> watches = watches_;
@@ -337,13 +356,14 @@ void Node::run() {
         stop_ = true;
         break;
       }
+      take_clock_ticks();
       if (fds[0].revents & POLLIN) handle_waiting_messages();
       for (size_t i = 0; i < watches.size(); ++i) {
         if (!(fds[first_watch + i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
         // On "sim", an fd's data (CAN frames, TCP telegrams) is timed with the
         // clock: take in the newest SIM_CLOCK first, or data the simulator sent
         // after a clock tick would be stamped with the tick before.
-        if (options_.clock == ClockSource::kSim) handle_waiting_messages();
+        if (options_.clock == ClockSource::kSim) handle_waiting_messages();  // takes the clock ticks first
         // Still watched? An earlier callback may have removed it.
         const bool live = std::any_of(watches_.begin(), watches_.end(),
                                       [&](const Watch& w) { return w.id == watches[i].id; });
@@ -355,6 +375,7 @@ void Node::run() {
         }
       }
     }
+    take_clock_ticks();
     fire_due_timers(system_timers_, steady_us());
     // On "sim", once per turn at the newest SIM_CLOCK: a node that fell behind
     // and finds a backlog of clock messages runs each timer once, skipping the

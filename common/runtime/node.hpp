@@ -27,6 +27,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "runtime/bus_tap.hpp"
+
 namespace lcm {
 class LCM;
 class LogFile;
@@ -190,6 +192,7 @@ class Node {
   void advance_clock(int64_t now_us);
   void on_sim_clock(const void* data, int size);
   void check_sim_clock_silence();
+  void take_clock_ticks();  // "sim" on udpm: every SIM_CLOCK tick waiting on the tap
   void set_clock_problem(int8_t state, std::string why);
   void publish_status();
   struct Watch {
@@ -200,6 +203,7 @@ class Node {
 
   NodeOptions options_;
   std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<BusTap> clock_tap_;  // "sim" on udpm: SIM_CLOCK read in this thread
   std::unique_ptr<lcm::LogFile> out_log_;
   std::map<std::string, std::vector<RawHandler>, std::less<>> handlers_;
   std::vector<Timer> timers_;         // on the node's clock

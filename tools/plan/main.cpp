@@ -1,0 +1,93 @@
+// pex-plan --log IN.lcm [--config explorer.toml] [--pose-channel SIM_TRUTH]
+//          [--utime T] [--tight] [--svg OUT.svg]
+// Runs the explorer's planner, offline, on a MAP of an LCM log: the last MAP
+// (or the last one at or before --utime) and the newest pose on the pose
+// channel at that time, with the planner options of an explorer config. It
+// prints every frontier goal candidate (where, reachable or why not, path
+// length) and the C-space pieces, and can draw map, C-space, candidates and
+// the chosen path to SVG: how to see why a mission ended where it did.
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <pex/polygon_map_t.hpp>
+#include <pex/pose_t.hpp>
+
+#include "explorer_options.hpp"
+#include "map_message.hpp"
+#include "plan_report.hpp"
+#include "planning/cspace.hpp"
+#include "runtime/channels.hpp"
+#include "runtime/config.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"Run the explorer's planner on a logged MAP and show why it chose what it chose"};
+  std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path;
+  std::int64_t at_utime = -1;
+  bool tight = false;
+  app.add_option("--log", log_path, "LCM log with MAP and pose messages")->required();
+  app.add_option("--config", config_path, "explorer config (planner options); default: the defaults in code");
+  app.add_option("--map-channel", map_channel, "channel of the pex.polygon_map_t messages");
+  app.add_option("--pose-channel", pose_channel, "channel of the robot's pex.pose_t (SLAM_POSE, SIM_TRUTH)");
+  app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
+  app.add_flag("--tight", tight, "plan without the clearance margin (the explorer's tight fallback)");
+  app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
+  CLI11_PARSE(app, argc, argv);
+
+  pex::explorer::ExplorerOptions options;
+  try {
+    auto config = config_path.empty() ? pex::runtime::ConfigReader() : pex::runtime::ConfigReader::from_file(config_path);
+    options = pex::explorer::load_options(config);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pex-plan: %s\n", e.what());
+    return 64;
+  }
+  pex::planning::PlannerOptions planner = options.mission.planner;
+  if (tight) planner.cspace.clearance_margin_m = 0.0;
+
+  lcm::LogFile log(log_path, "r");
+  if (!log.good()) {
+    std::fprintf(stderr, "pex-plan: cannot read %s\n", log_path.c_str());
+    return 66;
+  }
+  std::optional<pex::polygon_map_t> map;
+  std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
+  std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
+  for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
+    if (e->channel == pose_channel) {
+      pex::pose_t p;
+      if (p.decode(e->data, 0, e->datalen) < 0) continue;
+      if (at_utime >= 0 && p.utime > at_utime) continue;
+      pose_pending = p;
+    } else if (e->channel == map_channel) {
+      pex::polygon_map_t m;
+      if (m.decode(e->data, 0, e->datalen) < 0) continue;
+      if (at_utime >= 0 && m.utime > at_utime) continue;
+      map = std::move(m);
+      pose = pose_pending;
+    }
+  }
+  if (!map || !pose) {
+    std::fprintf(stderr, "pex-plan: no %s with a %s before it in %s\n", map_channel.c_str(), pose_channel.c_str(),
+                 log_path.c_str());
+    return 65;
+  }
+  const auto decoded = pex::explorer::decode_map(*map, options.map);
+  if (!decoded.ok) {
+    std::fprintf(stderr, "pex-plan: the MAP is bad input: %s\n", decoded.error.c_str());
+    return 65;
+  }
+  const pex::mapping::Pose2 robot{pose->x, pose->y, pose->theta};
+  const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner);
+  pex::planning::ConfigurationSpace cspace;
+  cspace.build(decoded.polygons, planner.cspace);
+  std::printf("%s", pex::plan_tool::describe(*map, *pose, cspace, plan).c_str());
+  if (!svg_path.empty()) {
+    std::ofstream(svg_path) << pex::plan_tool::to_svg(decoded.polygons, robot, cspace, plan);
+    std::printf("wrote %s\n", svg_path.c_str());
+  }
+  return plan.ok ? 0 : 1;
+}

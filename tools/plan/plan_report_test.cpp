@@ -1,0 +1,74 @@
+#include "plan_report.hpp"
+
+#include <gtest/gtest.h>
+
+#include "planning/test_maps.hpp"
+
+using namespace pex::planning;
+using namespace pex::planning::testing;
+
+namespace {
+
+// A 6 x 3 m room whose right side is a frontier; the robot at the left.
+struct Fixture {
+  TypedMultiPolygon map{typed_polygon(
+      rectangle(0, 0, 6, 3, {EdgeType::kObstacle, EdgeType::kFrontier, EdgeType::kObstacle, EdgeType::kObstacle}))};
+  pex::mapping::Pose2 robot{1.0, 1.5, 0.0};
+  PlannerOptions options;
+  ConfigurationSpace cspace;
+  Plan plan;
+  pex::polygon_map_t msg{};
+  pex::pose_t pose{};
+  Fixture() {
+    options.cspace.robot_radius_m = 0.3;
+    cspace.build(map, options.cspace);
+    plan = plan_exploration(map, robot, {}, options);
+    msg.utime = 7;
+    msg.vertex_count = 4;
+    pose.x = robot.x;
+    pose.y = robot.y;
+  }
+};
+
+}  // namespace
+
+TEST(PlanReport, DescribesPiecesCandidatesAndTheBestOne) {
+  Fixture f;
+  ASSERT_TRUE(f.plan.ok) << f.plan.error;
+  ASSERT_GE(f.plan.best, 0);
+  const std::string text = pex::plan_tool::describe(f.msg, f.pose, f.cspace, f.plan);
+  EXPECT_NE(text.find("C-space: 1 pieces"), std::string::npos) << text;
+  EXPECT_NE(text.find("(the robot's)"), std::string::npos) << text;
+  EXPECT_NE(text.find("<- best"), std::string::npos) << text;
+  // Every candidate has a line with its path or "no path".
+  std::size_t lines = 0;
+  for (std::size_t at = text.find("frontier ("); at != std::string::npos; at = text.find("frontier (", at + 1)) ++lines;
+  EXPECT_EQ(lines, f.plan.candidates.size());
+}
+
+TEST(PlanReport, AFailedPlanSaysWhy) {
+  Fixture f;
+  Plan failed;
+  failed.error = "robot pose is not finite";
+  const std::string text = pex::plan_tool::describe(f.msg, f.pose, f.cspace, failed);
+  EXPECT_NE(text.find("plan failed: robot pose is not finite"), std::string::npos) << text;
+}
+
+TEST(PlanReport, SvgDrawsEdgesCandidatesAndThePath) {
+  Fixture f;
+  const std::string svg = pex::plan_tool::to_svg(f.map, f.robot, f.cspace, f.plan);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  EXPECT_NE(svg.find("#ff8800"), std::string::npos) << "no frontier edge drawn";
+  EXPECT_NE(svg.find("<polyline"), std::string::npos) << "no path drawn";
+  // A long ring is written whole (no fixed-size buffer cuts it).
+  TypedMultiPolygon round{typed_polygon(RingSpec{[] {
+    std::vector<Point> pts;
+    for (int i = 0; i < 400; ++i) pts.emplace_back(3 + 2 * std::cos(i * 0.0157), 3 + 2 * std::sin(i * 0.0157));
+    return pts;
+  }(), {}})};
+  const std::string big = pex::plan_tool::to_svg(round, f.robot, f.cspace, f.plan);
+  const auto path_start = big.find("<path d=\"");
+  ASSERT_NE(path_start, std::string::npos);
+  EXPECT_NE(big.find("Z \" fill", path_start), std::string::npos);
+}
