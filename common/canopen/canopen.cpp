@@ -176,6 +176,16 @@ Cia402Master::Cia402Master(Options options) : options_(std::move(options)) {
     nodes_.push_back(n);
   }
   request_pending_.assign(nodes_.size(), false);
+  configuration_.push_back({kObjModesOfOperation, 0, static_cast<std::uint8_t>(kModeProfileVelocity), 1});
+  if (options_.quick_stop_deceleration > 0)
+    configuration_.push_back({kObjQuickStopDeceleration, 0, options_.quick_stop_deceleration, 4});
+  if (options_.drive_heartbeat_consumer_us > 0 && options_.master_heartbeat_period_us > 0) {
+    const auto ms = static_cast<std::uint32_t>(std::min<std::int64_t>(0xFFFF, options_.drive_heartbeat_consumer_us / 1000));
+    configuration_.push_back({kObjAbortConnectionOption, 0,
+                              static_cast<std::uint16_t>(static_cast<std::int16_t>(options_.abort_option)), 2});
+    configuration_.push_back(
+        {kObjConsumerHeartbeatTime, 1, (std::uint32_t{options_.master_node_id} << 16) | ms, 4});
+  }
 }
 
 Cia402Master::NodeStatus* Cia402Master::find(std::uint8_t node_id) {
@@ -189,6 +199,7 @@ void Cia402Master::set_phase(NodeStatus& node, Phase phase, std::int64_t now_us)
   if (node.phase == phase) return;
   node.phase = phase;
   node.phase_since_us = now_us;
+  if (phase == Phase::kConfiguring) node.config_step = 0;
   request_pending_[static_cast<std::size_t>(&node - nodes_.data())] = false;
 }
 
@@ -216,7 +227,9 @@ void Cia402Master::handle(const Frame& frame, std::int64_t now_us) {
       node->nmt_state = *state;
       const bool operational = *state == NmtState::kOperational;
       if (*state == NmtState::kBootUp || node->phase == Phase::kUnknown) {
-        set_phase(*node, operational ? Phase::kEnabling : Phase::kConfiguring, now_us);
+        // Configured from the start even when already Operational (a restarted
+        // master finds its drives running): the watchdog is ours to set.
+        set_phase(*node, Phase::kConfiguring, now_us);
         if (*state == NmtState::kBootUp) node->statusword_seen = false;
       } else if (node->phase == Phase::kStarting && operational) {
         set_phase(*node, Phase::kEnabling, now_us);
@@ -258,8 +271,13 @@ void Cia402Master::handle(const Frame& frame, std::int64_t now_us) {
         ++counters_.sdo_aborts;
         return;  // retried after sdo_timeout_us
       }
-      if (node->phase == Phase::kConfiguring && response->index == kObjModesOfOperation) {
-        set_phase(*node, Phase::kStarting, now_us);
+      if (node->phase == Phase::kConfiguring && node->config_step < configuration_.size() &&
+          response->index == configuration_[node->config_step].index &&
+          response->subindex == configuration_[node->config_step].subindex) {
+        const auto i = static_cast<std::size_t>(node - nodes_.data());
+        request_pending_[i] = false;  // the next write at the next step
+        if (++node->config_step == configuration_.size())
+          set_phase(*node, node->nmt_state == NmtState::kOperational ? Phase::kEnabling : Phase::kStarting, now_us);
       }
       return;
     }
@@ -272,6 +290,10 @@ void Cia402Master::handle(const Frame& frame, std::int64_t now_us) {
 
 std::vector<Frame> Cia402Master::step(std::int64_t now_us, const std::vector<std::int32_t>& target_velocity) {
   std::vector<Frame> out;
+  if (options_.master_heartbeat_period_us > 0 && now_us >= next_master_heartbeat_us_) {
+    out.push_back(heartbeat_frame(options_.master_node_id, NmtState::kOperational));
+    next_master_heartbeat_us_ = now_us + options_.master_heartbeat_period_us;
+  }
   out.push_back(sync_frame());
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     NodeStatus& node = nodes_[i];
@@ -292,8 +314,8 @@ std::vector<Frame> Cia402Master::step(std::int64_t now_us, const std::vector<std
         break;
       case Phase::kConfiguring:
         if (!request_pending_[i] || retry_due) {
-          out.push_back(sdo_write_frame(node.node_id, kObjModesOfOperation, 0,
-                                        static_cast<std::uint8_t>(kModeProfileVelocity), 1));
+          const ConfigWrite& w = configuration_[node.config_step];
+          out.push_back(sdo_write_frame(node.node_id, w.index, w.subindex, w.value, w.size_bytes));
           request_pending_[i] = true;
           node.phase_since_us = now_us;
         }
@@ -356,7 +378,8 @@ bool Cia402Master::all_ready() const {
 
 // ------------------------------------------------------------- drive node --
 
-DriveNode::DriveNode(Options options) : options_(options) {}
+DriveNode::DriveNode(Options options)
+    : options_(options), quick_stop_deceleration_(options.quick_stop_deceleration) {}
 
 std::uint16_t DriveNode::statusword() const {
   std::uint16_t sw = 0;
@@ -443,6 +466,10 @@ std::vector<Frame> DriveNode::handle(const Frame& frame) {
     }
     return out;
   }
+  if (function == kCobHeartbeat && consumer_time_us_ > 0 && id == consumer_node_) {
+    if (read_heartbeat(frame)) producer_heard_ = true;  // timed at the next step
+    return out;
+  }
   if (id != options_.node_id) return out;
   if (function == kCobRpdo1 && nmt_ == NmtState::kOperational) {
     auto pdo = read_rpdo1(frame);
@@ -458,20 +485,47 @@ std::vector<Frame> DriveNode::handle(const Frame& frame) {
     if (!expedited_download) {
       out.push_back(sdo_abort_frame(options_.node_id, request->index, request->subindex,
                                     0x05040001));  // command specifier not valid
-    } else if (request->index == kObjModesOfOperation && request->subindex == 0) {
-      if (static_cast<std::int8_t>(request->value & 0xFF) != kModeProfileVelocity) {
-        out.push_back(sdo_abort_frame(options_.node_id, request->index, request->subindex,
-                                      0x06090030));  // value range exceeded
-      } else {
-        mode_ = kModeProfileVelocity;
-        out.push_back(sdo_write_ack_frame(options_.node_id, request->index, request->subindex));
-      }
+    } else if (const auto abort_code = sdo_abort_code_for(*request)) {
+      out.push_back(sdo_abort_frame(options_.node_id, request->index, request->subindex, *abort_code));
     } else {
-      out.push_back(sdo_abort_frame(options_.node_id, request->index, request->subindex,
-                                    0x06020000));  // object does not exist
+      out.push_back(sdo_write_ack_frame(options_.node_id, request->index, request->subindex));
     }
   }
   return out;
+}
+
+// The write's abort code, or nullopt when it was applied (the objects this
+// drive has: 0x6060, 0x1016:01, 0x6007, 0x6085).
+std::optional<std::uint32_t> DriveNode::sdo_abort_code_for(const SdoRequest& r) {
+  constexpr std::uint32_t kNoObject = 0x06020000, kNoSubindex = 0x06090011, kRange = 0x06090030;
+  switch (r.index) {
+    case kObjModesOfOperation:
+      if (r.subindex != 0) return kNoSubindex;
+      if (static_cast<std::int8_t>(r.value & 0xFF) != kModeProfileVelocity) return kRange;
+      mode_ = kModeProfileVelocity;
+      return std::nullopt;
+    case kObjConsumerHeartbeatTime:
+      if (r.subindex != 1) return kNoSubindex;
+      consumer_node_ = static_cast<std::uint8_t>((r.value >> 16) & 0x7F);
+      consumer_time_us_ = 1000ll * static_cast<std::int64_t>(r.value & 0xFFFF);
+      consumer_armed_ = false;  // armed again by the producer's next heartbeat
+      producer_heard_ = false;
+      return std::nullopt;
+    case kObjAbortConnectionOption: {
+      if (r.subindex != 0) return kNoSubindex;
+      const auto v = static_cast<std::int16_t>(r.value & 0xFFFF);
+      if (v < 0 || v > 3) return kRange;
+      abort_option_ = static_cast<AbortConnectionOption>(v);
+      return std::nullopt;
+    }
+    case kObjQuickStopDeceleration:
+      if (r.subindex != 0) return kNoSubindex;
+      if (r.value == 0) return kRange;
+      quick_stop_deceleration_ = static_cast<double>(r.value);
+      return std::nullopt;
+    default:
+      return kNoObject;
+  }
 }
 
 std::vector<Frame> DriveNode::step(std::int64_t now_us) {
@@ -481,12 +535,34 @@ std::vector<Frame> DriveNode::step(std::int64_t now_us) {
     const bool driving = state_ == DriveState::kOperationEnabled && nmt_ == NmtState::kOperational &&
                          mode_ == kModeProfileVelocity;
     const double goal = driving ? static_cast<double>(target_velocity_) : 0.0;
-    const double max_dv = options_.max_acceleration * dt;
+    const bool quick_stop = state_ == DriveState::kQuickStopActive;
+    const double max_dv = (quick_stop ? quick_stop_deceleration_ : options_.max_acceleration) * dt;
     const double v0 = velocity_;
     velocity_ += std::clamp(goal - velocity_, -max_dv, max_dv);
     position_ += 0.5 * (v0 + velocity_) * dt;
+    // Quick stop option code 2: once stopped, Switch On Disabled.
+    if (quick_stop && velocity_ == 0.0) state_ = DriveState::kSwitchOnDisabled;
   }
   last_step_us_ = now_us;
+  // Heartbeat consumer (CiA 301): armed by the producer's heartbeat; a
+  // heartbeat event when the next one is later than the consumer time.
+  if (producer_heard_) {
+    producer_heard_ = false;
+    consumer_armed_ = true;
+    producer_heard_us_ = now_us;
+  } else if (consumer_armed_ && consumer_time_us_ > 0 && now_us - producer_heard_us_ > consumer_time_us_) {
+    consumer_armed_ = false;
+    ++heartbeat_events_;
+    if (!silent_) out.push_back(emcy_frame(options_.node_id, kEmcyHeartbeatError, 0x11));  // generic + communication
+    if (state_ == DriveState::kOperationEnabled) {
+      switch (abort_option_) {
+        case AbortConnectionOption::kNone: break;
+        case AbortConnectionOption::kFault: state_ = DriveState::kFault; break;
+        case AbortConnectionOption::kDisableVoltage: state_ = DriveState::kSwitchOnDisabled; break;
+        case AbortConnectionOption::kQuickStop: state_ = DriveState::kQuickStopActive; break;
+      }
+    }
+  }
   if (silent_) return out;
   if (boot_up_pending_) {
     out.push_back(heartbeat_frame(options_.node_id, NmtState::kBootUp));
@@ -515,6 +591,11 @@ void DriveNode::power_cycle() {
   mode_ = 0;
   target_velocity_ = 0;
   last_controlword_ = 0;
+  consumer_time_us_ = 0;  // the object dictionary back to its defaults
+  consumer_node_ = 0;
+  consumer_armed_ = producer_heard_ = false;
+  abort_option_ = AbortConnectionOption::kFault;
+  quick_stop_deceleration_ = options_.quick_stop_deceleration;
   velocity_ = 0.0;
   position_ = 0.0;  // the encoder count restarts from zero, as on a real drive
 }

@@ -51,6 +51,12 @@ enum class NmtState : std::uint8_t {
 };
 
 // Object dictionary entries we use.
+inline constexpr std::uint16_t kObjConsumerHeartbeatTime = 0x1016;  // sub 1: (producer node << 16) | ms
+inline constexpr std::uint16_t kObjAbortConnectionOption = 0x6007;  // INT16: reaction to a lost master
+inline constexpr std::uint16_t kObjQuickStopDeceleration = 0x6085;  // UINT32, velocity units per second
+inline constexpr std::uint16_t kEmcyHeartbeatError = 0x8130;        // life guard / heartbeat error
+// 0x6007 values (CiA 402).
+enum class AbortConnectionOption : std::int16_t { kNone = 0, kFault = 1, kDisableVoltage = 2, kQuickStop = 3 };
 inline constexpr std::uint16_t kObjControlword = 0x6040;
 inline constexpr std::uint16_t kObjStatusword = 0x6041;
 inline constexpr std::uint16_t kObjModesOfOperation = 0x6060;
@@ -131,10 +137,18 @@ std::optional<NmtState> read_heartbeat(const Frame& frame);
 // ------------------------------------------------------------------ master --
 
 // Keeps a set of CiA 402 drives in profile velocity mode, Operation Enabled:
-// configures each (SDO 0x6060 = 3), starts it (NMT), walks its state machine
-// with the controlword, resets faults, watches its heartbeat, and sends the
-// target velocities. Call handle() for every received frame and step() at the
-// control rate; step() returns the frames to send (one SYNC, then per node).
+// configures each by SDO (mode 0x6060 = 3; the drive-side watchdog: consumer
+// heartbeat time 0x1016:01 on our heartbeat, abort connection option 0x6007,
+// quick stop deceleration 0x6085), starts it (NMT), walks its state machine
+// with the controlword, resets faults, watches its heartbeat, produces its own
+// heartbeat, and sends the target velocities. Call handle() for every received
+// frame and step() at the control rate; step() returns the frames to send.
+//
+// Why the drive-side watchdog: a master that dies (kill -9, a crash, a cut
+// cable) sends nothing more, and a drive left alone keeps its last target
+// velocity for ever. With 0x1016 the drive itself notices our heartbeat is
+// gone and stops the wheels (0x6007 = quick stop), whatever became of us.
+// Every (re)configuration writes it again: a restarted master re-arms it.
 class Cia402Master {
  public:
   struct Options {
@@ -142,6 +156,22 @@ class Cia402Master {
     std::int64_t heartbeat_timeout_us = 300'000;  // missed heartbeat after this long
     std::int64_t sdo_timeout_us = 200'000;        // retry configuration after this long
     std::int64_t fault_reset_period_us = 100'000; // between fault-reset edges
+    // Our own heartbeat (COB-ID 0x700 + master_node_id) every this long;
+    // 0 = none (and then no drive watchdog either).
+    std::uint8_t master_node_id = 0x7F;
+    std::int64_t master_heartbeat_period_us = 50'000;
+    // Written to each drive's 0x1016:01: it reacts (0x6007) when our heartbeat
+    // is missing this long. 0 = the drive watchdog is not configured.
+    std::int64_t drive_heartbeat_consumer_us = 150'000;
+    AbortConnectionOption abort_option = AbortConnectionOption::kQuickStop;
+    std::uint32_t quick_stop_deceleration = 0;  // 0x6085, velocity units/s; 0 = leave the drive's
+  };
+  // One expedited SDO write of the configuration.
+  struct ConfigWrite {
+    std::uint16_t index;
+    std::uint8_t subindex;
+    std::uint32_t value;
+    std::uint8_t size_bytes;
   };
 
   enum class Phase {
@@ -155,6 +185,7 @@ class Cia402Master {
   struct NodeStatus {
     std::uint8_t node_id = 0;
     Phase phase = Phase::kUnknown;
+    std::size_t config_step = 0;     // kConfiguring: index into configuration()
     NmtState nmt_state = NmtState::kBootUp;
     bool heartbeat_seen = false;
     bool heartbeat_lost = false;     // no heartbeat within heartbeat_timeout_us
@@ -194,6 +225,8 @@ class Cia402Master {
   const std::vector<NodeStatus>& nodes() const { return nodes_; }
   const Counters& counters() const { return counters_; }
   const Options& options() const { return options_; }
+  // The SDO writes every drive gets before it is started, in order.
+  const std::vector<ConfigWrite>& configuration() const { return configuration_; }
 
  private:
   NodeStatus* find(std::uint8_t node_id);
@@ -203,6 +236,8 @@ class Cia402Master {
   std::vector<NodeStatus> nodes_;
   Counters counters_;
   std::vector<bool> request_pending_;  // per node: SDO write or NMT start sent, awaiting its effect
+  std::vector<ConfigWrite> configuration_;
+  std::int64_t next_master_heartbeat_us_ = 0;  // 0: at the first step
 };
 const char* to_string(Cia402Master::Phase phase);
 
@@ -210,15 +245,26 @@ const char* to_string(Cia402Master::Phase phase);
 
 // A simulated CiA 402 drive with an encoder, for the simulator and tests. It
 // follows the NMT and CiA 402 state machines, accepts SDO writes of the mode,
-// answers SYNC with TPDO1 when Operational, applies RPDO1, produces a
-// heartbeat, and ramps its actual velocity to the target within its
-// acceleration limit when Operation Enabled (to zero otherwise).
+// the consumer heartbeat time (0x1016:01), the abort connection option
+// (0x6007) and the quick stop deceleration (0x6085), answers SYNC with TPDO1
+// when Operational, applies RPDO1, produces a heartbeat, and ramps its actual
+// velocity to the target within its acceleration limit when Operation Enabled
+// (to zero otherwise; in Quick Stop Active at the quick stop deceleration,
+// then Switch On Disabled, quick stop option code 2).
+//
+// Heartbeat consumer as CiA 301 has it: armed by the first heartbeat of the
+// configured producer; when none follows within the consumer time, a
+// heartbeat event: EMCY 0x8130 and the 0x6007 reaction (kNone: nothing,
+// kFault: Fault, kDisableVoltage: Switch On Disabled, the motor coasting down,
+// kQuickStop: Quick Stop Active). The NMT state is kept (0x1029 = 1). The next
+// heartbeat re-arms it.
 class DriveNode {
  public:
   struct Options {
     std::uint8_t node_id = 1;
     std::int64_t heartbeat_period_us = 100'000;
     double max_acceleration = 200'000.0;   // velocity units per second (counts/s^2)
+    double quick_stop_deceleration = 200'000.0;  // until 0x6085 is written
   };
 
   explicit DriveNode(Options options);
@@ -244,9 +290,13 @@ class DriveNode {
   std::uint16_t statusword() const;
   std::int8_t mode() const { return mode_; }
   std::uint8_t node_id() const { return options_.node_id; }
+  std::int64_t consumer_heartbeat_time_us() const { return consumer_time_us_; }
+  AbortConnectionOption abort_option() const { return abort_option_; }
+  std::uint64_t heartbeat_events() const { return heartbeat_events_; }
 
  private:
   void apply_controlword(std::uint16_t controlword);
+  std::optional<std::uint32_t> sdo_abort_code_for(const SdoRequest& request);
 
   Options options_;
   NmtState nmt_ = NmtState::kBootUp;
@@ -260,6 +310,15 @@ class DriveNode {
   std::optional<std::int64_t> last_step_us_;
   std::int64_t next_heartbeat_us_ = 0;
   bool silent_ = false;
+  // Heartbeat consumer (0x1016:01) and its reaction (0x6007).
+  std::int64_t consumer_time_us_ = 0;  // 0: off
+  std::uint8_t consumer_node_ = 0;
+  AbortConnectionOption abort_option_ = AbortConnectionOption::kFault;  // CiA 402's default
+  double quick_stop_deceleration_ = 0.0;
+  bool producer_heard_ = false;        // a heartbeat came since the last step
+  bool consumer_armed_ = false;
+  std::int64_t producer_heard_us_ = 0;
+  std::uint64_t heartbeat_events_ = 0;
 };
 
 }  // namespace pex::canopen

@@ -91,6 +91,18 @@ class Bus {
       for (auto& f : to_master) master_.handle(f, now_us_);
     }
   }
+  // The master is gone (kill -9): the drives run on their own; what they send
+  // goes nowhere. Returns the EMCY codes they sent.
+  std::vector<std::uint16_t> run_without_master(int steps) {
+    std::vector<std::uint16_t> emcy;
+    for (int s = 0; s < steps; ++s) {
+      now_us_ += 10'000;
+      for (auto& node : nodes_)
+        for (auto& f : node.step(now_us_))
+          if ((f.can_id & 0x780) == kCobEmcy && f.can_dlc == 8) emcy.push_back(static_cast<std::uint16_t>(f.data[0] | (f.data[1] << 8)));
+    }
+    return emcy;
+  }
   Cia402Master master_;
   std::vector<DriveNode> nodes_;
   std::int64_t now_us_ = 1'000'000;
@@ -223,6 +235,82 @@ TEST(Cia402, QuickStopAndDisableTransitions) {
   node.step(100'000);  // 0.1 s at 200000 counts/s^2 -> 20000 counts/s
   EXPECT_DOUBLE_EQ(node.velocity_actual(), 20'000.0);
   EXPECT_DOUBLE_EQ(node.position_actual(), 1'000.0);
+}
+
+
+// The drive-side watchdog (0x1016 / 0x6007): set at bring-up; with the master
+// gone the drives quick-stop on their own within the consumer time plus the
+// ramp; a new master (the restarted daemon) re-arms it and drives again.
+TEST(Cia402, DrivesStopOnTheirOwnWhenTheMasterDiesAndARestartedMasterDrivesAgain) {
+  Bus bus;
+  bus.run(40, {20'000, -20'000});
+  ASSERT_TRUE(bus.master_.all_ready());
+  for (auto& node : bus.nodes_) {
+    EXPECT_EQ(node.consumer_heartbeat_time_us(), bus.master_.options().drive_heartbeat_consumer_us);
+    EXPECT_EQ(node.abort_option(), AbortConnectionOption::kQuickStop);
+  }
+  bus.run(50, {20'000, -20'000});
+  ASSERT_DOUBLE_EQ(bus.nodes_[0].velocity_actual(), 20'000.0);
+
+  // Within the consumer time the drives keep going (a late heartbeat is no event) ...
+  const std::int64_t consumer_us = bus.master_.options().drive_heartbeat_consumer_us;
+  const int steps_in_consumer_time = static_cast<int>(consumer_us / 10'000) - 5;  // the last heartbeat may be 50 ms old
+  EXPECT_TRUE(bus.run_without_master(steps_in_consumer_time).empty());
+  EXPECT_DOUBLE_EQ(bus.nodes_[0].velocity_actual(), 20'000.0);
+  // ... then a heartbeat event: EMCY 0x8130 and a quick stop at the drive's deceleration.
+  const auto emcy = bus.run_without_master(10);
+  EXPECT_EQ(emcy, (std::vector<std::uint16_t>{kEmcyHeartbeatError, kEmcyHeartbeatError}));
+  for (auto& node : bus.nodes_) EXPECT_EQ(node.heartbeat_events(), 1u);
+  bus.run_without_master(10);  // 20'000 counts/s at 200'000 counts/s^2: 100 ms
+  for (auto& node : bus.nodes_) {
+    EXPECT_EQ(node.velocity_actual(), 0.0);
+    EXPECT_EQ(node.state(), DriveState::kSwitchOnDisabled);
+  }
+  // Stopped for good, with no master.
+  bus.run_without_master(100);
+  EXPECT_EQ(bus.nodes_[0].velocity_actual(), 0.0);
+  EXPECT_EQ(bus.nodes_[0].heartbeat_events(), 1u);
+
+  // A new master finds the drives Operational but disabled: configures them
+  // again (watchdog included) and drives.
+  bus.master_ = Cia402Master(Cia402Master::Options{});
+  bus.run(60, {10'000, 10'000});
+  EXPECT_TRUE(bus.master_.all_ready());
+  EXPECT_DOUBLE_EQ(bus.nodes_[0].velocity_actual(), 10'000.0);
+  EXPECT_EQ(bus.master_.nodes()[0].config_step, bus.master_.configuration().size());
+}
+
+// The quick stop deceleration the master writes (0x6085) is what the drive ramps with.
+TEST(Cia402, QuickStopUsesTheConfiguredDeceleration) {
+  Bus bus;
+  Cia402Master::Options o;
+  o.quick_stop_deceleration = 1'000'000;  // five times the drive's own
+  bus.master_ = Cia402Master(o);
+  bus.run(40, {20'000, 20'000});
+  bus.run(30, {20'000, 20'000});
+  ASSERT_DOUBLE_EQ(bus.nodes_[0].velocity_actual(), 20'000.0);
+  int steps = 0;
+  for (; steps < 100 && bus.nodes_[0].velocity_actual() > 0.0; ++steps) bus.run_without_master(1);
+  // 150 ms consumer time (minus up to 50 ms since the last heartbeat) + 20 ms ramp, in 10 ms steps.
+  EXPECT_LE(steps, 18);
+  EXPECT_GE(steps, 10);
+}
+
+TEST(Cia402, DriveRefusesWatchdogValuesOutOfRange) {
+  DriveNode drive(DriveNode::Options{1, 100'000, 200'000.0});
+  drive.step(0);  // boot-up: pre-operational, SDO accepted
+  auto answer = [&](Frame f) {
+    const auto out = drive.handle(f);
+    EXPECT_EQ(out.size(), 1u);
+    return read_sdo_response(out.at(0)).value();
+  };
+  EXPECT_TRUE(answer(sdo_write_frame(1, kObjAbortConnectionOption, 0, 7, 2)).abort);
+  EXPECT_TRUE(answer(sdo_write_frame(1, kObjConsumerHeartbeatTime, 2, 0x7F0096, 4)).abort);  // wrong subindex
+  EXPECT_TRUE(answer(sdo_write_frame(1, kObjQuickStopDeceleration, 0, 0, 4)).abort);
+  EXPECT_EQ(drive.abort_option(), AbortConnectionOption::kFault);
+  EXPECT_EQ(drive.consumer_heartbeat_time_us(), 0);
+  EXPECT_FALSE(answer(sdo_write_frame(1, kObjConsumerHeartbeatTime, 1, 0x7F0096, 4)).abort);
+  EXPECT_EQ(drive.consumer_heartbeat_time_us(), 150'000);
 }
 
 }  // namespace

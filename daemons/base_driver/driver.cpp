@@ -49,6 +49,21 @@ DriverOptions load_options(runtime::ConfigReader& config) {
   o.heartbeat_timeout_ms = config.get<int>("heartbeat_timeout_ms", o.heartbeat_timeout_ms, in_range(20, 60'000));
   o.sdo_timeout_ms = config.get<int>("sdo_timeout_ms", o.sdo_timeout_ms, in_range(10, 60'000));
   o.error_frame_hold_ms = config.get<int>("error_frame_hold_ms", o.error_frame_hold_ms, in_range(0, 60'000));
+  o.master_node_id = config.get<int>("master_node_id", o.master_node_id, in_range(1, 127));
+  if (o.master_node_id == o.left_node_id || o.master_node_id == o.right_node_id)
+    config.fail("master_node_id", "must differ from the drives' node ids");
+  o.master_heartbeat_period_ms =
+      config.get<int>("master_heartbeat_period_ms", o.master_heartbeat_period_ms, in_range(10, 10'000));
+  o.drive_heartbeat_consumer_ms =
+      config.get<int>("drive_heartbeat_consumer_ms", o.drive_heartbeat_consumer_ms, in_range(0, 60'000));
+  // CiA 301: the consumer time must exceed the producer period, or every
+  // heartbeat is late; twice the period leaves room for one lost frame.
+  if (o.drive_heartbeat_consumer_ms > 0 && o.drive_heartbeat_consumer_ms < 2 * o.master_heartbeat_period_ms)
+    config.fail("drive_heartbeat_consumer_ms", "must be 0 (off) or at least twice master_heartbeat_period_ms");
+  o.drive_abort_option = config.get<std::string>("drive_abort_option", o.drive_abort_option,
+                                                 one_of({"quick_stop", "fault", "disable_voltage"}));
+  o.quick_stop_decel_mps2 =
+      config.get<double>("quick_stop_decel_mps2", o.quick_stop_decel_mps2, in_range(0.1, 50.0));
   return o;
 }
 
@@ -69,6 +84,14 @@ canopen::Cia402Master::Options master_options(const DriverOptions& o) {
   m.node_ids = {o.left_node_id, o.right_node_id};
   m.heartbeat_timeout_us = 1000ll * o.heartbeat_timeout_ms;
   m.sdo_timeout_us = 1000ll * o.sdo_timeout_ms;
+  m.master_node_id = static_cast<std::uint8_t>(o.master_node_id);
+  m.master_heartbeat_period_us = 1000ll * o.master_heartbeat_period_ms;
+  m.drive_heartbeat_consumer_us = 1000ll * o.drive_heartbeat_consumer_ms;
+  m.abort_option = o.drive_abort_option == "fault"             ? canopen::AbortConnectionOption::kFault
+                   : o.drive_abort_option == "disable_voltage" ? canopen::AbortConnectionOption::kDisableVoltage
+                                                               : canopen::AbortConnectionOption::kQuickStop;
+  m.quick_stop_deceleration =
+      static_cast<std::uint32_t>(std::lround(o.quick_stop_decel_mps2 * o.geometry.counts_per_m()));
   return m;
 }
 

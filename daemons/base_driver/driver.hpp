@@ -34,6 +34,15 @@ struct DriverOptions {
   int heartbeat_timeout_ms = 300;    // a node silent this long is lost
   int sdo_timeout_ms = 200;
   int error_frame_hold_ms = 500;     // stop this long after a CAN error frame
+  // The drive-side watchdog (canopen.hpp, Cia402Master): our heartbeat every
+  // master_heartbeat_period_ms; each drive reacts (drive_abort_option) when it
+  // misses it for drive_heartbeat_consumer_ms, so the wheels stop whatever
+  // becomes of this daemon.
+  int master_node_id = 127;
+  int master_heartbeat_period_ms = 50;
+  int drive_heartbeat_consumer_ms = 150;  // 0: no drive watchdog
+  std::string drive_abort_option = "quick_stop";  // "quick_stop" | "fault" | "disable_voltage"
+  double quick_stop_decel_mps2 = 3.0;     // the drives' quick stop ramp, at the wheel
 };
 
 DriverOptions load_options(runtime::ConfigReader& config);
