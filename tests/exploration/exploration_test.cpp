@@ -52,12 +52,6 @@ constexpr double kWorldFreeAreaM2 = 82.66;
 // the suite; every wait ends on a state long before them.
 constexpr auto kBudget = 600s;
 
-std::int64_t counter_of(const pex::daemon_status_t& s, const std::string& name) {
-  for (int i = 0; i < s.ncounters; ++i)
-    if (s.counter_names[static_cast<std::size_t>(i)] == name) return s.counter_values[static_cast<std::size_t>(i)];
-  return -1;
-}
-
 bool finished(std::int8_t phase) {
   return phase == pex::explore_state_t::PHASE_DONE || phase == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ||
          phase == pex::explore_state_t::PHASE_FAILED;

@@ -27,15 +27,7 @@ namespace ch = pex::runtime::channels;
 
 namespace {
 
-pex::velocity_cmd_t command(double v) {
-  pex::velocity_cmd_t c{};
-  c.utime = std::chrono::duration_cast<std::chrono::microseconds>(
-                std::chrono::system_clock::now().time_since_epoch())
-                .count();
-  c.v = v;
-  c.source = "faults_test";
-  return c;
-}
+pex::velocity_cmd_t command(double v) { return velocity_command(v, 0.0, "faults_test"); }
 
 // What the bus carries of the truth and the clock.
 struct Truth {
@@ -55,12 +47,6 @@ struct Truth {
     return 0.0;
   }
 };
-
-std::string logs_of(const std::vector<Process*>& set) {
-  std::string out;
-  for (Process* p : set) out += "--- " + p->name() + "\n" + p->output() + "\n";
-  return out;
-}
 
 }  // namespace
 

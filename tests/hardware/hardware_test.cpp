@@ -36,17 +36,6 @@ std::int64_t counter_of(const pex::daemon_status_t& s, const std::string& name) 
   return -1;
 }
 
-std::int64_t wall_utime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-std::string logs_of(const std::vector<Process*>& processes) {
-  std::string out;
-  for (Process* p : processes) out += "--- " + p->name() + "\n" + p->output();
-  return out;
-}
 
 struct Recorder {
   std::vector<pex::laser_scan_t> scans;
@@ -59,14 +48,7 @@ struct Recorder {
   }
 };
 
-pex::velocity_cmd_t command(double v, double omega) {
-  pex::velocity_cmd_t c{};
-  c.utime = wall_utime();
-  c.v = v;
-  c.omega = omega;
-  c.source = "hardware_test";
-  return c;
-}
+pex::velocity_cmd_t command(double v, double omega) { return velocity_command(v, omega, "hardware_test"); }
 
 }  // namespace
 

@@ -252,4 +252,21 @@ std::string decode_registered(const std::string& channel, const void* data, int 
   return "no decoder for type " + std::string(t);
 }
 
+std::string logs_of(const std::vector<Process*>& processes) {
+  std::string out;
+  for (Process* p : processes) out += "--- " + p->name() + "\n" + p->output() + "\n";
+  return out;
+}
+
+pex::velocity_cmd_t velocity_command(double v, double omega, const std::string& source) {
+  pex::velocity_cmd_t c{};
+  c.utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                std::chrono::system_clock::now().time_since_epoch())
+                .count();
+  c.v = v;
+  c.omega = omega;
+  c.source = source;
+  return c;
+}
+
 }  // namespace pex::testing

@@ -16,6 +16,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 #include <pex/daemon_status_t.hpp>
+#include <pex/velocity_cmd_t.hpp>
 
 namespace pex::testing {
 
@@ -112,6 +113,12 @@ std::string sim_config_of(const std::string& daemon_name);
 std::unique_ptr<Process> start_daemon(const std::string& name, const std::string& log_dir,
                                       std::vector<std::string> extra_args = {},
                                       const std::string& config_path = "");
+
+// Every process's name and output, for a failing test's message.
+std::string logs_of(const std::vector<Process*>& processes);
+
+// A BASE_CMD stamped with the wall clock, as a test drives the robot.
+pex::velocity_cmd_t velocity_command(double v, double omega, const std::string& source);
 
 // "polygon_mapper" -> "pex-polygon-mapper"
 std::string program_of(const std::string& daemon_name);
