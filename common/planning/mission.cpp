@@ -68,7 +68,8 @@ Mission::Mission(MissionOptions options) : options_(std::move(options)), followe
   }
 }
 
-void Mission::on_map(TypedMultiPolygon map, std::int64_t utime) {
+void Mission::on_map(TypedMultiPolygon map, std::int64_t utime, std::int64_t scan_utime) {
+  map_scan_utime_ = scan_utime;
   explored_area_m2_ = mapping::area(map);
   map_ = std::make_shared<const TypedMultiPolygon>(std::move(map));
   map_utime_ = utime;
@@ -439,7 +440,13 @@ MissionOutput Mission::step(std::int64_t now_utime) {
   }
 
   if (phase_ == Phase::kSelecting) {
-    if (map_utime_ <= select_after_map_utime_) {
+    // After a goal: a newer map, and one holding a scan taken there (the
+    // look at the frontier), or a frontier the robot just saw counts as
+    // "visited without clearing it". Bounded: a mapper that inserts only on
+    // motion never sends one.
+    const bool scan_missing = map_scan_utime_ >= 0 && map_scan_utime_ < reached_utime_ &&
+                              now_utime < scan_wait_until_utime_;
+    if (map_utime_ <= select_after_map_utime_ || scan_missing) {
       status_ = "goal reached; waiting for the map to show it";
       return stopped();
     }
@@ -473,6 +480,8 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       follower_.clear();
       outstanding_id_ = 0;  // a plan for the old goal is of no use
       select_after_map_utime_ = map_utime_;
+      reached_utime_ = now_utime;
+      scan_wait_until_utime_ = now_utime + 3 * options_.replan_period_us;
       enter(Phase::kSelecting, format("goal (%.2f, %.2f) reached", visited_.back().x(), visited_.back().y()));
       return stopped();
     }

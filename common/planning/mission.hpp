@@ -167,7 +167,8 @@ class Mission {
   explicit Mission(MissionOptions options = {});
 
   // Inputs, with the time they arrived (us). A map replaces the previous one.
-  void on_map(TypedMultiPolygon map, std::int64_t utime);
+  // `scan_utime`: the newest scan in the map (MAP.scan_utime), -1 unknown.
+  void on_map(TypedMultiPolygon map, std::int64_t utime, std::int64_t scan_utime = -1);
   void on_pose(const Pose2& pose, std::int64_t utime);
   // An operator's command; idempotent (start while exploring does nothing).
   // Returns "" when applied, else why not (e.g. resume while not paused).
@@ -230,6 +231,9 @@ class Mission {
   std::int64_t last_request_utime_ = -1;
   std::int64_t last_request_map_utime_ = -1;
   std::int64_t select_after_map_utime_ = -1;  // SELECTING waits for a map newer than this
+  std::int64_t map_scan_utime_ = -1;          // the newest scan in the map (-1: not known)
+  std::int64_t reached_utime_ = -1;           // the last goal was reached then ...
+  std::int64_t scan_wait_until_utime_ = -1;   // ... and a map with a scan from then on is awaited until this
   std::int64_t last_empty_map_utime_ = -1;
   int empty_plans_ = 0;
   int goal_failures_ = 0;

@@ -24,7 +24,7 @@ std::string ExplorerNode::on_map(const pex::polygon_map_t& msg, std::int64_t now
   counters_.maps_accepted++;
   counters_.map_polygons_dropped += decoded.polygons_dropped;
   counters_.map_rings_reoriented += decoded.rings_reoriented;
-  mission_.on_map(std::move(decoded.polygons), now_utime);
+  mission_.on_map(std::move(decoded.polygons), now_utime, msg.scan_utime);
   return {};
 }
 

@@ -29,6 +29,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.threads = config.get<int>("threads", o.threads, runtime::in_range(1, 64));
   o.insert_min_distance_m = config.get<double>("insert_min_distance_m", o.insert_min_distance_m, non_negative<double>());
   o.insert_min_rotation_rad = config.get<double>("insert_min_rotation_rad", o.insert_min_rotation_rad, non_negative<double>());
+  o.insert_max_interval_s = config.get<double>("insert_max_interval_s", o.insert_max_interval_s, non_negative<double>());
   o.publish_rate_hz = config.get<double>("publish_rate_hz", o.publish_rate_hz, runtime::in_range(0.01, 100.0));
   o.pose_buffer_s = config.get<double>("pose_buffer_s", o.pose_buffer_s, positive<double>());
   o.max_pose_gap_s = config.get<double>("max_pose_gap_s", o.max_pose_gap_s, positive<double>());
@@ -219,7 +220,9 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   if (last_insert_pose_) {
     const double moved = std::hypot(robot.x - last_insert_pose_->x, robot.y - last_insert_pose_->y);
     const double turned = std::abs(wrap_angle(robot.theta - last_insert_pose_->theta));
-    if (moved < options_.insert_min_distance_m && turned < options_.insert_min_rotation_rad) {
+    const bool due = options_.insert_max_interval_s > 0.0 && last_insert_scan_utime_ >= 0 &&
+                     scan.utime - last_insert_scan_utime_ >= static_cast<std::int64_t>(options_.insert_max_interval_s * 1e6);
+    if (moved < options_.insert_min_distance_m && turned < options_.insert_min_rotation_rad && !due) {
       ++counters_.scans_skipped_no_motion;
       return true;
     }
@@ -240,6 +243,7 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   counters_.boost_fallbacks = map_.boost_fallbacks();
   ++counters_.scans_inserted;
   last_insert_pose_ = robot;
+  last_insert_scan_utime_ = scan.utime;
   last_scan_utime_ = scan.utime;
   if (result.tiles_touched > 0) dirty_ = true;
   return true;

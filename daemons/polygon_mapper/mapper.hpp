@@ -28,6 +28,9 @@ struct MapperOptions {
   std::string pose_source = "odometry";
   double insert_min_distance_m = 0.2;     // insert a scan when the robot moved this far ...
   double insert_min_rotation_rad = 0.25;  // ... or turned this much since the last insert
+  // ... or this long (scan time) after the last insert: a robot that stopped to
+  // look at a frontier gets that look into the map (0 = never by time).
+  double insert_max_interval_s = 1.0;
   double publish_rate_hz = 1.0;
   double pose_buffer_s = 5.0;             // poses kept for pairing with scans
   double max_pose_gap_s = 0.5;            // poses bracketing a scan may be this far apart
@@ -123,6 +126,7 @@ class Mapper {
   std::deque<pex::laser_scan_t> pending_;
   mapping::PolygonMap map_;
   std::optional<mapping::Pose2> last_insert_pose_;
+  std::int64_t last_insert_scan_utime_ = -1;
   std::int64_t last_scan_utime_ = 0;
   std::optional<pex::polygon_map_t> message_;
   bool dirty_ = false;
