@@ -89,6 +89,51 @@ TEST(Mission, GoalReachedWaitsForANewerMapThenTakesTheNextGoal) {
   EXPECT_LT(out.goal->x(), 1.0);
 }
 
+// After a goal, a newer map is not enough when its newest scan is older than
+// the arrival: the look at the frontier is not in it yet. It waits for one
+// that has it, at most three replan periods (a mapper that never sends one).
+TEST(Mission, GoalReachedWaitsForAMapWithAScanFromTheGoal) {
+  Mission m(test_options());
+  m.on_map(corridor(true, true), 0, 0);
+  m.on_pose(Pose2{14, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point first = *out.goal;
+  m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 200'000);
+  out = step_with_inline_planning(m, 200'000);
+  ASSERT_EQ(out.phase, Phase::kSelecting);
+  // A newer map, but built from scans before the arrival: still waiting.
+  m.on_map(corridor(true, true), 1'000'000, 150'000);
+  m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 1'100'000);
+  out = step_with_inline_planning(m, 1'100'000);
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_FALSE(out.plan_request.has_value());
+  EXPECT_NE(out.status.find("waiting for the map"), std::string::npos) << out.status;
+  // One with a scan from the goal: the next goal.
+  m.on_map(corridor(true, true), 2'000'000, 1'900'000);
+  m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 2'000'000);
+  out = step_with_inline_planning(m, 2'000'000);
+  EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+
+  // The bound: maps whose scans never get newer stop holding it after 3 s.
+  Mission n(test_options());
+  n.on_map(corridor(true, true), 0, 0);
+  n.on_pose(Pose2{14, 1.5, 0}, 0);
+  out = step_with_inline_planning(n, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  n.on_pose(Pose2{out.goal->x() - 0.05, out.goal->y(), 0}, 200'000);
+  out = step_with_inline_planning(n, 200'000);
+  ASSERT_EQ(out.phase, Phase::kSelecting);
+  n.on_map(corridor(true, true), 2'000'000, 0);
+  n.on_pose(Pose2{out.goal ? out.goal->x() : 19.0, 1.5, 0}, 2'000'000);
+  out = step_with_inline_planning(n, 2'000'000);
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  n.on_map(corridor(true, true), 3'300'000, 0);
+  n.on_pose(Pose2{19.0, 1.5, 0}, 3'300'000);
+  out = step_with_inline_planning(n, 3'300'000);
+  EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+}
+
 TEST(Mission, AtTheGoalItTurnsToFaceTheFrontierBeforeItCountsAsReached) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);
