@@ -416,13 +416,23 @@ MissionOutput Mission::step(std::int64_t now_utime) {
 
   const std::int64_t pose_age = now_utime - pose_utime_;
   const std::int64_t map_age = now_utime - map_utime_;
-  if (pose_age > options_.pose_timeout_us || map_age > options_.map_timeout_us) {
+  const bool scans_stale = options_.scan_timeout_us > 0 &&
+                           (scan_utime_ < 0 || now_utime - scan_utime_ > options_.scan_timeout_us);
+  if (pose_age > options_.pose_timeout_us || map_age > options_.map_timeout_us || scans_stale) {
     degraded_ = true;
     MissionOutput out = stopped();
-    out.degraded_reason = pose_age > options_.pose_timeout_us ? "pose is stale" : "map is stale";
-    out.status = pose_age > options_.pose_timeout_us
-                     ? format("stopped: pose is stale (%.0f ms old)", static_cast<double>(pose_age) * 1e-3)
-                     : format("stopped: map is stale (%.0f ms old)", static_cast<double>(map_age) * 1e-3);
+    if (pose_age > options_.pose_timeout_us) {
+      out.degraded_reason = "pose is stale";
+      out.status = format("stopped: pose is stale (%.0f ms old)", static_cast<double>(pose_age) * 1e-3);
+    } else if (map_age > options_.map_timeout_us) {
+      out.degraded_reason = "map is stale";
+      out.status = format("stopped: map is stale (%.0f ms old)", static_cast<double>(map_age) * 1e-3);
+    } else {
+      out.degraded_reason = "no laser scans";
+      out.status = scan_utime_ < 0 ? std::string("stopped: no laser scan yet")
+                                   : format("stopped: no laser scan for %.0f ms (driving blind otherwise)",
+                                            static_cast<double>(now_utime - scan_utime_) * 1e-3);
+    }
     return out;
   }
   if (degraded_) {

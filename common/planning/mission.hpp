@@ -32,7 +32,7 @@
 // waits for a plan. step_with_inline_planning() does both at once for tests
 // and offline tools.
 //
-// Stale inputs (pose or map older than its timeout) stop the robot and set
+// Stale inputs (pose, map or laser scans older than their timeout) stop the robot and set
 // `degraded` without changing the phase; the mission resumes when they are
 // fresh again. No clock, no I/O: time comes in with every call.
 #include <cstdint>
@@ -85,6 +85,10 @@ struct MissionOptions {
   std::int64_t replan_period_us = 1'000'000;
   std::int64_t pose_timeout_us = 500'000;
   std::int64_t map_timeout_us = 5'000'000;
+  // No laser scan for this long: stop, degraded (no driving blind: the map
+  // and the pose may still come, from the last scans and from odometry).
+  // 0 = scans are not watched (the mission is not told about them).
+  std::int64_t scan_timeout_us = 0;
   // A plan asked for and not answered within this time is asked for again
   // (the answer to the old request is then ignored).
   std::int64_t plan_timeout_us = 5'000'000;
@@ -170,6 +174,8 @@ class Mission {
   // `scan_utime`: the newest scan in the map (MAP.scan_utime), -1 unknown.
   void on_map(TypedMultiPolygon map, std::int64_t utime, std::int64_t scan_utime = -1);
   void on_pose(const Pose2& pose, std::int64_t utime);
+  // A laser scan arrived (only its time matters: the laser is alive).
+  void on_scan(std::int64_t utime) { scan_utime_ = utime; }
   // An operator's command; idempotent (start while exploring does nothing).
   // Returns "" when applied, else why not (e.g. resume while not paused).
   std::string on_command(MissionCommand command, std::int64_t now_utime);
@@ -217,6 +223,7 @@ class Mission {
   double explored_area_m2_ = 0.0;
   std::optional<Pose2> pose_;
   std::int64_t pose_utime_ = 0;
+  std::int64_t scan_utime_ = -1;  // the last scan's arrival (-1: none yet)
   double travelled_m_ = 0.0;
 
   std::int64_t last_step_utime_ = -1;

@@ -269,6 +269,52 @@ TEST(Mission, FailsAfterRepeatedGoalsWithoutProgress) {
   EXPECT_EQ(m.blacklist().size(), 2u);
 }
 
+// No driving blind: with scan_timeout_us set, the robot stands until the
+// first scan, stops when scans stop (map and pose still fresh), and goes on
+// to the same goal when they come back.
+TEST(Mission, NoLaserScansStopTheRobotUntilTheyComeBack) {
+  MissionOptions o = test_options();
+  o.scan_timeout_us = 500'000;
+  Mission m(o);
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{5, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  EXPECT_TRUE(out.degraded);
+  EXPECT_EQ(out.degraded_reason, "no laser scans");
+  EXPECT_EQ(out.command.v_mps, 0.0);
+  std::optional<Point> goal;
+  std::int64_t t = 0;
+  for (; t <= 2 * kSecond; t += 100'000) {  // scans, pose and map fresh: it drives
+    m.on_scan(t);
+    m.on_pose(Pose2{5 + 0.1 * static_cast<double>(t) / kSecond, 1.5, 0}, t);
+    out = step_with_inline_planning(m, t);
+    if (out.goal) goal = out.goal;
+  }
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_FALSE(out.degraded);
+  EXPECT_GT(out.command.v_mps, 0.0);
+  // The laser goes silent; poses and maps keep coming.
+  const std::int64_t last_scan = t - 100'000;
+  for (; t <= last_scan + 1'000'000; t += 100'000) {
+    m.on_pose(Pose2{5.2, 1.5, 0}, t);
+    if (t % kSecond == 0) m.on_map(corridor(false, true), t);
+    out = step_with_inline_planning(m, t);
+    if (t - last_scan > 500'000) {
+      EXPECT_TRUE(out.degraded) << t;
+      EXPECT_EQ(out.command.v_mps, 0.0) << t;
+      EXPECT_NE(out.status.find("no laser scan for"), std::string::npos) << out.status;
+    }
+  }
+  EXPECT_EQ(out.phase, Phase::kMoving);  // the goal is kept
+  m.on_scan(t);
+  m.on_pose(Pose2{5.2, 1.5, 0}, t);
+  out = step_with_inline_planning(m, t);
+  EXPECT_FALSE(out.degraded);
+  EXPECT_GT(out.command.v_mps, 0.0);
+  ASSERT_TRUE(goal && out.goal);
+  EXPECT_LT(distance(*goal, *out.goal), 0.5);
+}
+
 TEST(Mission, AGoalThatMovesOnWithItsFrontierIsProgress) {
   // The corridor's far end recedes 0.5 m a second (the robot sees further
   // down it) while the path to it does not get shorter: no give-up.

@@ -34,6 +34,12 @@ std::string ExplorerNode::on_pose(const pex::pose_t& msg, std::int64_t now_utime
   return {};
 }
 
+std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime) {
+  if (msg.nranges <= 0 || static_cast<std::size_t>(msg.nranges) != msg.ranges.size()) return "scan without ranges";
+  mission_.on_scan(now_utime);
+  return {};
+}
+
 std::string ExplorerNode::on_command(const pex::mission_cmd_t& msg, std::int64_t now_utime) {
   if (msg.command < pex::mission_cmd_t::CMD_START || msg.command > pex::mission_cmd_t::CMD_STOP)
     return "refused: unknown mission command " + std::to_string(msg.command);

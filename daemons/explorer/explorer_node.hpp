@@ -8,6 +8,7 @@
 #include <string>
 
 #include <pex/explore_state_t.hpp>
+#include <pex/laser_scan_t.hpp>
 #include <pex/mission_cmd_t.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
@@ -36,6 +37,8 @@ class ExplorerNode {
   // message was refused (the caller counts it as bad input).
   std::string on_map(const pex::polygon_map_t& msg, std::int64_t now_utime);
   std::string on_pose(const pex::pose_t& msg, std::int64_t now_utime);
+  // A LIDAR_SCAN: only that the laser is alive (the mission stops without scans).
+  std::string on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime);
   // A MISSION_CMD. Returns "" when applied or already in effect; "refused: ..."
   // for a command that is not a command (bad input); other text: why it does
   // not apply now (e.g. resume while not paused).

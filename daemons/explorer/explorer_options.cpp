@@ -92,6 +92,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       us_from_ms(config.get<int>("pose_timeout_ms", static_cast<int>(m.pose_timeout_us / 1000), in_range(10, 60'000)));
   m.map_timeout_us =
       us_from_ms(config.get<int>("map_timeout_ms", static_cast<int>(m.map_timeout_us / 1000), in_range(100, 600'000)));
+  m.scan_timeout_us = us_from_ms(config.get<int>("scan_timeout_ms", 500, in_range(0, 60'000)));
   m.progress_timeout_us = us_from_ms(
       config.get<int>("progress_timeout_ms", static_cast<int>(m.progress_timeout_us / 1000), in_range(1000, 3'600'000)));
   m.progress_min_m = config.get<double>("progress_min_m", m.progress_min_m, positive<double>());

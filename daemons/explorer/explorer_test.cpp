@@ -119,6 +119,7 @@ TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
     const bool robot = std::string(file).find("/robot/") != std::string::npos;
     EXPECT_EQ(o.mission.autostart, !robot) << file;
     EXPECT_EQ(runtime_options.clock, robot ? runtime::ClockSource::kSystem : runtime::ClockSource::kSim) << file;
+    EXPECT_EQ(o.mission.scan_timeout_us, 500'000) << file;  // no driving blind, on the robot too
   }
 }
 
@@ -173,6 +174,35 @@ TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {
   broken.rings[0].edge_type[0] = 9;
   EXPECT_NE(node.on_map(broken, 2'100'000), "");
   EXPECT_EQ(node.counters().maps_accepted, 1);
+}
+
+// The laser's scans keep the mission going; a scan without ranges is refused
+// and does not count as the laser being alive.
+TEST(ExplorerNode, StopsWithoutLaserScans) {
+  ExplorerOptions options;
+  options.mission.scan_timeout_us = 500'000;
+  ExplorerNode node(options);
+  pex::pose_t pose{};
+  pose.x = 10;
+  pose.y = 1.5;
+  pex::laser_scan_t scan{};
+  scan.nranges = 3;
+  scan.ranges = {1.0f, 1.0f, 1.0f};
+  pex::laser_scan_t empty{};
+  ASSERT_EQ(node.on_map(corridor(), 0), "");
+  for (std::int64_t t = 0; t <= 200'000; t += 100'000) {
+    ASSERT_EQ(node.on_pose(pose, t), "");
+    EXPECT_NE(node.on_scan(empty, t), "");
+    node.step(t);
+  }
+  EXPECT_TRUE(node.last_output().degraded);
+  EXPECT_EQ(node.last_output().degraded_reason, "no laser scans");
+  ASSERT_EQ(node.on_scan(scan, 300'000), "");
+  ASSERT_EQ(node.on_pose(pose, 300'000), "");
+  node.step(300'000);
+  ASSERT_EQ(node.on_pose(pose, 400'000), "");
+  EXPECT_GT(node.step(400'000).v, 0.0);
+  EXPECT_FALSE(node.last_output().degraded);
 }
 
 }  // namespace

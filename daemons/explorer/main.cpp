@@ -43,6 +43,9 @@ int main(int argc, char** argv) {
         node.subscribe<pex::pose_t>(options.pose_channel, [&node, explorer](const pex::pose_t& msg) {
           if (auto why = explorer->on_pose(msg, node.now_utime()); !why.empty()) throw pex::runtime::BadInput(why);
         });
+        node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [&node, explorer](const pex::laser_scan_t& msg) {
+          if (auto why = explorer->on_scan(msg, node.now_utime()); !why.empty()) throw pex::runtime::BadInput(why);
+        });
         node.subscribe<pex::mission_cmd_t>(ch::kMissionCmd, [&node, explorer](const pex::mission_cmd_t& msg) {
           const std::string why = explorer->on_command(msg, node.now_utime());
           if (why.rfind("refused:", 0) == 0) throw pex::runtime::BadInput(why);

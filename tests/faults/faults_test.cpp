@@ -7,6 +7,11 @@
 //   gone (CiA 301 consumer heartbeat 0x1016, set up by the driver at
 //   bring-up) and quick-stop (0x6007): the robot stands within 300 ms of
 //   simulated time. A restarted driver re-arms the watchdog and drives again.
+//
+//   kill -9 pex-lidar-reader mid-mission: the explorer stops the robot once
+//   no scan came for scan_timeout_ms (no driving blind) and says so in its
+//   health (DEGRADED, "no laser scans"); with the reader restarted the
+//   mission goes on and ends DONE with the world mapped.
 #include <gtest/gtest.h>
 
 #include <pex/pose_t.hpp>
@@ -18,6 +23,7 @@
 #include <filesystem>
 #include <regex>
 
+#include "exploration_set.hpp"
 #include "harness.hpp"
 #include "runtime/channels.hpp"
 
@@ -105,4 +111,58 @@ TEST(Faults, KilledBaseDriverStopsTheWheelsWithin300msAndARestartedOneDrivesAgai
       << "no driving after the restart\n" << logs_of(set);
   for (Process* p : set) EXPECT_EQ(p->stop(5s), 0) << p->name() << "\n" << p->output();
   std::filesystem::remove_all(dir);
+}
+
+TEST(Faults, KilledLidarReaderStopsTheRobotAndTheMissionEndsDoneAfterItsRestart) {
+  ExplorationSet set("faults-lidar", 1.0, /*autostart=*/true);
+  std::vector<pex::pose_t> poses;
+  set.bus().on<pex::pose_t>(std::string(ch::kSimTruth), [&](const pex::pose_t& p) { poses.push_back(p); });
+  auto speed = [&] {  // m/s over the last 100 ms of truth
+    for (auto it = poses.rbegin(); it != poses.rend(); ++it)
+      if (poses.back().utime - it->utime >= 100'000)
+        return std::hypot(poses.back().x - it->x, poses.back().y - it->y) /
+               (static_cast<double>(poses.back().utime - it->utime) * 1e-6);
+    return 0.0;
+  };
+  // Driving to a goal, well under way.
+  ASSERT_TRUE(set.spin_sim(
+      [&] { return set.phase() == pex::explore_state_t::PHASE_MOVING && speed() > 0.2; }, 120.0))
+      << set.report_with_logs();
+
+  Process* reader = set.process("lidar_reader");
+  ASSERT_NE(reader, nullptr);
+  const double kill_s = set.sim_seconds();
+  reader->kill_hard();
+  const std::size_t first_after_kill = poses.size();
+  // 3 simulated seconds without scans.
+  set.spin_sim([] { return false; }, 3.0);
+  ASSERT_GT(poses.size(), first_after_kill + 10);
+  // Standing: over the last 1.5 s of them the robot moved less than 2 cm.
+  const auto& last = poses.back();
+  for (std::size_t i = first_after_kill; i < poses.size(); ++i) {
+    if (last.utime - poses[i].utime > 1'500'000) continue;
+    EXPECT_LT(std::hypot(last.x - poses[i].x, last.y - poses[i].y), 0.02)
+        << "the robot drove on without scans (" << set.sim_seconds() - kill_s << " s after the kill)";
+  }
+  const auto& explorer_status = set.bus().status().at("explorer");
+  EXPECT_EQ(explorer_status.state, +pex::daemon_status_t::STATE_DEGRADED);
+  ASSERT_TRUE(set.state());
+  EXPECT_NE(set.state()->status.find("no laser scan"), std::string::npos) << set.state()->status;
+
+  // The reader back (systemd restarts it): the mission goes on to its end.
+  set.restart("lidar_reader");
+  ASSERT_TRUE(set.spin_sim(
+      [&] {
+        const auto p = set.phase();
+        return p == pex::explore_state_t::PHASE_DONE || p == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ||
+               p == pex::explore_state_t::PHASE_FAILED;
+      },
+      600.0))
+      << set.report_with_logs();
+  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
+  // two_rooms: 82.66 m2 free; the map loses a band along each wall.
+  EXPECT_GT(set.state()->explored_area_m2, 0.8 * 82.66) << set.report();
+  EXPECT_EQ(set.clock()->collisions, 0);
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
 }

@@ -1,0 +1,156 @@
+#pragma once
+// The exploration set as the tests start it (see ExplorationSet).
+#include <gtest/gtest.h>
+
+#include <pex/explore_state_t.hpp>
+#include <pex/pose_t.hpp>
+#include <pex/sim_clock_t.hpp>
+#include <pex/velocity_cmd_t.hpp>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "harness.hpp"
+
+namespace pex::testing {
+
+using namespace std::chrono_literals;
+
+// Wall-clock budget of a wait on the set: only there so that a hung set fails
+// instead of hanging the suite; every wait ends on a state long before it.
+inline constexpr auto kSetBudget = std::chrono::seconds(600);
+
+// `text` with top-level `key` set to `value` (a TOML literal): the key's line
+// is replaced, or the key is added at the top (before any [section]).
+inline std::string with_key(const std::string& text, const std::string& key, const std::string& value) {
+  const std::regex line("^[ \\t]*" + key + "[ \\t]*=.*$", std::regex::multiline);
+  if (std::regex_search(text, line)) return std::regex_replace(text, line, key + " = " + value);
+  return key + " = " + value + "\n" + text;
+}
+
+inline std::string write_config(const std::string& dir, const std::string& daemon, const std::string& text) {
+  const std::string path = dir + "/" + daemon + ".toml";
+  write_file(path, text);
+  return path;
+}
+
+// The exploration set on a world: pex-sim, pex-lidar-reader, pex-base-driver,
+// pex-polygon-mapper (SIM_TRUTH poses, so no SLAM) and pex-explorer (pose
+// channel SIM_TRUTH), each on the simulator's clock, with what the test bus
+// heard. For the exploration and the fault tests.
+class ExplorationSet {
+ public:
+  ExplorationSet(const std::string& tag, double speed, bool autostart, const std::string& world = "two_rooms")
+      : dir_(make_temp_dir(tag)) {
+    std::string sim = with_key(read_file(sim_config_of("sim")), "world_file",
+                               "\"" + source_path("worlds/" + world + ".wkt") + "\"");
+    sim = with_key(sim, "speed_factor", std::to_string(speed));
+    const std::string mapper = with_key(read_file(sim_config_of("polygon_mapper")), "pose_source", "\"sim_truth\"");
+    std::string explorer = with_key(read_file(sim_config_of("explorer")), "pose_channel", "\"SIM_TRUTH\"");
+    explorer = with_key(explorer, "autostart", autostart ? "true" : "false");
+
+    bus_.on<pex::explore_state_t>("EXPLORE_STATE", [this](const pex::explore_state_t& s) {
+      if (states_.empty() || states_.back().phase != s.phase) states_.push_back(s);
+      state_ = s;
+    });
+    bus_.on<pex::pose_t>("SIM_TRUTH", [this](const pex::pose_t& p) {
+      if (!first_truth_) first_truth_ = p;
+      truth_ = p;
+    });
+    bus_.on<pex::sim_clock_t>("SIM_CLOCK", [this](const pex::sim_clock_t& c) { clock_ = c; });
+    bus_.on<pex::velocity_cmd_t>("BASE_CMD", [this](const pex::velocity_cmd_t& c) { cmd_ = c; });
+
+    set_.push_back(start_daemon("sim", dir_, {}, write_config(dir_, "sim", sim)));
+    set_.push_back(start_daemon("lidar_reader", dir_));
+    set_.push_back(start_daemon("base_driver", dir_));
+    set_.push_back(start_daemon("polygon_mapper", dir_, {}, write_config(dir_, "polygon_mapper", mapper)));
+    set_.push_back(start_daemon("explorer", dir_, {}, write_config(dir_, "explorer", explorer)));
+  }
+
+  Bus& bus() { return bus_; }
+  // One daemon of the set ("lidar_reader", ...); nullptr if it is not one.
+  Process* process(const std::string& name) {
+    for (auto& p : set_)
+      if (p->name() == bin_path(program_of(name)) || p->name() == program_of(name)) return p.get();
+    return nullptr;
+  }
+  // Starts a daemon of the set again (after a kill), with its config.
+  void restart(const std::string& name) {
+    for (auto& p : set_)
+      if (p->name() == bin_path(program_of(name)) || p->name() == program_of(name)) {
+        const std::string config = dir_ + "/" + name + ".toml";
+        p = start_daemon(name, dir_, {}, std::filesystem::exists(config) ? config : "");
+        return;
+      }
+  }
+  const std::optional<pex::explore_state_t>& state() const { return state_; }
+  const std::optional<pex::pose_t>& truth() const { return truth_; }
+  const std::optional<pex::pose_t>& first_truth() const { return first_truth_; }
+  const std::optional<pex::sim_clock_t>& clock() const { return clock_; }
+  const std::optional<pex::velocity_cmd_t>& cmd() const { return cmd_; }
+  std::int8_t phase() const { return state_ ? state_->phase : std::int8_t{-1}; }
+  double sim_seconds() const { return clock_ ? static_cast<double>(clock_->sim_time_us) * 1e-6 : 0.0; }
+
+  // Spins until `done` or the simulated clock has run `sim_s` more seconds.
+  bool spin_sim(const std::function<bool()>& done, double sim_s) {
+    const double until = sim_seconds() + sim_s;
+    return bus_.spin_until([&] { return done() || sim_seconds() >= until; }, kSetBudget) && done();
+  }
+
+  // pex-mission COMMAND on the test bus; its exit code.
+  int command(const std::string& name) {
+    return run_to_completion({bin_path("pex-mission"), name, "--lcm-url", kTestLcmUrl, "--timeout", "20"}, 30s)
+        .exit_code;
+  }
+
+  std::string report() const {
+    std::string r;
+    for (const auto& s : states_) r += "phase " + std::to_string(s.phase) + ": " + s.status + "\n";
+    if (state_)
+      r += "last: " + state_->status + ", explored " + std::to_string(state_->explored_area_m2) +
+           " m^2, travelled " + std::to_string(state_->distance_travelled_m) + " m, mission time " +
+           std::to_string(state_->mission_time_s) + " s\n";
+    if (clock_)
+      r += "sim time " + std::to_string(sim_seconds()) + " s, collisions " + std::to_string(clock_->collisions) +
+           ", collision steps " + std::to_string(clock_->collision_steps) + "\n";
+    if (truth_) r += "robot at " + std::to_string(truth_->x) + ", " + std::to_string(truth_->y) + "\n";
+    return r;
+  }
+  std::string report_with_logs() const {
+    std::string r = report();
+    for (const auto& p : set_) {
+      const std::string out = p->output();
+      r += "--- " + p->name() + " (tail)\n" + out.substr(out.size() > 3000 ? out.size() - 3000 : 0);
+    }
+    return r;
+  }
+
+  // Stops the set; every daemon must have run to the end and stop cleanly.
+  void stop_all() {
+    for (auto& p : set_) {
+      EXPECT_TRUE(p->running()) << p->name() << " exited early:\n" << p->output();
+      EXPECT_EQ(p->stop(5s), 0) << p->name();
+    }
+  }
+  void clean_up(bool failed) {
+    if (!failed && !std::getenv("PEX_KEEP_LOGS")) std::filesystem::remove_all(dir_);
+  }
+
+ private:
+  std::string dir_;
+  Bus bus_;
+  std::vector<std::unique_ptr<Process>> set_;
+  std::optional<pex::explore_state_t> state_;
+  std::vector<pex::explore_state_t> states_;
+  std::optional<pex::pose_t> truth_, first_truth_;
+  std::optional<pex::sim_clock_t> clock_;
+  std::optional<pex::velocity_cmd_t> cmd_;
+};
+
+
+}  // namespace pex::testing
