@@ -4,16 +4,73 @@
 
 namespace pex::slam {
 
-bool OdometrySync::add_odometry(std::int64_t utime, const Pose2& pose) {
-  if (!is_finite(pose)) {
+bool OdometrySync::possible_step(const Reading& from, const Reading& to) const {
+  const StepLimits& l = options_.limits;
+  const double t_s = std::max(l.min_interval_s, std::abs(static_cast<double>(to.utime - from.utime)) * 1e-6);
+  const Pose2 step = relative(from.raw, to.raw);
+  return std::hypot(step.x_m, step.y_m) <= l.max_speed_mps * t_s + l.slack_m &&
+         std::abs(step.theta_rad) <= l.max_omega_radps * t_s + l.slack_rad;
+}
+
+void OdometrySync::reset_frame(const Reading& first_of_new_frame) {
+  // The robot did not move while the odometry restarted: the new frame's first
+  // reading is where the last accepted one put it.
+  frame_ = compose(odometry_.back().second, inverse(first_of_new_frame.raw));
+  ++odometry_resets_;
+}
+
+void OdometrySync::store(const Reading& reading) {
+  if (!odometry_.empty() && reading.utime < odometry_.back().first) ++out_of_order_odometry_;
+  newest_odometry_utime_ = odometry_.empty() ? reading.utime : std::max(newest_odometry_utime_, reading.utime);
+  odometry_.emplace_back(reading.utime, compose(frame_, reading.raw));
+  while (odometry_.size() > options_.history) odometry_.pop_front();
+  last_accepted_ = reading;
+}
+
+bool OdometrySync::add_odometry(std::int64_t utime, const Pose2& pose, double covariance_trace) {
+  why_.clear();
+  const StepLimits& l = options_.limits;
+  if (!is_finite(pose) || std::abs(pose.x_m) > l.max_abs_coordinate_m || std::abs(pose.y_m) > l.max_abs_coordinate_m) {
     ++refused_odometry_;
+    why_ = "odometry pose is not finite or not on this planet";
     return false;
   }
-  if (!odometry_.empty() && utime < odometry_.back().first) ++out_of_order_odometry_;
-  newest_odometry_utime_ = odometry_.empty() ? utime : std::max(newest_odometry_utime_, utime);
-  odometry_.emplace_back(utime, pose);
-  while (odometry_.size() > options_.history) odometry_.pop_front();
-  return true;
+  const Reading reading{utime, pose, covariance_trace};
+  if (l.enabled && last_accepted_ && std::isfinite(covariance_trace) &&
+      std::isfinite(last_accepted_->covariance_trace) && covariance_trace < last_accepted_->covariance_trace) {
+    held_.reset();
+    reset_frame(reading);
+    store(reading);
+    return true;
+  }
+  if (!l.enabled || !last_accepted_ || possible_step(*last_accepted_, reading)) {
+    held_.reset();  // whatever was held was an outlier
+    store(reading);
+    return true;
+  }
+  if (held_ && possible_step(*held_, reading)) {
+    // Two readings agree on a new frame: the odometry was reset. The held one
+    // is where the robot was last seen (it did not move while the odometry
+    // restarted); the estimate stays where it was.
+    reset_frame(*held_);
+    store(*held_);
+    held_.reset();
+    store(reading);
+    return true;
+  }
+  ++impossible_steps_;
+  const Pose2 step = relative(last_accepted_->raw, pose);
+  why_ = "odometry step of " + std::to_string(std::hypot(step.x_m, step.y_m)) + " m, " +
+         std::to_string(std::abs(step.theta_rad)) + " rad in " +
+         std::to_string(std::abs(static_cast<double>(utime - last_accepted_->utime)) * 1e-6) +
+         " s is not possible; held (a next reading that agrees with it makes it an odometry reset)";
+  held_ = reading;
+  return false;
+}
+
+std::optional<Pose2> OdometrySync::newest_pose() const {
+  if (odometry_.empty()) return std::nullopt;
+  return odometry_.back().second;
 }
 
 bool OdometrySync::add_scan(RangeScan scan) {

@@ -9,9 +9,24 @@
 // Real logs carry host time stamps that sometimes go backwards (the Intel log's
 // IPC time stamps do, by up to 0.6 s, while its order of arrival is right), so
 // readings are kept in arrival order and searched from the newest back.
+//
+// Physically impossible steps. A reading the robot cannot have reached from the
+// newest accepted one (farther or more turned than StepLimits allow in the time
+// between them) is held back and counted (impossible_steps()): one absurd
+// message (x = 1e300) does not move SLAM. When the next reading is possible
+// from the held one, the odometry was reset: the new frame is anchored so that
+// the held reading is where the robot was last seen, and the estimate does not
+// jump (odometry_resets()). A reading whose covariance is smaller than the one
+// before is a reset too, at once: odometry covariance only grows while its
+// integrator runs, so a smaller one is a new integrator (a restarted base
+// driver, counting from (0, 0) again, after a gap however long). The speeds in
+// the readings are not used: logs (Intel, FR079) carry zeros there while the
+// robot moves. Every stored pose is in the first frame.
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -19,7 +34,19 @@
 
 namespace pex::slam {
 
+// What the robot can do, generously: a step beyond it is not a motion.
+struct StepLimits {
+  bool enabled = true;
+  double max_speed_mps = 2.0;
+  double max_omega_radps = 4.0;
+  double min_interval_s = 0.05;  // time stamps closer than this are taken this far apart (jitter)
+  double slack_m = 0.05;         // added to every bound (noise)
+  double slack_rad = 0.05;
+  double max_abs_coordinate_m = 1e6;  // beyond: refused as not a pose
+};
+
 struct OdometrySyncOptions {
+  StepLimits limits;
   std::int64_t max_wait_us = 500'000;
   std::size_t max_buffered_scans = 64;  // beyond this the oldest scan is paired at once
   std::size_t history = 256;            // odometry readings kept for interpolation
@@ -35,8 +62,13 @@ class OdometrySync {
   explicit OdometrySync(const OdometrySyncOptions& options = {}) : options_(options) {}
 
   // A non-finite reading is refused (false); one older than the newest is kept
-  // and counted (out_of_order_odometry()).
-  bool add_odometry(std::int64_t utime, const Pose2& pose);
+  // and counted (out_of_order_odometry()). covariance_trace: of the reading's
+  // covariance (NaN: unknown). false also when the step is impossible (held,
+  // see above); why() says why.
+  bool add_odometry(std::int64_t utime, const Pose2& pose, double covariance_trace = std::nan(""));
+  const std::string& why() const { return why_; }
+  // The newest accepted reading, in the first frame (nullopt: none yet).
+  std::optional<Pose2> newest_pose() const;
   // Buffers a scan; scans before the first odometry reading are dropped (false).
   bool add_scan(RangeScan scan);
   // The scans that can be paired now, in arrival order.
@@ -47,9 +79,19 @@ class OdometrySync {
   std::size_t dropped_scans() const { return dropped_scans_; }
   std::size_t refused_odometry() const { return refused_odometry_; }
   std::size_t out_of_order_odometry() const { return out_of_order_odometry_; }
+  std::size_t impossible_steps() const { return impossible_steps_; }
+  std::size_t odometry_resets() const { return odometry_resets_; }
 
  private:
+  struct Reading {
+    std::int64_t utime;
+    Pose2 raw;  // as received (its own frame)
+    double covariance_trace;
+  };
   Pose2 pose_at(std::int64_t utime) const;
+  bool possible_step(const Reading& from, const Reading& to) const;
+  void store(const Reading& reading);
+  void reset_frame(const Reading& first_of_new_frame);
 
   OdometrySyncOptions options_;
   std::deque<std::pair<std::int64_t, Pose2>> odometry_;
@@ -58,6 +100,12 @@ class OdometrySync {
   std::size_t refused_odometry_ = 0;
   std::size_t out_of_order_odometry_ = 0;
   std::int64_t newest_odometry_utime_ = 0;
+  std::optional<Reading> last_accepted_;
+  std::optional<Reading> held_;   // an impossible step, kept to tell an outlier from a reset
+  Pose2 frame_;                   // raw -> first frame
+  std::size_t impossible_steps_ = 0;
+  std::size_t odometry_resets_ = 0;
+  std::string why_;
 };
 
 }  // namespace pex::slam

@@ -265,7 +265,9 @@ TEST(ParticleFilter, ScansWithoutReturnsOrBadOdometryAreIgnored) {
 }
 
 TEST(OdometrySync, InterpolatesAndWaitsForOdometry) {
-  OdometrySync sync;
+  OdometrySyncOptions options;
+  options.limits.enabled = false;  // 1 m in 100 us: pairing only, not physics
+  OdometrySync sync(options);
   RangeScan early;
   early.utime = 50;
   EXPECT_FALSE(sync.add_scan(early));  // before any odometry
@@ -292,6 +294,80 @@ TEST(OdometrySync, InterpolatesAndWaitsForOdometry) {
   const auto paired = sync.take_ready();
   ASSERT_EQ(paired.size(), 1u);
   EXPECT_DOUBLE_EQ(paired[0].odometry.x_m, 2.0);
+}
+
+// Odometry at 50 Hz along x at 0.5 m/s, from (x0, 0), starting at t0 (us).
+namespace {
+void drive(OdometrySync& sync, std::int64_t& t, double& x, int readings, double covariance_trace = 0.0) {
+  for (int i = 0; i < readings; ++i) {
+    t += 20'000;
+    x += 0.01;
+    ASSERT_TRUE(sync.add_odometry(t, {x, 0.0, 0.0}, covariance_trace)) << sync.why();
+  }
+}
+}  // namespace
+
+TEST(OdometrySync, AnAbsurdReadingIsHeldAndCountedAndMovesNothing) {
+  OdometrySync sync;
+  std::int64_t t = 0;
+  double x = 0.0;
+  drive(sync, t, x, 50);
+  const Pose2 before = *sync.newest_pose();
+  EXPECT_FALSE(sync.add_odometry(t + 20'000, {1e300, 0.0, 0.0}));  // not a pose at all
+  EXPECT_FALSE(sync.add_odometry(t + 20'000, {x + 5.0, 0.0, 0.0}));  // 5 m in 20 ms
+  EXPECT_NE(sync.why().find("not possible"), std::string::npos) << sync.why();
+  EXPECT_FALSE(sync.add_odometry(t + 20'000, {x, 0.0, 2.0}));  // 2 rad in 20 ms
+  EXPECT_EQ(sync.impossible_steps(), 2u);
+  EXPECT_EQ(sync.refused_odometry(), 1u);
+  EXPECT_DOUBLE_EQ(sync.newest_pose()->x_m, before.x_m);
+  drive(sync, t, x, 10);  // and on as before: the held ones were outliers
+  EXPECT_NEAR(sync.newest_pose()->x_m, before.x_m + 0.1, 1e-9);
+  EXPECT_EQ(sync.odometry_resets(), 0u);
+}
+
+TEST(OdometrySync, AResetOdometryIsAnchoredWhereTheRobotWas) {
+  OdometrySync sync;
+  std::int64_t t = 0;
+  double x = 0.0;
+  drive(sync, t, x, 300);  // 3 m
+  const Pose2 last = *sync.newest_pose();
+  // The odometry restarts from (0, 0) at once (a jump of 3 m): held, then the
+  // next reading agrees with it: a reset, no jump in what is stored.
+  x = 0.0;
+  t += 20'000;
+  EXPECT_FALSE(sync.add_odometry(t, {0.0, 0.0, 0.0}));
+  drive(sync, t, x, 10);
+  EXPECT_EQ(sync.odometry_resets(), 1u);
+  EXPECT_NEAR(sync.newest_pose()->x_m, last.x_m + 0.1, 1e-9);
+  // Scans are paired in the first frame too.
+  RangeScan scan;
+  scan.utime = t;
+  sync.add_scan(scan);
+  drive(sync, t, x, 1);
+  const auto ready = sync.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_NEAR(ready[0].odometry.x_m, last.x_m + 0.1, 1e-9);
+}
+
+TEST(OdometrySync, AShrinkingCovarianceIsARestartedOdometryEvenAfterALongGap) {
+  OdometrySync sync;
+  std::int64_t t = 0;
+  double x = 0.0;
+  for (int i = 1; i <= 200; ++i) {  // 2 m with a growing covariance
+    t += 20'000;
+    x += 0.01;
+    ASSERT_TRUE(sync.add_odometry(t, {x, 0.0, 0.0}, 1e-4 * i));
+  }
+  const Pose2 last = *sync.newest_pose();
+  // The driver restarts 2 s later: (0, 0) is within 2 m/s x 2 s of (2, 0), but
+  // its covariance is back to zero: a reset, not a 2 m drive back.
+  t += 2'000'000;
+  x = 0.0;
+  ASSERT_TRUE(sync.add_odometry(t, {0.0, 0.0, 0.0}, 0.0));
+  EXPECT_EQ(sync.odometry_resets(), 1u);
+  EXPECT_NEAR(sync.newest_pose()->x_m, last.x_m, 1e-9);
+  drive(sync, t, x, 10, 1e-5);
+  EXPECT_NEAR(sync.newest_pose()->x_m, last.x_m + 0.1, 1e-9);
 }
 
 TEST(TrajectoryRecorder, CarriesUpdatePosesForwardByOdometry) {

@@ -33,12 +33,14 @@ int main(int argc, char** argv) {
     outputs.publish_pose = [&node](const pex::pose_t& msg) { node.publish(ch::kSlamPose, msg); };
     auto slam = std::make_shared<SlamNode>(options, outputs);
     // Content the node refuses becomes BadInput: counted, logged, dropped.
-    node.subscribe<pex::odometry_t>(ch::kOdometry, [slam](const pex::odometry_t& msg) {
+    node.subscribe<pex::odometry_t>(ch::kOdometry, [slam, &node](const pex::odometry_t& msg) {
       try {
         slam->on_odometry(msg);
       } catch (const std::invalid_argument& e) {
+        node.counter("odometry_impossible_steps") = static_cast<std::int64_t>(slam->odometry_sync().impossible_steps());
         throw pex::runtime::BadInput(e.what());
       }
+      node.counter("odometry_resets") = static_cast<std::int64_t>(slam->odometry_sync().odometry_resets());
     });
     node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [slam, &node](const pex::laser_scan_t& msg) {
       try {

@@ -12,10 +12,13 @@ SlamNode::SlamNode(const SlamNodeOptions& options, SlamOutputs outputs)
 void SlamNode::on_odometry(const odometry_t& msg) {
   const slam::Pose2 pose{msg.x, msg.y, msg.theta};
   if (!slam::is_finite(pose)) throw std::invalid_argument("odometry pose is not finite");
-  sync_.add_odometry(msg.utime, pose);
+  // An impossible step is held back (OdometrySync): SLAM does not move on it.
+  const double covariance_trace = msg.covariance[0] + msg.covariance[4] + msg.covariance[8];
+  if (!sync_.add_odometry(msg.utime, pose, covariance_trace)) throw std::invalid_argument(sync_.why());
   process(sync_.take_ready());
   if (filter_.initialized() && outputs_.publish_pose) {
-    const slam::Pose2 best = filter_.best_pose(pose);
+    // In the odometry's first frame (a reset odometry is anchored there).
+    const slam::Pose2 best = filter_.best_pose(*sync_.newest_pose());
     pose_t out{};
     out.utime = msg.utime;
     out.x = best.x_m;

@@ -36,6 +36,7 @@ class SlamNode {
   // Throw std::invalid_argument for content they refuse (non-finite pose,
   // array sizes that disagree, too many beams); the state is unchanged then.
   void on_odometry(const odometry_t& msg);
+  const slam::OdometrySync& odometry_sync() const { return sync_; }
   void on_scan(const laser_scan_t& msg);
   // Processes scans still waiting for odometry (end of a log).
   void flush();

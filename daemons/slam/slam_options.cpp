@@ -65,6 +65,10 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   auto sync = config.section("sync");
   o.sync.max_wait_us = 1000 * sync.get<std::int64_t>("max_odometry_wait_ms", o.sync.max_wait_us / 1000,
                                                      non_negative<std::int64_t>());
+  auto& l = o.sync.limits;
+  l.enabled = sync.get<bool>("check_odometry_steps", l.enabled);
+  l.max_speed_mps = sync.get<double>("odometry_max_speed_mps", l.max_speed_mps, positive<double>());
+  l.max_omega_radps = sync.get<double>("odometry_max_omega_radps", l.max_omega_radps, positive<double>());
   o.max_beams = static_cast<std::size_t>(config.get<int>("max_beams", static_cast<int>(o.max_beams),
                                                          in_range(1, 1 << 20)));
   return o;
