@@ -27,7 +27,7 @@ void OdometrySync::store(const Reading& reading) {
   last_accepted_ = reading;
 }
 
-bool OdometrySync::add_odometry(std::int64_t utime, const Pose2& pose, double covariance_trace) {
+bool OdometrySync::add_odometry(std::int64_t utime, const Pose2& pose, double heading_variance_rad2) {
   why_.clear();
   const StepLimits& l = options_.limits;
   if (!is_finite(pose) || std::abs(pose.x_m) > l.max_abs_coordinate_m || std::abs(pose.y_m) > l.max_abs_coordinate_m) {
@@ -35,9 +35,10 @@ bool OdometrySync::add_odometry(std::int64_t utime, const Pose2& pose, double co
     why_ = "odometry pose is not finite or not on this planet";
     return false;
   }
-  const Reading reading{utime, pose, covariance_trace};
-  if (l.enabled && last_accepted_ && std::isfinite(covariance_trace) &&
-      std::isfinite(last_accepted_->covariance_trace) && covariance_trace < last_accepted_->covariance_trace) {
+  const Reading reading{utime, pose, heading_variance_rad2};
+  if (l.enabled && last_accepted_ && std::isfinite(heading_variance_rad2) &&
+      std::isfinite(last_accepted_->heading_variance_rad2) &&
+      heading_variance_rad2 < last_accepted_->heading_variance_rad2) {
     held_.reset();
     reset_frame(reading);
     store(reading);

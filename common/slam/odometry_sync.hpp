@@ -16,10 +16,12 @@
 // message (x = 1e300) does not move SLAM. When the next reading is possible
 // from the held one, the odometry was reset: the new frame is anchored so that
 // the held reading is where the robot was last seen, and the estimate does not
-// jump (odometry_resets()). A reading whose covariance is smaller than the one
-// before is a reset too, at once: odometry covariance only grows while its
-// integrator runs, so a smaller one is a new integrator (a restarted base
-// driver, counting from (0, 0) again, after a gap however long). The speeds in
+// jump (odometry_resets()). A reading whose heading variance is smaller than
+// the one before is a reset too, at once: an odometry integrator only ever
+// adds to it (kinematics::OdometryIntegrator: P22' = P22 + q), so a smaller one
+// is a new integrator (a restarted base driver, counting from (0, 0) again,
+// after a gap however long). The other terms may shrink (the shear of the
+// motion Jacobian), so they are not used. The speeds in
 // the readings are not used: logs (Intel, FR079) carry zeros there while the
 // robot moves. Every stored pose is in the first frame.
 #include <cmath>
@@ -62,10 +64,10 @@ class OdometrySync {
   explicit OdometrySync(const OdometrySyncOptions& options = {}) : options_(options) {}
 
   // A non-finite reading is refused (false); one older than the newest is kept
-  // and counted (out_of_order_odometry()). covariance_trace: of the reading's
-  // covariance (NaN: unknown). false also when the step is impossible (held,
+  // and counted (out_of_order_odometry()). heading_variance_rad2: the reading's
+  // covariance[8] (NaN: unknown). false also when the step is impossible (held,
   // see above); why() says why.
-  bool add_odometry(std::int64_t utime, const Pose2& pose, double covariance_trace = std::nan(""));
+  bool add_odometry(std::int64_t utime, const Pose2& pose, double heading_variance_rad2 = std::nan(""));
   const std::string& why() const { return why_; }
   // The newest accepted reading, in the first frame (nullopt: none yet).
   std::optional<Pose2> newest_pose() const;
@@ -86,7 +88,7 @@ class OdometrySync {
   struct Reading {
     std::int64_t utime;
     Pose2 raw;  // as received (its own frame)
-    double covariance_trace;
+    double heading_variance_rad2;
   };
   Pose2 pose_at(std::int64_t utime) const;
   bool possible_step(const Reading& from, const Reading& to) const;

@@ -298,11 +298,11 @@ TEST(OdometrySync, InterpolatesAndWaitsForOdometry) {
 
 // Odometry at 50 Hz along x at 0.5 m/s, from (x0, 0), starting at t0 (us).
 namespace {
-void drive(OdometrySync& sync, std::int64_t& t, double& x, int readings, double covariance_trace = 0.0) {
+void drive(OdometrySync& sync, std::int64_t& t, double& x, int readings, double heading_variance = 0.0) {
   for (int i = 0; i < readings; ++i) {
     t += 20'000;
     x += 0.01;
-    ASSERT_TRUE(sync.add_odometry(t, {x, 0.0, 0.0}, covariance_trace)) << sync.why();
+    ASSERT_TRUE(sync.add_odometry(t, {x, 0.0, 0.0}, heading_variance)) << sync.why();
   }
 }
 }  // namespace
@@ -349,18 +349,18 @@ TEST(OdometrySync, AResetOdometryIsAnchoredWhereTheRobotWas) {
   EXPECT_NEAR(ready[0].odometry.x_m, last.x_m + 0.1, 1e-9);
 }
 
-TEST(OdometrySync, AShrinkingCovarianceIsARestartedOdometryEvenAfterALongGap) {
+TEST(OdometrySync, AShrinkingHeadingVarianceIsARestartedOdometryEvenAfterALongGap) {
   OdometrySync sync;
   std::int64_t t = 0;
   double x = 0.0;
-  for (int i = 1; i <= 200; ++i) {  // 2 m with a growing covariance
+  for (int i = 1; i <= 200; ++i) {  // 2 m with a growing heading variance
     t += 20'000;
     x += 0.01;
     ASSERT_TRUE(sync.add_odometry(t, {x, 0.0, 0.0}, 1e-4 * i));
   }
   const Pose2 last = *sync.newest_pose();
   // The driver restarts 2 s later: (0, 0) is within 2 m/s x 2 s of (2, 0), but
-  // its covariance is back to zero: a reset, not a 2 m drive back.
+  // its heading variance is back to zero: a reset, not a 2 m drive back.
   t += 2'000'000;
   x = 0.0;
   ASSERT_TRUE(sync.add_odometry(t, {0.0, 0.0, 0.0}, 0.0));

@@ -13,8 +13,7 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   const slam::Pose2 pose{msg.x, msg.y, msg.theta};
   if (!slam::is_finite(pose)) throw std::invalid_argument("odometry pose is not finite");
   // An impossible step is held back (OdometrySync): SLAM does not move on it.
-  const double covariance_trace = msg.covariance[0] + msg.covariance[4] + msg.covariance[8];
-  if (!sync_.add_odometry(msg.utime, pose, covariance_trace)) throw std::invalid_argument(sync_.why());
+  if (!sync_.add_odometry(msg.utime, pose, msg.covariance[8])) throw std::invalid_argument(sync_.why());
   process(sync_.take_ready());
   if (filter_.initialized() && outputs_.publish_pose) {
     // In the odometry's first frame (a reset odometry is anchored there).

@@ -8,6 +8,10 @@
 //   bring-up) and quick-stop (0x6007): the robot stands within 300 ms of
 //   simulated time. A restarted driver re-arms the watchdog and drives again.
 //
+//   kill -9 pex-base-driver under SLAM and restart: the new driver's odometry
+//   starts again from (0, 0); SLAM takes it as an odometry reset (its heading
+//   variance shrank) and its pose does not jump.
+//
 //   kill -9 pex-lidar-reader mid-mission: the explorer stops the robot once
 //   no scan came for scan_timeout_ms (no driving blind) and says so in its
 //   health (DEGRADED, "no laser scans"); with the reader restarted the
@@ -21,7 +25,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <regex>
 
 #include "exploration_set.hpp"
 #include "harness.hpp"
@@ -62,8 +65,8 @@ TEST(Faults, KilledBaseDriverStopsTheWheelsWithin300msAndARestartedOneDrivesAgai
   const std::string dir = make_temp_dir("faults-driver");
   // two_rooms: 4 m of free floor ahead of the start pose.
   const std::string sim_config = dir + "/sim.toml";
-  write_file(sim_config, std::regex_replace(read_file(sim_config_of("sim")), std::regex("^world_file *=.*$", std::regex::multiline),
-                                            "world_file = \"" + source_path("worlds/two_rooms.wkt") + "\""));
+  write_file(sim_config, with_key(read_file(sim_config_of("sim")), "world_file",
+                                  "\"" + source_path("worlds/two_rooms.wkt") + "\""));
   auto sim = start_daemon("sim", dir, {}, sim_config);
   auto driver = start_daemon("base_driver", dir);
   std::vector<Process*> set = {sim.get(), driver.get()};
@@ -165,4 +168,59 @@ TEST(Faults, KilledLidarReaderStopsTheRobotAndTheMissionEndsDoneAfterItsRestart)
   EXPECT_EQ(set.clock()->collisions, 0);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
+}
+
+TEST(Faults, RestartedBaseDriverResetsOdometryAndSlamDoesNotJump) {
+  Bus bus;
+  Truth truth(bus);
+  std::vector<pex::pose_t> slam_poses;
+  bus.on<pex::pose_t>(std::string(ch::kSlamPose), [&](const pex::pose_t& p) { slam_poses.push_back(p); });
+  const std::string dir = make_temp_dir("faults-odometry");
+  const std::string sim_config = dir + "/sim.toml";
+  write_file(sim_config, with_key(read_file(sim_config_of("sim")), "world_file",
+                                  "\"" + source_path("worlds/two_rooms.wkt") + "\""));
+  auto sim = start_daemon("sim", dir, {}, sim_config);
+  auto reader = start_daemon("lidar_reader", dir);
+  auto driver = start_daemon("base_driver", dir);
+  auto slam = start_daemon("slam", dir);
+  std::vector<Process*> set = {sim.get(), reader.get(), driver.get(), slam.get()};
+  ASSERT_TRUE(bus.spin_until([&] { return bus.all_ok({"base_driver", "slam"}) && !slam_poses.empty(); }, 30s))
+      << logs_of(set);
+  const pex::pose_t truth_start = truth.poses.back();
+  const pex::pose_t slam_start = slam_poses.back();
+  auto drive_until = [&](const std::function<bool()>& done) {
+    return bus.spin_until(
+        [&] {
+          bus.publish(std::string(ch::kBaseCmd), command(0.3));
+          bus.spin_for(50ms);
+          return done();
+        },
+        60s);
+  };
+  auto travelled = [&] { return std::hypot(truth.poses.back().x - truth_start.x, truth.poses.back().y - truth_start.y); };
+  ASSERT_TRUE(drive_until([&] { return travelled() > 1.0; })) << logs_of(set);
+
+  driver->kill_hard();
+  bus.spin_until([&] { return truth.speed() < 0.01; }, 10s);  // the drives stop on their own
+  driver = start_daemon("base_driver", dir);
+  set = {sim.get(), reader.get(), driver.get(), slam.get()};
+  ASSERT_TRUE(drive_until([&] { return bus.all_ok({"base_driver"}) && travelled() > 2.0; })) << logs_of(set);
+  bus.spin_until([&] { return false; }, 1500ms);  // statuses with the final counters
+
+  // SLAM moved as far as the robot did, with no jump on the way.
+  const pex::pose_t& slam_end = slam_poses.back();
+  const double slam_moved = std::hypot(slam_end.x - slam_start.x, slam_end.y - slam_start.y);
+  EXPECT_NEAR(slam_moved, travelled(), 0.15) << "SLAM moved " << slam_moved << " m, the robot " << travelled() << " m";
+  double largest_step = 0.0;
+  for (std::size_t i = 1; i < slam_poses.size(); ++i)
+    largest_step = std::max(largest_step, std::hypot(slam_poses[i].x - slam_poses[i - 1].x,
+                                                     slam_poses[i].y - slam_poses[i - 1].y));
+  EXPECT_LT(largest_step, 0.15) << "the SLAM pose jumped";
+  const auto& status = bus.status().at("slam");
+  std::int64_t resets = -1;
+  for (int i = 0; i < status.ncounters; ++i)
+    if (status.counter_names[static_cast<std::size_t>(i)] == "odometry_resets") resets = status.counter_values[static_cast<std::size_t>(i)];
+  EXPECT_EQ(resets, 1);
+  for (Process* p : set) EXPECT_EQ(p->stop(5s), 0) << p->name() << "\n" << p->output();
+  std::filesystem::remove_all(dir);
 }
