@@ -50,11 +50,13 @@ int main(int argc, char** argv) {
       }
       node.counter("scans_processed") = slam->scans_processed();
       node.counter("filter_updates") = slam->filter().generation() + 1;
+      node.counter("updates_republished") = slam->republished();
     });
     node.on_shutdown([slam, &node, &poses_path] {
       slam->flush();
       node.counter("scans_processed") = slam->scans_processed();
       node.counter("filter_updates") = slam->filter().generation() + 1;
+      node.counter("updates_republished") = slam->republished();
       if (poses_path.empty()) return;
       std::ofstream out(poses_path);
       out << slam->trajectory_text();

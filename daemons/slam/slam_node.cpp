@@ -56,8 +56,25 @@ void SlamNode::process(std::vector<slam::PairedScan> ready) {
     const bool updated = filter_.process(paired.scan, paired.odometry);
     recorder_.record(paired.scan.utime, filter_, paired.odometry);
     ++scans_processed_;
-    if (updated && outputs_.publish_update) outputs_.publish_update(update_message(paired.scan.utime));
+    if (!outputs_.publish_update || !filter_.initialized()) continue;
+    const auto period_us = static_cast<std::int64_t>(options_.republish_period_s * 1e6);
+    if (updated) {
+      outputs_.publish_update(update_message(paired.scan.utime));
+      last_published_scan_utime_ = paired.scan.utime;
+    } else if (period_us > 0 && paired.scan.utime - last_published_scan_utime_ >= period_us) {
+      outputs_.publish_update(republish_message(paired.scan.utime));
+      last_published_scan_utime_ = paired.scan.utime;
+      ++republished_;
+    }
   }
+}
+
+slam_update_t SlamNode::republish_message(std::int64_t scan_utime) const {
+  slam_update_t msg = update_message(scan_utime);
+  // Every particle is its own parent: the maps are extended, none copied.
+  msg.resampled = false;
+  for (std::size_t i = 0; i < msg.particles.size(); ++i) msg.particles[i].parent = static_cast<std::int32_t>(i);
+  return msg;
 }
 
 slam_update_t SlamNode::update_message(std::int64_t scan_utime) const {

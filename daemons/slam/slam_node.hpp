@@ -22,6 +22,12 @@ struct SlamNodeOptions {
   slam::ParticleFilterOptions filter;
   slam::OdometrySyncOptions sync;
   std::size_t max_beams = 8192;  // a scan with more is refused as bad input
+  // With no filter update for this long (scan time), the particle set is
+  // published again with the current scan: identity parents, no resampling,
+  // the filter untouched. A standing robot makes no updates, and a mapper
+  // (re)started meanwhile would wait for one for ever while the explorer
+  // waits for its map. 0 = never.
+  double republish_period_s = 1.0;
 };
 
 struct SlamOutputs {
@@ -47,10 +53,13 @@ class SlamNode {
 
   const slam::ParticleFilter& filter() const { return filter_; }
   std::int64_t scans_processed() const { return scans_processed_; }
+  std::int64_t republished() const { return republished_; }
 
  private:
   void process(std::vector<slam::PairedScan> ready);
   slam_update_t update_message(std::int64_t scan_utime) const;
+  // The particle set now, as an update that changes no lineage (republish).
+  slam_update_t republish_message(std::int64_t scan_utime) const;
 
   SlamNodeOptions options_;
   SlamOutputs outputs_;
@@ -58,6 +67,8 @@ class SlamNode {
   slam::OdometrySync sync_;
   slam::TrajectoryRecorder recorder_;
   std::int64_t scans_processed_ = 0;
+  std::int64_t last_published_scan_utime_ = -1;
+  std::int64_t republished_ = 0;
 };
 
 }  // namespace pex::slam_daemon

@@ -72,6 +72,28 @@ TEST(SlamNode, FirstScanPublishesAnUpdateWithEveryParticle) {
   EXPECT_NEAR(out.poses.back().x, 0.05, 1e-9);
 }
 
+// A standing robot makes no filter updates; the particle set is still
+// published once a second (scan time) with the newest scan, every particle its
+// own parent, so a mapper started late gets its maps (no start-order deadlock).
+TEST(SlamNode, StandingStillRepublishesTheParticleSetWithoutTouchingTheFilter) {
+  Published out;
+  SlamNode node = make_node(out, 4);
+  for (std::int64_t t = 1'000'000; t <= 4'500'000; t += 20'000) {
+    node.on_odometry(odometry(t, 0.0));
+    if ((t / 20'000) % 2 == 0) node.on_scan(box_scan(t));
+  }
+  ASSERT_EQ(out.updates.size(), 4u);  // the first scan, then at 1, 2 and 3 s after it
+  EXPECT_EQ(node.filter().generation(), 0);
+  EXPECT_EQ(node.republished(), 3);
+  for (std::size_t k = 1; k < out.updates.size(); ++k) {
+    const slam_update_t& u = out.updates[k];
+    EXPECT_EQ(u.generation, 0);
+    EXPECT_FALSE(u.resampled);
+    EXPECT_GE(u.scan_utime - out.updates[k - 1].scan_utime, 1'000'000);
+    for (int i = 0; i < u.nparticles; ++i) EXPECT_EQ(u.particles[static_cast<std::size_t>(i)].parent, i);
+  }
+}
+
 TEST(SlamNode, RefusesBadInputAndKeepsItsState) {
   Published out;
   SlamNode node = make_node(out);

@@ -69,6 +69,7 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   l.enabled = sync.get<bool>("check_odometry_steps", l.enabled);
   l.max_speed_mps = sync.get<double>("odometry_max_speed_mps", l.max_speed_mps, positive<double>());
   l.max_omega_radps = sync.get<double>("odometry_max_omega_radps", l.max_omega_radps, positive<double>());
+  o.republish_period_s = config.get<double>("republish_period_s", o.republish_period_s, non_negative<double>());
   o.max_beams = static_cast<std::size_t>(config.get<int>("max_beams", static_cast<int>(o.max_beams),
                                                          in_range(1, 1 << 20)));
   return o;

@@ -12,12 +12,17 @@
 //   starts again from (0, 0); SLAM takes it as an odometry reset (its heading
 //   variance shrank) and its pose does not jump.
 //
+//   start order: SLAM and the explorer up, the mapper 5 s later (systemd gives
+//   no order between them): SLAM republishes its particle set while the robot
+//   stands, the late mapper builds its maps from it, the robot sets off.
+//
 //   kill -9 pex-lidar-reader mid-mission: the explorer stops the robot once
 //   no scan came for scan_timeout_ms (no driving blind) and says so in its
 //   health (DEGRADED, "no laser scans"); with the reader restarted the
 //   mission goes on and ends DONE with the world mapped.
 #include <gtest/gtest.h>
 
+#include <pex/explore_state_t.hpp>
 #include <pex/pose_t.hpp>
 #include <pex/sim_clock_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
@@ -25,6 +30,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
 #include "exploration_set.hpp"
 #include "harness.hpp"
@@ -222,5 +228,47 @@ TEST(Faults, RestartedBaseDriverResetsOdometryAndSlamDoesNotJump) {
     if (status.counter_names[static_cast<std::size_t>(i)] == "odometry_resets") resets = status.counter_values[static_cast<std::size_t>(i)];
   EXPECT_EQ(resets, 1);
   for (Process* p : set) EXPECT_EQ(p->stop(5s), 0) << p->name() << "\n" << p->output();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Faults, MapperStartedLastStillGetsItsMapsAndTheRobotSetsOff) {
+  Bus bus;
+  Truth truth(bus);
+  std::optional<pex::explore_state_t> state;
+  bus.on<pex::explore_state_t>(std::string(ch::kExploreState), [&](const pex::explore_state_t& s) { state = s; });
+  const std::string dir = make_temp_dir("faults-order");
+  const std::string sim_config = dir + "/sim.toml";
+  write_file(sim_config, with_key(read_file(sim_config_of("sim")), "world_file",
+                                  "\"" + source_path("worlds/two_rooms.wkt") + "\""));
+  std::vector<std::unique_ptr<Process>> set;
+  set.push_back(start_daemon("sim", dir, {}, sim_config));
+  for (const char* name : {"lidar_reader", "base_driver", "slam", "explorer"}) set.push_back(start_daemon(name, dir));
+  auto all = [&] {
+    std::vector<Process*> p;
+    for (auto& q : set) p.push_back(q.get());
+    return p;
+  };
+  // 5 simulated seconds without a mapper: no map, the robot waits.
+  ASSERT_TRUE(bus.spin_until([&] { return truth.clock_utime > 0 && !truth.poses.empty(); }, 30s)) << logs_of(all());
+  const std::int64_t start = truth.clock_utime;
+  ASSERT_TRUE(bus.spin_until([&] { return truth.clock_utime > start + 5'000'000; }, 60s)) << logs_of(all());
+  ASSERT_TRUE(state);
+  EXPECT_EQ(state->phase, +pex::explore_state_t::PHASE_IDLE) << state->status;
+  const pex::pose_t before = truth.poses.back();
+
+  set.push_back(start_daemon("polygon_mapper", dir));
+  const std::int64_t mapper_started = truth.clock_utime;
+  const bool set_off = bus.spin_until(
+      [&] {
+        const auto& p = truth.poses.back();
+        return std::hypot(p.x - before.x, p.y - before.y) > 0.3 || truth.clock_utime > mapper_started + 20'000'000;
+      },
+      120s);
+  ASSERT_TRUE(set_off);
+  const auto& p = truth.poses.back();
+  EXPECT_GT(std::hypot(p.x - before.x, p.y - before.y), 0.3)
+      << "the robot never set off after the mapper started last: " << (state ? state->status : "no state") << "\n"
+      << logs_of(all());
+  for (auto& q : set) EXPECT_EQ(q->stop(5s), 0) << q->name() << "\n" << q->output();
   std::filesystem::remove_all(dir);
 }
