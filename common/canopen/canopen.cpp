@@ -221,6 +221,9 @@ void Cia402Master::handle(const Frame& frame, std::int64_t now_us) {
       auto state = read_heartbeat(frame);
       if (!state) break;
       if (*state == NmtState::kBootUp && node->heartbeat_seen) ++node->restarts;
+      // Out of NMT Stopped (our "enter pre-operational" worked): configure at once.
+      if (node->phase == Phase::kConfiguring && node->nmt_state == NmtState::kStopped && *state != NmtState::kStopped)
+        request_pending_[static_cast<std::size_t>(node - nodes_.data())] = false;
       node->heartbeat_seen = true;
       node->heartbeat_lost = false;
       node->last_heartbeat_us = now_us;
@@ -313,6 +316,17 @@ std::vector<Frame> Cia402Master::step(std::int64_t now_us, const std::vector<std
       case Phase::kUnknown:
         break;
       case Phase::kConfiguring:
+        if (node.nmt_state == NmtState::kStopped) {
+          // An NMT stop (from a tool, another master): a stopped node answers
+          // no SDO, so it goes to pre-operational first (CiA 301), then the
+          // configuration and the start follow as after a boot-up.
+          if (!request_pending_[i] || retry_due) {
+            out.push_back(nmt_frame(NmtCommand::kEnterPreOperational, node.node_id));
+            request_pending_[i] = true;
+            node.phase_since_us = now_us;
+          }
+          break;
+        }
         if (!request_pending_[i] || retry_due) {
           const ConfigWrite& w = configuration_[node.config_step];
           out.push_back(sdo_write_frame(node.node_id, w.index, w.subindex, w.value, w.size_bytes));

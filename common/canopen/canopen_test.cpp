@@ -280,6 +280,23 @@ TEST(Cia402, DrivesStopOnTheirOwnWhenTheMasterDiesAndARestartedMasterDrivesAgain
   EXPECT_EQ(bus.master_.nodes()[0].config_step, bus.master_.configuration().size());
 }
 
+// An NMT stop (sent by someone else): the drive stops and answers no SDO; the
+// master brings it to pre-operational, configures and starts it, and drives.
+TEST(Cia402, NodeStoppedByNmtIsBroughtBack) {
+  Bus bus;
+  bus.run(40, {5'000, 5'000});
+  ASSERT_TRUE(bus.master_.all_ready());
+  bus.nodes_[0].handle(nmt_frame(NmtCommand::kStop, 1));
+  EXPECT_EQ(bus.nodes_[0].nmt_state(), NmtState::kStopped);
+  bus.run(20, {5'000, 5'000});  // heartbeat: stopped -> the master reacts
+  EXPECT_FALSE(bus.master_.all_ready());
+  bus.run(60, {5'000, 5'000});
+  EXPECT_TRUE(bus.master_.all_ready());
+  EXPECT_EQ(bus.nodes_[0].nmt_state(), NmtState::kOperational);
+  EXPECT_EQ(bus.nodes_[0].state(), DriveState::kOperationEnabled);
+  EXPECT_DOUBLE_EQ(bus.nodes_[0].velocity_actual(), 5'000.0);
+}
+
 // The quick stop deceleration the master writes (0x6085) is what the drive ramps with.
 TEST(Cia402, QuickStopUsesTheConfiguredDeceleration) {
   Bus bus;

@@ -227,7 +227,7 @@ TEST(Hardware, SocketCanWithoutKernelSupportFailsWithAClearLine) {
 // clients, as a bus does): a CAN error frame, then an NMT "reset node" to
 // every drive. The driver must stop the wheels although commands keep coming,
 // say why in DAEMON_STATUS, and drive again once the bus and drives are back.
-TEST(Hardware, DriverStopsOnBusErrorsAndDriveRestartsAndRecovers) {
+TEST(Hardware, DriverStopsOnBusErrorsAndDriveRestartsOrNmtStopsAndRecovers) {
   Bus bus;
   Recorder rec(bus);
   const std::string logs = make_temp_dir("hwbus");
@@ -282,6 +282,17 @@ TEST(Hardware, DriverStopsOnBusErrorsAndDriveRestartsAndRecovers) {
       << logs_of(all);
   EXPECT_TRUE(drive_for(10s, [&] { return moving() && bus.all_ok({"base_driver"}); }))
       << "no recovery after the drives restarted\n" << logs_of(all);
+  // 3. NMT stop to every drive (from a service tool, say): they stop and answer
+  // no SDO; the driver takes them to pre-operational, configures and starts them.
+  struct can_frame stop {};
+  stop.can_id = 0x000;
+  stop.can_dlc = 2;
+  stop.data[0] = 0x02;
+  stop.data[1] = 0x00;
+  ASSERT_TRUE((*can)->send(stop, &error)) << error;
+  EXPECT_TRUE(drive_for(5s, [&] { return !bus.all_ok({"base_driver"}); })) << "an NMT stop went unnoticed\n" << logs_of(all);
+  EXPECT_TRUE(drive_for(10s, [&] { return moving() && bus.all_ok({"base_driver"}); }))
+      << "no recovery after an NMT stop\n" << logs_of(all);
   // Odometry survived the encoders restarting from zero: no jump backwards.
   for (std::size_t i = 1; i < rec.odometry.size(); ++i) {
     EXPECT_GE(rec.odometry[i].x, rec.odometry[i - 1].x - 1e-3) << i;
