@@ -5,6 +5,7 @@
 #include <chrono>
 #include <memory>
 
+#include <pex/daemon_status_t.hpp>
 #include <pex/laser_scan_t.hpp>
 #include <pex/odometry_t.hpp>
 #include <pex/pose_t.hpp>
@@ -13,6 +14,7 @@
 #include "mapper.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/daemon.hpp"
+#include "runtime/input_watch.hpp"
 
 namespace ch = pex::runtime::channels;
 using pex::polygon_mapper::Mapper;
@@ -22,6 +24,15 @@ int main(int argc, char** argv) {
   info.supports_replay = true;
   return pex::runtime::run_daemon(argc, argv, info, [](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
     auto mapper = std::make_shared<Mapper>(pex::polygon_mapper::load_options(config));
+    // Health: without scans or poses the map stands still (DEGRADED, says which).
+    const std::string& source = mapper->options().pose_source;
+    const std::string pose_channel(source == "slam"       ? ch::kSlamUpdate
+                                   : source == "odometry" ? ch::kOdometry
+                                                          : ch::kSimTruth);
+    auto watch = std::make_shared<pex::runtime::InputWatch>();
+    const auto timeout_us = static_cast<std::int64_t>(mapper->options().input_timeout_s * 1e6);
+    watch->expect(std::string(ch::kLidarScan), timeout_us);
+    watch->expect(pose_channel, timeout_us);
     // Counters in DAEMON_STATUS mirror the mapper's after every event.
     auto report = [&node, mapper] {
       const auto& c = mapper->counters();
@@ -40,36 +51,39 @@ int main(int argc, char** argv) {
       node.counter("best_switches") = c.best_switches;
       node.counter("map_vertices") = static_cast<std::int64_t>(mapper->map().planning_vertex_count());
     };
-    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [mapper, report](const pex::laser_scan_t& scan) {
+    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [&node, mapper, report, watch](const pex::laser_scan_t& scan) {
       try {
         mapper->on_scan(scan);
       } catch (const std::invalid_argument& e) {
         throw pex::runtime::BadInput(e.what());
       }
+      watch->seen(ch::kLidarScan, node.monotonic_us());
       report();
     });
-    const std::string& source = mapper->options().pose_source;
     if (source == "slam") {
-      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, report](const pex::slam_update_t& update) {
+      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, report, watch](const pex::slam_update_t& update) {
         bool switched = false;
         try {
           switched = mapper->on_slam_update(update);
         } catch (const std::invalid_argument& e) {
           throw pex::runtime::BadInput(e.what());
         }
+        watch->seen(ch::kSlamUpdate, node.monotonic_us());
         // A new best particle: its map goes out now, consistent with its trajectory.
         if (switched)
           if (auto msg = mapper->map_message(node.now_utime())) node.publish(ch::kMap, *msg);
         report();
       });
     } else if (source == "odometry") {
-      node.subscribe<pex::odometry_t>(ch::kOdometry, [mapper, report](const pex::odometry_t& odom) {
+      node.subscribe<pex::odometry_t>(ch::kOdometry, [&node, mapper, report, watch](const pex::odometry_t& odom) {
         mapper->on_pose({odom.utime, {odom.x, odom.y, odom.theta}});
+        watch->seen(ch::kOdometry, node.monotonic_us());
         report();
       });
     } else {
-      node.subscribe<pex::pose_t>(ch::kSimTruth, [mapper, report](const pex::pose_t& pose) {
+      node.subscribe<pex::pose_t>(ch::kSimTruth, [&node, mapper, report, watch](const pex::pose_t& pose) {
         mapper->on_pose({pose.utime, {pose.x, pose.y, pose.theta}});
+        watch->seen(ch::kSimTruth, node.monotonic_us());
         report();
       });
     }
@@ -77,6 +91,10 @@ int main(int argc, char** argv) {
     node.every(period, [&node, mapper, report](std::int64_t now_utime) {
       if (auto msg = mapper->map_message(now_utime)) node.publish(ch::kMap, *msg);
       report();
+    });
+    node.every(std::chrono::milliseconds(250), [&node, watch](std::int64_t) {
+      const std::string why = watch->stale(node.monotonic_us());
+      node.set_state(why.empty() ? pex::daemon_status_t::STATE_OK : pex::daemon_status_t::STATE_DEGRADED, why);
     });
   });
 }

@@ -31,6 +31,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.insert_min_rotation_rad = config.get<double>("insert_min_rotation_rad", o.insert_min_rotation_rad, non_negative<double>());
   o.insert_max_interval_s = config.get<double>("insert_max_interval_s", o.insert_max_interval_s, non_negative<double>());
   o.publish_rate_hz = config.get<double>("publish_rate_hz", o.publish_rate_hz, runtime::in_range(0.01, 100.0));
+  o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, runtime::in_range(0.1, 3600.0));
   o.pose_buffer_s = config.get<double>("pose_buffer_s", o.pose_buffer_s, positive<double>());
   o.max_pose_gap_s = config.get<double>("max_pose_gap_s", o.max_pose_gap_s, positive<double>());
   o.max_pending_scans = config.get<int>("max_pending_scans", o.max_pending_scans, runtime::in_range(1, 1000));

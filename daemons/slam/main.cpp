@@ -4,12 +4,15 @@
 // through the same handlers and writes one `timestamp_s x y theta` per scan.
 #include <cstdio>
 #include <fstream>
+#include <chrono>
 #include <memory>
 
+#include <pex/daemon_status_t.hpp>
 #include <spdlog/spdlog.h>
 
 #include "runtime/channels.hpp"
 #include "runtime/daemon.hpp"
+#include "runtime/input_watch.hpp"
 #include "slam_options.hpp"
 
 namespace ch = pex::runtime::channels;
@@ -32,8 +35,18 @@ int main(int argc, char** argv) {
     };
     outputs.publish_pose = [&node](const pex::pose_t& msg) { node.publish(ch::kSlamPose, msg); };
     auto slam = std::make_shared<SlamNode>(options, outputs);
+    // Health: without scans or odometry the filter stands still (DEGRADED, says which).
+    auto watch = std::make_shared<pex::runtime::InputWatch>();
+    const auto timeout_us = static_cast<std::int64_t>(options.input_timeout_s * 1e6);
+    watch->expect(std::string(ch::kLidarScan), timeout_us);
+    watch->expect(std::string(ch::kOdometry), timeout_us);
+    node.every(std::chrono::milliseconds(250), [&node, watch](std::int64_t) {
+      const std::string why = watch->stale(node.monotonic_us());
+      node.set_state(why.empty() ? pex::daemon_status_t::STATE_OK : pex::daemon_status_t::STATE_DEGRADED, why);
+    });
     // Content the node refuses becomes BadInput: counted, logged, dropped.
-    node.subscribe<pex::odometry_t>(ch::kOdometry, [slam, &node](const pex::odometry_t& msg) {
+    node.subscribe<pex::odometry_t>(ch::kOdometry, [slam, &node, watch](const pex::odometry_t& msg) {
+      watch->seen(ch::kOdometry, node.monotonic_us());  // alive, even when a reading is held
       try {
         slam->on_odometry(msg);
       } catch (const std::invalid_argument& e) {
@@ -42,12 +55,13 @@ int main(int argc, char** argv) {
       }
       node.counter("odometry_resets") = static_cast<std::int64_t>(slam->odometry_sync().odometry_resets());
     });
-    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [slam, &node](const pex::laser_scan_t& msg) {
+    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [slam, &node, watch](const pex::laser_scan_t& msg) {
       try {
         slam->on_scan(msg);
       } catch (const std::invalid_argument& e) {
         throw pex::runtime::BadInput(e.what());
       }
+      watch->seen(ch::kLidarScan, node.monotonic_us());
       node.counter("scans_processed") = slam->scans_processed();
       node.counter("filter_updates") = slam->filter().generation() + 1;
       node.counter("updates_republished") = slam->republished();

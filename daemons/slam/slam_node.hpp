@@ -28,6 +28,7 @@ struct SlamNodeOptions {
   // (re)started meanwhile would wait for one for ever while the explorer
   // waits for its map. 0 = never.
   double republish_period_s = 1.0;
+  double input_timeout_s = 3.0;  // no LIDAR_SCAN or no ODOMETRY this long: DEGRADED (health)
 };
 
 struct SlamOutputs {

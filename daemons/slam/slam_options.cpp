@@ -70,6 +70,7 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   l.max_speed_mps = sync.get<double>("odometry_max_speed_mps", l.max_speed_mps, positive<double>());
   l.max_omega_radps = sync.get<double>("odometry_max_omega_radps", l.max_omega_radps, positive<double>());
   o.republish_period_s = config.get<double>("republish_period_s", o.republish_period_s, non_negative<double>());
+  o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, positive<double>());
   o.max_beams = static_cast<std::size_t>(config.get<int>("max_beams", static_cast<int>(o.max_beams),
                                                          in_range(1, 1 << 20)));
   return o;
