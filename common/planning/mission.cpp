@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <limits>
 #include <utility>
 
@@ -59,6 +60,135 @@ PlanResult compute_plan(const PlanRequest& request) {
   result.plan = request.home ? plan_path_to(*request.map, request.pose, *request.home, request.options)
                              : plan_exploration(*request.map, request.pose, request.blacklist, request.options);
   return result;
+}
+
+std::string to_text(const MissionCheckpoint& c) {
+  std::string t = "polyexplore-mission 1\n";
+  char line[160];
+  auto add = [&](const char* fmt, auto... args) {
+    std::snprintf(line, sizeof line, fmt, args...);
+    t += line;
+  };
+  add("phase %d\n", static_cast<int>(c.phase));
+  add("started %d\n", c.started ? 1 : 0);
+  add("start_utime %lld\n", static_cast<long long>(c.start_utime));
+  add("end_utime %lld\n", static_cast<long long>(c.end_utime));
+  add("travelled_m %.17g\n", c.travelled_m);
+  if (c.home) add("home %.17g %.17g %.17g\n", c.home->x, c.home->y, c.home->theta);
+  add("outcomes %lld %lld %lld %lld\n", static_cast<long long>(c.outcomes.reached),
+      static_cast<long long>(c.outcomes.seen), static_cast<long long>(c.outcomes.blocked),
+      static_cast<long long>(c.outcomes.no_progress));
+  add("plans %lld\n", static_cast<long long>(c.plans));
+  for (const auto& p : c.visited) add("visited %.17g %.17g\n", p.x(), p.y());
+  for (const auto& p : c.blacklist) add("blacklist %.17g %.17g\n", p.x(), p.y());
+  t += "end\n";
+  return t;
+}
+
+std::optional<MissionCheckpoint> checkpoint_from_text(const std::string& text, std::string* why) {
+  auto fail = [&](const std::string& w) -> std::optional<MissionCheckpoint> {
+    if (why) *why = w;
+    return std::nullopt;
+  };
+  std::istringstream in(text);
+  std::string line;
+  if (!std::getline(in, line) || line != "polyexplore-mission 1") return fail("not a mission checkpoint (version 1)");
+  MissionCheckpoint c;
+  bool ended = false;
+  int number = 1;
+  while (std::getline(in, line)) {
+    ++number;
+    std::istringstream f(line);
+    std::string key;
+    f >> key;
+    bool ok = true;
+    if (key == "phase") {
+      int p = -1;
+      ok = static_cast<bool>(f >> p) && p >= 0 && p <= static_cast<int>(Phase::kStopped);
+      c.phase = static_cast<Phase>(p);
+    } else if (key == "started") {
+      int b = 0;
+      ok = static_cast<bool>(f >> b);
+      c.started = b != 0;
+    } else if (key == "start_utime") {
+      ok = static_cast<bool>(f >> c.start_utime);
+    } else if (key == "end_utime") {
+      ok = static_cast<bool>(f >> c.end_utime);
+    } else if (key == "travelled_m") {
+      ok = static_cast<bool>(f >> c.travelled_m) && std::isfinite(c.travelled_m) && c.travelled_m >= 0.0;
+    } else if (key == "home") {
+      Pose2 h;
+      ok = static_cast<bool>(f >> h.x >> h.y >> h.theta) && std::isfinite(h.x) && std::isfinite(h.y) &&
+           std::isfinite(h.theta);
+      c.home = h;
+    } else if (key == "outcomes") {
+      ok = static_cast<bool>(f >> c.outcomes.reached >> c.outcomes.seen >> c.outcomes.blocked >> c.outcomes.no_progress);
+    } else if (key == "plans") {
+      ok = static_cast<bool>(f >> c.plans);
+    } else if (key == "visited" || key == "blacklist") {
+      double x = 0, y = 0;
+      ok = static_cast<bool>(f >> x >> y) && std::isfinite(x) && std::isfinite(y);
+      (key == "visited" ? c.visited : c.blacklist).emplace_back(x, y);
+    } else if (key == "end") {
+      ended = true;
+      break;
+    } else {
+      return fail("line " + std::to_string(number) + ": unknown key '" + key + "'");
+    }
+    if (!ok) return fail("line " + std::to_string(number) + ": bad value for '" + key + "'");
+  }
+  // A file cut short (power lost while writing) lacks its "end" line.
+  if (!ended) return fail("no 'end' line: the checkpoint is incomplete");
+  return c;
+}
+
+MissionCheckpoint Mission::checkpoint() const {
+  MissionCheckpoint c;
+  c.phase = phase_ == Phase::kPaused ? Phase::kPaused : phase_;
+  c.started = started_;
+  c.start_utime = start_utime_;
+  c.end_utime = end_utime_;
+  c.travelled_m = travelled_m_;
+  c.home = home_;
+  c.outcomes = outcomes_;
+  c.plans = plans_;
+  c.visited = visited_;
+  c.blacklist = blacklist_;
+  return c;
+}
+
+void Mission::restore(const MissionCheckpoint& c) {
+  started_ = c.started;
+  start_utime_ = c.start_utime;
+  end_utime_ = c.end_utime;
+  travelled_m_ = c.travelled_m;
+  home_ = c.home;
+  outcomes_ = c.outcomes;
+  plans_ = c.plans;
+  visited_ = c.visited;
+  blacklist_ = c.blacklist;
+  switch (c.phase) {
+    case Phase::kIdle:
+    case Phase::kSelecting:
+    case Phase::kMoving:
+      enter(Phase::kIdle, "restored: exploring on");
+      break;
+    case Phase::kPaused:
+      paused_from_ = Phase::kSelecting;  // the goal in hand is not kept: select anew on resume
+      enter(Phase::kPaused, "restored: paused by command");
+      break;
+    case Phase::kHoming:
+      if (!home_) {
+        enter(Phase::kIdle, "restored: exploring on (no home pose to go to)");
+        break;
+      }
+      enter(Phase::kHoming, "restored: going home");
+      last_request_utime_ = -1;
+      break;
+    default:
+      enter(c.phase, std::string("restored: ") + to_string(c.phase));
+      break;
+  }
 }
 
 Mission::Mission(MissionOptions options) : options_(std::move(options)), follower_(options_.follower) {

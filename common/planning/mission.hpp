@@ -166,6 +166,27 @@ struct MissionOutput {
   PlanStats plan_stats;         // of the last plan
 };
 
+// What of a mission survives a restart of the explorer: where it started,
+// how far it got, which goals it visited or gave up, and the operator's
+// standing decision (waiting, paused, stopped, home, done). Not the goal in
+// hand nor the path: a restarted mission selects again on the newest map.
+struct MissionCheckpoint {
+  Phase phase = Phase::kIdle;
+  bool started = false;
+  std::int64_t start_utime = -1;
+  std::int64_t end_utime = -1;
+  double travelled_m = 0.0;
+  std::optional<Pose2> home;
+  GoalOutcomes outcomes;
+  std::int64_t plans = 0;
+  std::vector<Point> visited;
+  std::vector<Point> blacklist;
+};
+// A small text file, one fact a line ("polyexplore-mission 1" first).
+std::string to_text(const MissionCheckpoint& checkpoint);
+// nullopt (and why) for text that is not a checkpoint of this version.
+std::optional<MissionCheckpoint> checkpoint_from_text(const std::string& text, std::string* why = nullptr);
+
 class Mission {
  public:
   explicit Mission(MissionOptions options = {});
@@ -186,6 +207,11 @@ class Mission {
   MissionOutput step(std::int64_t now_utime);
 
   Phase phase() const { return phase_; }
+  MissionCheckpoint checkpoint() const;
+  // Takes up a checkpointed mission (call before the first step): exploring
+  // phases resume by selecting anew; paused, stopped, home and the ended ones
+  // stay as they were; homing goes on homing.
+  void restore(const MissionCheckpoint& checkpoint);
   const std::vector<Point>& blacklist() const { return blacklist_; }
   const std::vector<Point>& visited_goals() const { return visited_; }
   const GoalOutcomes& goal_outcomes() const { return outcomes_; }

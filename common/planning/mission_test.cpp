@@ -134,6 +134,79 @@ TEST(Mission, GoalReachedWaitsForAMapWithAScanFromTheGoal) {
   EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
 }
 
+// A restarted explorer takes the mission up: visited goals stay visited, the
+// distance and the mission clock go on from where they were.
+TEST(Mission, ACheckpointTakesTheMissionUpAfterARestart) {
+  Mission m(test_options());
+  m.on_map(corridor(true, true), 0);
+  m.on_pose(Pose2{14, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point goal = *out.goal;
+  std::int64_t t = 0;
+  for (double x = 14.0; x < goal.x() - 0.05; x += 0.1) {  // drives there
+    t += 100'000;
+    m.on_pose(Pose2{x, 1.5, 0}, t);
+  }
+  m.on_pose(Pose2{goal.x() - 0.05, goal.y(), 0}, t + 100'000);
+  out = step_with_inline_planning(m, t + 100'000);
+  ASSERT_EQ(m.visited_goals().size(), 1u);
+
+  std::string why;
+  const auto text = to_text(m.checkpoint());
+  const auto restored = checkpoint_from_text(text, &why);
+  ASSERT_TRUE(restored) << why;
+  Mission n(test_options());
+  n.restore(*restored);
+  EXPECT_EQ(n.visited_goals().size(), 1u);
+  EXPECT_EQ(n.blacklist().size(), m.blacklist().size());
+  EXPECT_EQ(n.goal_outcomes().reached, 1);
+  // It goes on: the visited right end is not offered again, the left one is;
+  // the mission clock counts from the first start.
+  n.on_map(corridor(true, true), 10'000'000);
+  n.on_pose(Pose2{19.0, 1.5, 0}, 10'000'000);
+  out = step_with_inline_planning(n, 10'000'000);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(out.goal->x(), 1.0);
+  EXPECT_NEAR(out.mission_time_s, 10.0, 1e-9);
+  EXPECT_NEAR(out.distance_travelled_m, restored->travelled_m + 0.0, 1e-9);  // no pose jump counted at the restart
+  EXPECT_GT(restored->travelled_m, 0.0);
+
+  // A stopped mission stays stopped; a paused one stays paused.
+  auto stopped = *restored;
+  stopped.phase = Phase::kStopped;
+  Mission s(test_options());
+  s.restore(*checkpoint_from_text(to_text(stopped)));
+  s.on_map(corridor(true, true), 0);
+  s.on_pose(Pose2{5, 1.5, 0}, 0);
+  EXPECT_EQ(step_with_inline_planning(s, 0).phase, Phase::kStopped);
+  auto paused = *restored;
+  paused.phase = Phase::kPaused;
+  Mission p(test_options());
+  p.restore(paused);
+  p.on_map(corridor(true, true), 0);
+  p.on_pose(Pose2{5, 1.5, 0}, 0);
+  EXPECT_EQ(step_with_inline_planning(p, 0).phase, Phase::kPaused);
+  EXPECT_EQ(p.on_command(MissionCommand::kResume, 100'000), "");
+  EXPECT_EQ(step_with_inline_planning(p, 100'000).phase, Phase::kMoving);
+}
+
+TEST(Mission, ABrokenCheckpointIsRefusedWithAReason) {
+  std::string why;
+  EXPECT_FALSE(checkpoint_from_text("", &why));
+  EXPECT_NE(why.find("not a mission checkpoint"), std::string::npos) << why;
+  const std::string good = to_text(MissionCheckpoint{});
+  ASSERT_TRUE(checkpoint_from_text(good, &why)) << why;
+  // Cut short (power lost while writing): no "end" line.
+  EXPECT_FALSE(checkpoint_from_text(good.substr(0, good.size() - 4), &why));
+  EXPECT_NE(why.find("incomplete"), std::string::npos) << why;
+  EXPECT_FALSE(checkpoint_from_text("polyexplore-mission 1\nvisited 1 nan\nend\n", &why));
+  EXPECT_NE(why.find("bad value for 'visited'"), std::string::npos) << why;
+  EXPECT_FALSE(checkpoint_from_text("polyexplore-mission 1\nphase 42\nend\n", &why));
+  EXPECT_FALSE(checkpoint_from_text("polyexplore-mission 1\nwhatever 1\nend\n", &why));
+  EXPECT_NE(why.find("unknown key"), std::string::npos) << why;
+}
+
 TEST(Mission, AtTheGoalItTurnsToFaceTheFrontierBeforeItCountsAsReached) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);

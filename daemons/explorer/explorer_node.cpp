@@ -34,6 +34,16 @@ std::string ExplorerNode::on_pose(const pex::pose_t& msg, std::int64_t now_utime
   return {};
 }
 
+std::string ExplorerNode::checkpoint_text() const { return planning::to_text(mission_.checkpoint()); }
+
+std::string ExplorerNode::restore(const std::string& text) {
+  std::string why;
+  const auto checkpoint = planning::checkpoint_from_text(text, &why);
+  if (!checkpoint) return why;
+  mission_.restore(*checkpoint);
+  return {};
+}
+
 std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime) {
   if (msg.nranges <= 0 || static_cast<std::size_t>(msg.nranges) != msg.ranges.size()) return "scan without ranges";
   mission_.on_scan(now_utime);

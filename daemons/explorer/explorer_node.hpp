@@ -48,6 +48,11 @@ class ExplorerNode {
   // The worker's eventfd (-1 with inline planning).
   int plan_fd() const { return worker_ ? worker_->fd() : -1; }
 
+  // The mission's checkpoint as text, and taking one up (before the first
+  // step): "" when restored, else why not (the mission then starts afresh).
+  std::string checkpoint_text() const;
+  std::string restore(const std::string& checkpoint_text);
+
   // One control step: the command to publish now. Never waits for a plan.
   pex::velocity_cmd_t step(std::int64_t now_utime);
   // The state after the last step.

@@ -16,6 +16,10 @@ struct ExplorerOptions {
   std::string pose_channel = "SLAM_POSE";  // a registered pex.pose_t channel (SIM_TRUTH for tests)
   double cmd_rate_hz = 10.0;               // BASE_CMD rate (the mission steps at this rate)
   double state_rate_hz = 2.0;              // EXPLORE_STATE rate
+  // The mission's checkpoint (planning::MissionCheckpoint), written every
+  // checkpoint_period_s and on stop, read at start: "" = none.
+  std::string checkpoint_file;
+  double checkpoint_period_s = 2.0;
   MapDecodeOptions map;
   planning::MissionOptions mission;
 };

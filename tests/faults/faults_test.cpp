@@ -16,6 +16,9 @@
 //   no order between them): SLAM republishes its particle set while the robot
 //   stands, the late mapper builds its maps from it, the robot sets off.
 //
+//   kill -9 pex-explorer mid-mission and restart: the mission is taken up from
+//   its checkpoint (visited goals, distance, mission clock) and ends DONE.
+//
 //   kill -9 pex-lidar-reader mid-mission: the explorer stops the robot once
 //   no scan came for scan_timeout_ms (no driving blind) and says so in its
 //   health (DEGRADED, "no laser scans"; the mapper too: "no LIDAR_SCAN for
@@ -274,4 +277,40 @@ TEST(Faults, MapperStartedLastStillGetsItsMapsAndTheRobotSetsOff) {
       << logs_of(all());
   for (auto& q : set) EXPECT_EQ(q->stop(5s), 0) << q->name() << "\n" << q->output();
   std::filesystem::remove_all(dir);
+}
+
+TEST(Faults, KilledExplorerTakesItsMissionUpFromTheCheckpoint) {
+  const std::string checkpoint = make_temp_dir("faults-explorer-state") + "/mission.txt";
+  ExplorationSet set("faults-explorer", 1.0, /*autostart=*/true, "two_rooms",
+                     {{"checkpoint_file", "\"" + checkpoint + "\""}, {"checkpoint_period_s", "0.5"}});
+  // Two goals reached, and a checkpoint written after the second.
+  ASSERT_TRUE(set.spin_sim([&] { return set.state() && set.state()->goals_reached >= 2; }, 300.0))
+      << set.report_with_logs();
+  set.spin_sim([] { return false; }, 1.0);
+  const pex::explore_state_t before = *set.state();
+  set.process("explorer")->kill_hard();
+  set.restart("explorer");
+  // The restarted explorer's first states carry the mission on.
+  const double restarted_at = set.sim_seconds();
+  ASSERT_TRUE(set.spin_sim([&] { return set.state() && set.state()->utime > before.utime + 1'000'000 &&
+                                        set.sim_seconds() > restarted_at + 2.0; },
+                           60.0))
+      << set.report_with_logs();
+  const pex::explore_state_t after = *set.state();
+  EXPECT_GE(after.goals_reached, before.goals_reached) << "visited goals lost in the restart";
+  EXPECT_GE(after.distance_travelled_m, before.distance_travelled_m - 0.5) << "the travelled distance restarted";
+  EXPECT_GE(after.mission_time_s, before.mission_time_s) << "the mission clock restarted";
+  ASSERT_TRUE(set.spin_sim(
+      [&] {
+        const auto p = set.phase();
+        return p == pex::explore_state_t::PHASE_DONE || p == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ||
+               p == pex::explore_state_t::PHASE_FAILED;
+      },
+      600.0))
+      << set.report_with_logs();
+  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
+  EXPECT_GT(set.state()->explored_area_m2, 0.8 * 82.66) << set.report();
+  EXPECT_GT(set.bus().status().at("explorer").ncounters, 0);
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
 }

@@ -45,7 +45,9 @@ inline std::string write_config(const std::string& dir, const std::string& daemo
 // heard. For the exploration and the fault tests.
 class ExplorationSet {
  public:
-  ExplorationSet(const std::string& tag, double speed, bool autostart, const std::string& world = "two_rooms")
+  // explorer_keys: more top-level keys of the explorer's config (key, TOML literal).
+  ExplorationSet(const std::string& tag, double speed, bool autostart, const std::string& world = "two_rooms",
+                 const std::vector<std::pair<std::string, std::string>>& explorer_keys = {})
       : dir_(make_temp_dir(tag)) {
     std::string sim = with_key(read_file(sim_config_of("sim")), "world_file",
                                "\"" + source_path("worlds/" + world + ".wkt") + "\"");
@@ -53,6 +55,7 @@ class ExplorationSet {
     const std::string mapper = with_key(read_file(sim_config_of("polygon_mapper")), "pose_source", "\"sim_truth\"");
     std::string explorer = with_key(read_file(sim_config_of("explorer")), "pose_channel", "\"SIM_TRUTH\"");
     explorer = with_key(explorer, "autostart", autostart ? "true" : "false");
+    for (const auto& [key, value] : explorer_keys) explorer = with_key(explorer, key, value);
 
     bus_.on<pex::explore_state_t>("EXPLORE_STATE", [this](const pex::explore_state_t& s) {
       if (states_.empty() || states_.back().phase != s.phase) states_.push_back(s);
@@ -73,6 +76,7 @@ class ExplorationSet {
   }
 
   Bus& bus() { return bus_; }
+  const std::string& dir() const { return dir_; }
   // One daemon of the set ("lidar_reader", ...); nullptr if it is not one.
   Process* process(const std::string& name) {
     for (auto& p : set_)
