@@ -560,6 +560,18 @@ std::int64_t DeviceClock::unwrap(std::uint32_t raw) {
   return wraps_ * (std::int64_t{1} << 32) + raw;
 }
 
+std::int64_t DeviceClock::robust_minimum() const {
+  // The k-th smallest, k a tenth of the samples: transport delay only adds
+  // to an offset sample, so the smallest are the truest, but a receive clock
+  // that was behind (a simulated clock whose tick came after the telegram)
+  // makes a few samples too small; the minimum itself would keep such a
+  // sample for the whole window.
+  std::vector<std::int64_t> sorted(offsets_);
+  const auto k = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 10);
+  std::nth_element(sorted.begin(), k, sorted.end());
+  return *k;
+}
+
 void DeviceClock::reset() {
   have_last_ = false;
   wraps_ = 0;
@@ -576,7 +588,7 @@ DeviceClock::Mapped DeviceClock::map(std::uint32_t scan_device_us, std::uint32_t
                                            static_cast<std::uint32_t>(transmit_device_us - scan_device_us));
   const std::int64_t sample = host_receive_us - transmit;
   if (!offsets_.empty()) {
-    std::int64_t best = *std::min_element(offsets_.begin(), offsets_.end());
+    const std::int64_t best = robust_minimum();
     if (sample < best - options_.max_step_us || sample > best + options_.max_step_us) {
       ++resets_;
       offsets_.clear();
@@ -589,8 +601,7 @@ DeviceClock::Mapped DeviceClock::map(std::uint32_t scan_device_us, std::uint32_t
     offsets_[next_] = sample;
     next_ = (next_ + 1) % offsets_.size();
   }
-  const std::int64_t offset = *std::min_element(offsets_.begin(), offsets_.end());
-  return Mapped{scan, scan + offset};
+  return Mapped{scan, scan + robust_minimum()};
 }
 
 }  // namespace pex::cola

@@ -251,8 +251,10 @@ namespace pex::cola {
 
 // Maps the sensor's microsecond counter (uint32, wraps every ~71.6 min) to
 // host time. The counter is unwrapped; the offset host - device is estimated
-// as the minimum of (host receive time - device transmission time) over the
-// last `window` scans, since transport delay only ever adds to it. A sample
+// as the tenth-percentile of (host receive time - device transmission time)
+// over the last `window` scans: transport delay only ever adds to it, so the
+// smallest samples are the truest, and the percentile (not the minimum) lets
+// a few samples taken with a receive clock that was behind go by. A sample
 // that disagrees with the estimate by more than `max_step_us` (the sensor
 // restarted, the host clock jumped) starts the estimate afresh.
 class DeviceClock {
@@ -274,6 +276,7 @@ class DeviceClock {
 
  private:
   std::int64_t unwrap(std::uint32_t raw);
+  std::int64_t robust_minimum() const;
 
   Options options_;
   bool have_last_ = false;
