@@ -144,7 +144,7 @@ std::optional<MissionCheckpoint> checkpoint_from_text(const std::string& text, s
 
 MissionCheckpoint Mission::checkpoint() const {
   MissionCheckpoint c;
-  c.phase = phase_ == Phase::kPaused ? Phase::kPaused : phase_;
+  c.phase = phase_;
   c.started = started_;
   c.start_utime = start_utime_;
   c.end_utime = end_utime_;

@@ -61,23 +61,30 @@ TEST(Mission, SelectsTheNearestGoalAndDrivesTowardIt) {
   EXPECT_NEAR(out.explored_area_m2, 60.0, 1e-9);
 }
 
-TEST(Mission, GoalReachedWaitsForANewerMapThenTakesTheNextGoal) {
-  Mission m(test_options());
-  m.on_map(corridor(true, true), 0);
+// On the corridor open at both ends, from (14, 1.5): the right end is chosen
+// and reached (the robot put there at 200 ms). The map is stamped at 0, its
+// newest scan at `map_scan_utime`. Returns the goal reached.
+Point reach_the_right_end(Mission& m, std::int64_t map_scan_utime = -1) {
+  m.on_map(corridor(true, true), 0, map_scan_utime);
   m.on_pose(Pose2{14, 1.5, 0}, 0);
   auto out = step_with_inline_planning(m, 0);
-  ASSERT_EQ(out.phase, Phase::kMoving);
-  const Point first = *out.goal;
-  EXPECT_GT(first.x(), 10.0);  // the right end is nearer
-  // The robot arrives.
-  m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 200'000);
+  EXPECT_EQ(out.phase, Phase::kMoving);
+  const Point goal = out.goal.value_or(Point(19.7, 1.5));
+  EXPECT_GT(goal.x(), 10.0);  // the right end is nearer
+  m.on_pose(Pose2{goal.x() - 0.05, goal.y(), 0}, 200'000);
   out = step_with_inline_planning(m, 200'000);
   EXPECT_EQ(out.phase, Phase::kSelecting);
   EXPECT_NE(out.status.find("reached"), std::string::npos);
   EXPECT_EQ(out.command.v_mps, 0.0);
+  return goal;
+}
+
+TEST(Mission, GoalReachedWaitsForANewerMapThenTakesTheNextGoal) {
+  Mission m(test_options());
+  const Point first = reach_the_right_end(m);
   ASSERT_EQ(m.visited_goals().size(), 1u);
   // The same map again: it waits.
-  out = step_with_inline_planning(m, 1'500'000);
+  auto out = step_with_inline_planning(m, 1'500'000);
   EXPECT_EQ(out.phase, Phase::kSelecting);
   EXPECT_FALSE(out.plan_request.has_value());
   // A newer map in which the right frontier is still there (the laser could
@@ -94,18 +101,11 @@ TEST(Mission, GoalReachedWaitsForANewerMapThenTakesTheNextGoal) {
 // that has it, at most three replan periods (a mapper that never sends one).
 TEST(Mission, GoalReachedWaitsForAMapWithAScanFromTheGoal) {
   Mission m(test_options());
-  m.on_map(corridor(true, true), 0, 0);
-  m.on_pose(Pose2{14, 1.5, 0}, 0);
-  auto out = step_with_inline_planning(m, 0);
-  ASSERT_EQ(out.phase, Phase::kMoving);
-  const Point first = *out.goal;
-  m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 200'000);
-  out = step_with_inline_planning(m, 200'000);
-  ASSERT_EQ(out.phase, Phase::kSelecting);
+  const Point first = reach_the_right_end(m, 0);
   // A newer map, but built from scans before the arrival: still waiting.
   m.on_map(corridor(true, true), 1'000'000, 150'000);
   m.on_pose(Pose2{first.x() - 0.05, first.y(), 0}, 1'100'000);
-  out = step_with_inline_planning(m, 1'100'000);
+  auto out = step_with_inline_planning(m, 1'100'000);
   EXPECT_EQ(out.phase, Phase::kSelecting);
   EXPECT_FALSE(out.plan_request.has_value());
   EXPECT_NE(out.status.find("waiting for the map"), std::string::npos) << out.status;
@@ -117,15 +117,9 @@ TEST(Mission, GoalReachedWaitsForAMapWithAScanFromTheGoal) {
 
   // The bound: maps whose scans never get newer stop holding it after 3 s.
   Mission n(test_options());
-  n.on_map(corridor(true, true), 0, 0);
-  n.on_pose(Pose2{14, 1.5, 0}, 0);
-  out = step_with_inline_planning(n, 0);
-  ASSERT_EQ(out.phase, Phase::kMoving);
-  n.on_pose(Pose2{out.goal->x() - 0.05, out.goal->y(), 0}, 200'000);
-  out = step_with_inline_planning(n, 200'000);
-  ASSERT_EQ(out.phase, Phase::kSelecting);
+  const Point reached = reach_the_right_end(n, 0);
   n.on_map(corridor(true, true), 2'000'000, 0);
-  n.on_pose(Pose2{out.goal ? out.goal->x() : 19.0, 1.5, 0}, 2'000'000);
+  n.on_pose(Pose2{reached.x() - 0.05, reached.y(), 0}, 2'000'000);
   out = step_with_inline_planning(n, 2'000'000);
   EXPECT_EQ(out.phase, Phase::kSelecting);
   n.on_map(corridor(true, true), 3'300'000, 0);

@@ -356,7 +356,6 @@ void Node::run() {
         stop_ = true;
         break;
       }
-      take_clock_ticks();
       if (fds[0].revents & POLLIN) handle_waiting_messages();
       for (size_t i = 0; i < watches.size(); ++i) {
         if (!(fds[first_watch + i].revents & (POLLIN | POLLHUP | POLLERR))) continue;

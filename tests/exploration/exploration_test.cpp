@@ -36,11 +36,6 @@ namespace {
 // The world's free area, from the comment in worlds/two_rooms.wkt.
 constexpr double kWorldFreeAreaM2 = 82.66;
 
-bool finished(std::int8_t phase) {
-  return phase == pex::explore_state_t::PHASE_DONE || phase == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ||
-         phase == pex::explore_state_t::PHASE_FAILED;
-}
-
 struct Outcome {
   std::int8_t phase = -1;
   double explored_m2 = 0.0;
@@ -51,7 +46,7 @@ struct Outcome {
 // A whole mission on two_rooms at `speed`, to its end (at most 600 simulated s).
 Outcome explore_two_rooms(double speed, const std::string& tag) {
   ExplorationSet m(tag, speed, /*autostart=*/true);
-  m.spin_sim([&] { return finished(m.phase()); }, 600.0);
+  m.spin_to_end(600.0);
   m.bus().spin_for(500ms);  // the last commands after the end
   Outcome o;
   EXPECT_TRUE(m.state().has_value()) << m.report_with_logs();
@@ -137,7 +132,7 @@ TEST(Exploration, MissionCommandsStartPauseResumeAndHome) {
   // resume: it moves again.
   ASSERT_EQ(m.command("resume"), 0) << m.report_with_logs();
   EXPECT_TRUE(m.spin_sim(
-      [&] { return std::hypot(m.truth()->x - paused_at.x, m.truth()->y - paused_at.y) > 0.5 || finished(m.phase()); },
+      [&] { return std::hypot(m.truth()->x - paused_at.x, m.truth()->y - paused_at.y) > 0.5 || mission_finished(m.phase()); },
       120.0))
       << m.report_with_logs();
 

@@ -128,18 +128,11 @@ TEST(Faults, KilledBaseDriverStopsTheWheelsWithin300msAndARestartedOneDrivesAgai
 
 TEST(Faults, KilledLidarReaderStopsTheRobotAndTheMissionEndsDoneAfterItsRestart) {
   ExplorationSet set("faults-lidar", 1.0, /*autostart=*/true);
-  std::vector<pex::pose_t> poses;
-  set.bus().on<pex::pose_t>(std::string(ch::kSimTruth), [&](const pex::pose_t& p) { poses.push_back(p); });
-  auto speed = [&] {  // m/s over the last 100 ms of truth
-    for (auto it = poses.rbegin(); it != poses.rend(); ++it)
-      if (poses.back().utime - it->utime >= 100'000)
-        return std::hypot(poses.back().x - it->x, poses.back().y - it->y) /
-               (static_cast<double>(poses.back().utime - it->utime) * 1e-6);
-    return 0.0;
-  };
+  Truth truth(set.bus());
+  const std::vector<pex::pose_t>& poses = truth.poses;
   // Driving to a goal, well under way.
   ASSERT_TRUE(set.spin_sim(
-      [&] { return set.phase() == pex::explore_state_t::PHASE_MOVING && speed() > 0.2; }, 120.0))
+      [&] { return set.phase() == pex::explore_state_t::PHASE_MOVING && truth.speed() > 0.2; }, 120.0))
       << set.report_with_logs();
 
   Process* reader = set.process("lidar_reader");
@@ -166,14 +159,7 @@ TEST(Faults, KilledLidarReaderStopsTheRobotAndTheMissionEndsDoneAfterItsRestart)
 
   // The reader back (systemd restarts it): the mission goes on to its end.
   set.restart("lidar_reader");
-  ASSERT_TRUE(set.spin_sim(
-      [&] {
-        const auto p = set.phase();
-        return p == pex::explore_state_t::PHASE_DONE || p == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ||
-               p == pex::explore_state_t::PHASE_FAILED;
-      },
-      600.0))
-      << set.report_with_logs();
+  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
   EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
   // two_rooms: 82.66 m2 free; the map loses a band along each wall.
   EXPECT_GT(set.state()->explored_area_m2, 0.8 * 82.66) << set.report();
@@ -300,14 +286,7 @@ TEST(Faults, KilledExplorerTakesItsMissionUpFromTheCheckpoint) {
   EXPECT_GE(after.goals_reached, before.goals_reached) << "visited goals lost in the restart";
   EXPECT_GE(after.distance_travelled_m, before.distance_travelled_m - 0.5) << "the travelled distance restarted";
   EXPECT_GE(after.mission_time_s, before.mission_time_s) << "the mission clock restarted";
-  ASSERT_TRUE(set.spin_sim(
-      [&] {
-        const auto p = set.phase();
-        return p == pex::explore_state_t::PHASE_DONE || p == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ||
-               p == pex::explore_state_t::PHASE_FAILED;
-      },
-      600.0))
-      << set.report_with_logs();
+  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
   EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
   EXPECT_GT(set.state()->explored_area_m2, 0.8 * 82.66) << set.report();
   EXPECT_GT(set.bus().status().at("explorer").ncounters, 0);

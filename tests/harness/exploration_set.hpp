@@ -39,6 +39,12 @@ inline std::string write_config(const std::string& dir, const std::string& daemo
   return path;
 }
 
+// The mission has ended on its own (DONE, DONE_WITH_UNREACHABLE or FAILED).
+inline bool mission_finished(std::int8_t phase) {
+  return phase == pex::explore_state_t::PHASE_DONE || phase == pex::explore_state_t::PHASE_DONE_WITH_UNREACHABLE ||
+         phase == pex::explore_state_t::PHASE_FAILED;
+}
+
 // The exploration set on a world: pex-sim, pex-lidar-reader, pex-base-driver,
 // pex-polygon-mapper (SIM_TRUTH poses, so no SLAM) and pex-explorer (pose
 // channel SIM_TRUTH), each on the simulator's clock, with what the test bus
@@ -104,6 +110,11 @@ class ExplorationSet {
   bool spin_sim(const std::function<bool()>& done, double sim_s) {
     const double until = sim_seconds() + sim_s;
     return bus_.spin_until([&] { return done() || sim_seconds() >= until; }, kSetBudget) && done();
+  }
+
+  // Spins until the mission has ended on its own, at most `sim_s` simulated seconds.
+  bool spin_to_end(double sim_s = 600.0) {
+    return spin_sim([&] { return mission_finished(phase()); }, sim_s);
   }
 
   // pex-mission COMMAND on the test bus; its exit code.
