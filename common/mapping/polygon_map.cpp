@@ -615,6 +615,19 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
   return result;
 }
 
+void PolygonMap::restore_tile(const TileKey& key, TypedMultiPolygon free, TypedMultiPolygon obstacles) {
+  const Tile::PlanningOptions planning_options{options_.simplify_epsilon_m, options_.assign_edge_types};
+  tiles_[key] = std::make_shared<const Tile>(tile_box(key), std::move(free), std::move(obstacles), nullptr,
+                                             planning_options);
+}
+
+void PolygonMap::restore_counters(std::int64_t scans_inserted, std::int64_t failed_tile_updates,
+                                  std::int64_t boost_fallbacks) {
+  scans_inserted_ = scans_inserted;
+  failed_tile_updates_ = failed_tile_updates;
+  boost_fallbacks_ = boost_fallbacks;
+}
+
 MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
   MergeResult result;
   auto polygons_of = [layer](const Tile& tile) -> const TypedMultiPolygon& {

@@ -190,8 +190,14 @@ class PolygonMap {
   const PolygonMapOptions& options() const { return options_; }
 
   using TileKey = std::pair<std::int32_t, std::int32_t>;
-  // Read access for tests and memory accounting (ordered: deterministic).
+  // Read access for tests, memory accounting and checkpoints (ordered: deterministic).
   const std::map<TileKey, std::shared_ptr<const Tile>>& tiles() const { return tiles_; }
+
+  // For checkpoints (map_archive.hpp): puts a tile back as it was saved (its
+  // free and obstacle layers, valid and clipped to the tile's box); the
+  // planning layer is derived again on first use, as after an insert.
+  void restore_tile(const TileKey& key, TypedMultiPolygon free, TypedMultiPolygon obstacles);
+  void restore_counters(std::int64_t scans_inserted, std::int64_t failed_tile_updates, std::int64_t boost_fallbacks);
 
  private:
   Box tile_box(const TileKey& key) const;

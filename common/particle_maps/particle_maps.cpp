@@ -46,6 +46,8 @@ mapping::PreparedScan transformed(const mapping::PreparedScan& scan, const Pose2
 
 ParticleMaps::ParticleMaps(ParticleMapsOptions options) : options_(std::move(options)) {}
 
+void ParticleMaps::reseed(const mapping::PolygonMap& map, std::size_t count) { maps_.assign(count, map); }
+
 UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, const SensorScan& scan,
                                   const mapping::ScanPolygonOptions& scan_options) {
   UpdateResult r;

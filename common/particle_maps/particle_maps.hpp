@@ -68,6 +68,12 @@ class ParticleMaps {
   UpdateResult update(const std::vector<ParticleState>& particles, const SensorScan& scan,
                       const mapping::ScanPolygonOptions& scan_options);
 
+  // Every one of `count` particles starts from `map` (its tiles shared). After a
+  // break in the filter's lineage (updates missed, a restored checkpoint) the
+  // best map known stands in for every particle's; the next update's parents
+  // index these. count 0: no maps (the next update is a first one).
+  void reseed(const mapping::PolygonMap& map, std::size_t count);
+
   std::size_t size() const { return maps_.size(); }
   const mapping::PolygonMap& map(std::size_t particle) const { return maps_.at(particle); }
   std::int64_t updates() const { return updates_; }

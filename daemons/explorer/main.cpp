@@ -18,7 +18,7 @@
 #include "explorer_node.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/daemon.hpp"
-#include "runtime/files.hpp"
+#include "runtime/checkpoint.hpp"
 
 namespace ch = pex::runtime::channels;
 using pex::explorer::ExplorerNode;
@@ -38,30 +38,10 @@ int main(int argc, char** argv) {
             std::make_shared<ExplorerNode>(pex::explorer::load_options(config), ExplorerNode::Planning::kWorkerThread);
         const auto& options = explorer->options();
 
-        // The mission survives a restart (kill -9, a crash, a reboot): taken up
-        // from the checkpoint, written every checkpoint_period_s and on stop.
-        if (!options.checkpoint_file.empty()) {
-          std::string why;
-          if (const auto text = pex::runtime::read_whole_file(options.checkpoint_file, &why)) {
-            why = explorer->restore(*text);
-            if (why.empty())
-              spdlog::info("mission restored from {}", options.checkpoint_file);
-            else
-              node.error("checkpoint", "cannot restore the mission from " + options.checkpoint_file + ": " + why +
-                                           "; starting afresh");
-          } else {
-            spdlog::info("no mission checkpoint at {}: a new mission", options.checkpoint_file);
-          }
-          auto save = [&node, explorer, path = options.checkpoint_file] {
-            if (const auto why = pex::runtime::write_file_atomically(path, explorer->checkpoint_text()); !why.empty())
-              node.error("checkpoint", why);
-            else
-              ++node.counter("checkpoints_written");
-          };
-          node.every(std::chrono::microseconds(static_cast<std::int64_t>(options.checkpoint_period_s * 1e6)),
-                     [save](std::int64_t) { save(); });
-          node.on_shutdown(save);
-        }
+        // The mission survives a restart (kill -9, a crash, a reboot).
+        pex::runtime::keep_checkpoint(node, {options.checkpoint_file, options.checkpoint_period_s, "mission",
+                                             [explorer](const std::string& text) { return explorer->restore(text); },
+                                             [explorer] { return explorer->checkpoint_text(); }});
 
         node.subscribe<pex::polygon_map_t>(ch::kMap, [&node, explorer](const pex::polygon_map_t& msg) {
           if (auto why = explorer->on_map(msg, node.now_utime()); !why.empty()) throw pex::runtime::BadInput(why);

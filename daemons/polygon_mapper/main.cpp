@@ -10,9 +10,11 @@
 #include <pex/odometry_t.hpp>
 #include <pex/pose_t.hpp>
 #include <pex/slam_update_t.hpp>
+#include <spdlog/spdlog.h>
 
 #include "mapper.hpp"
 #include "runtime/channels.hpp"
+#include "runtime/checkpoint.hpp"
 #include "runtime/daemon.hpp"
 #include "runtime/input_watch.hpp"
 
@@ -24,6 +26,11 @@ int main(int argc, char** argv) {
   info.supports_replay = true;
   return pex::runtime::run_daemon(argc, argv, info, [](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
     auto mapper = std::make_shared<Mapper>(pex::polygon_mapper::load_options(config));
+    // The map survives a restart: published at once from the checkpoint, and
+    // with pose_source "slam" continued when SLAM's updates come (same epoch).
+    pex::runtime::keep_checkpoint(node, {mapper->options().checkpoint_file, mapper->options().checkpoint_period_s, "map",
+                                         [mapper](const std::string& bytes) { return mapper->restore(bytes); },
+                                         [mapper] { return mapper->checkpoint(); }});
     // Health: without scans or poses the map stands still (DEGRADED, says which).
     const std::string& source = mapper->options().pose_source;
     const std::string pose_channel(source == "slam"       ? ch::kSlamUpdate
@@ -49,6 +56,8 @@ int main(int argc, char** argv) {
       node.counter("slam_updates") = c.slam_updates;
       node.counter("updates_without_scan") = c.updates_without_scan;
       node.counter("best_switches") = c.best_switches;
+      node.counter("slam_resyncs") = c.slam_resyncs;
+      node.counter("slam_epoch_changes") = c.slam_epoch_changes;
       node.counter("map_vertices") = static_cast<std::int64_t>(mapper->map().planning_vertex_count());
     };
     node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [&node, mapper, report, watch](const pex::laser_scan_t& scan) {
@@ -63,11 +72,14 @@ int main(int argc, char** argv) {
     if (source == "slam") {
       node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, report, watch](const pex::slam_update_t& update) {
         bool switched = false;
+        const auto epoch_changes = mapper->counters().slam_epoch_changes;
         try {
           switched = mapper->on_slam_update(update);
         } catch (const std::invalid_argument& e) {
           throw pex::runtime::BadInput(e.what());
         }
+        if (mapper->counters().slam_epoch_changes != epoch_changes)
+          spdlog::warn("SLAM started afresh (epoch {}): its frame is not the old map's, which is dropped", update.epoch);
         watch->seen(ch::kSlamUpdate, node.monotonic_us());
         // A new best particle: its map goes out now, consistent with its trajectory.
         if (switched)

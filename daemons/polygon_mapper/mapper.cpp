@@ -5,6 +5,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "archive/byte_archive.hpp"
+#include "mapping/map_archive.hpp"
 #include "runtime/config.hpp"
 
 namespace pex::polygon_mapper {
@@ -35,6 +37,8 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.pose_buffer_s = config.get<double>("pose_buffer_s", o.pose_buffer_s, positive<double>());
   o.max_pose_gap_s = config.get<double>("max_pose_gap_s", o.max_pose_gap_s, positive<double>());
   o.max_pending_scans = config.get<int>("max_pending_scans", o.max_pending_scans, runtime::in_range(1, 1000));
+  o.checkpoint_file = config.get_path("checkpoint_file", o.checkpoint_file, /*must_exist=*/false);
+  o.checkpoint_period_s = config.get<double>("checkpoint_period_s", o.checkpoint_period_s, runtime::in_range(0.1, 3600.0));
   auto scan = config.section("scan");
   o.scan.range_min_m = scan.get<double>("range_min_m", o.scan.range_min_m, non_negative<double>());
   o.scan.range_max_m = scan.get<double>("range_max_m", o.scan.range_max_m, positive<double>());
@@ -97,7 +101,8 @@ Mapper::Mapper(MapperOptions options)
       particle_maps_(particle_maps::ParticleMapsOptions{options_.map, 1000, options_.threads}) {}
 
 const mapping::PolygonMap& Mapper::map() const {
-  return best_ >= 0 ? particle_maps_.map(static_cast<std::size_t>(best_)) : map_;
+  if (best_ >= 0) return particle_maps_.map(static_cast<std::size_t>(best_));
+  return restored_ ? *restored_ : map_;
 }
 
 mapping::ScanPolygonOptions Mapper::scan_options_for(const pex::laser_scan_t& scan) const {
@@ -154,10 +159,32 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   std::vector<particle_maps::ParticleState> particles;
   particles.reserve(update.particles.size());
   for (const auto& p : update.particles) particles.push_back({{p.x, p.y, p.theta}, p.parent});
+  // Parents index the previous update's particles: only an update that follows
+  // the one applied last may use them (a republish repeats its generation).
+  const bool held = particle_maps_.size() > 0 || restored_;
+  const bool continues = particle_maps_.size() > 0 && update.epoch == epoch_ &&
+                         update.generation == generation_ + (update.republished ? 0 : 1);
+  if (held && !continues) {
+    if (update.epoch == epoch_) {
+      // The same lineage, but the parents cannot be followed: the best map held
+      // stands in for every particle (the map goes on; the particles' maps
+      // differ again from the next scan on).
+      const mapping::PolygonMap best = restored_ ? *restored_ : map();
+      particle_maps_.reseed(best, particles.size());
+      ++counters_.slam_resyncs;
+    } else {
+      particle_maps_.reseed(mapping::PolygonMap(options_.map), 0);  // another frame: start afresh
+      ++counters_.slam_epoch_changes;
+    }
+  }
+  if (!continues && particle_maps_.size() > 0)
+    for (std::size_t i = 0; i < particles.size(); ++i) particles[i].parent = static_cast<int>(i);
   const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment,
                                               {scan->sensor_x, scan->sensor_y, scan->sensor_theta}};
   const auto result = particle_maps_.update(particles, sensor_scan, scan_options_for(*scan));
   if (!result.ok) throw std::invalid_argument("SLAM_UPDATE refused: " + result.error);
+  restored_.reset();
+  epoch_ = update.epoch;
   if (!result.scan_inserted) ++counters_.scan_polygon_errors;
   counters_.failed_tile_updates += result.insert_failures;
   counters_.boost_fallbacks += result.boost_fallbacks;
@@ -309,6 +336,65 @@ std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
     message_->robot_theta = last_insert_pose_->theta;
   }
   return message_;
+}
+
+namespace {
+constexpr std::string_view kCheckpointMagic = "PEXMAPR1";
+constexpr std::uint32_t kCheckpointVersion = 1;
+}  // namespace
+
+std::string Mapper::checkpoint() const {
+  archive::ByteWriter out;
+  out.put_string(options_.pose_source);
+  out.put<std::int64_t>(epoch_);
+  out.put<std::int64_t>(generation_);
+  out.put_bool(last_insert_pose_.has_value());
+  const mapping::Pose2 pose = last_insert_pose_.value_or(mapping::Pose2{});
+  out.put<double>(pose.x);
+  out.put<double>(pose.y);
+  out.put<double>(pose.theta);
+  out.put<std::int64_t>(last_insert_scan_utime_);
+  out.put<std::int64_t>(last_scan_utime_);
+  out.put<std::int64_t>(counters_.scans_inserted);
+  mapping::write_polygon_map(out, map());
+  return archive::seal(kCheckpointMagic, kCheckpointVersion, out.bytes());
+}
+
+std::string Mapper::restore(std::string_view checkpoint) {
+  try {
+    const std::string payload = archive::unseal(kCheckpointMagic, kCheckpointVersion, checkpoint);
+    archive::ByteReader in(payload);
+    const std::string source = in.get_string();
+    if (source != options_.pose_source)
+      return "the map was made with pose_source \"" + source + "\", the configuration has \"" +
+             options_.pose_source + "\"";
+    const auto epoch = in.get<std::int64_t>(), generation = in.get<std::int64_t>();
+    const bool has_pose = in.get_bool();
+    mapping::Pose2 pose;
+    pose.x = in.get<double>();
+    pose.y = in.get<double>();
+    pose.theta = in.get<double>();
+    const auto last_insert_scan_utime = in.get<std::int64_t>(), last_scan_utime = in.get<std::int64_t>();
+    const auto scans_inserted = in.get<std::int64_t>();
+    mapping::PolygonMap map = mapping::read_polygon_map(in, options_.map);
+    in.expect_end();
+    // All read: take it up.
+    if (options_.pose_source == "slam") {
+      restored_ = std::move(map);
+      epoch_ = epoch;
+      generation_ = generation;
+    } else {
+      map_ = std::move(map);
+    }
+    last_insert_pose_ = has_pose ? std::optional(pose) : std::nullopt;
+    last_insert_scan_utime_ = last_insert_scan_utime;
+    last_scan_utime_ = last_scan_utime;
+    counters_.scans_inserted = scans_inserted;
+    dirty_ = true;
+    return "";
+  } catch (const archive::ArchiveError& e) {
+    return e.what();
+  }
 }
 
 }  // namespace pex::polygon_mapper

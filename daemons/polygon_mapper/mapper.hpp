@@ -6,6 +6,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include <pex/laser_scan_t.hpp>
 #include <pex/polygon_map_t.hpp>
@@ -39,6 +40,10 @@ struct MapperOptions {
   mapping::ScanPolygonOptions scan;       // range_max_m caps the sensor's own range_max
   mapping::PolygonMapOptions map;
   int threads = 1;                        // slam: inserts of one update side by side
+  // The published map (and the SLAM epoch it belongs to) across restarts,
+  // written every checkpoint_period_s and on stop, read at start: "" = none.
+  std::string checkpoint_file;
+  double checkpoint_period_s = 2.0;
 };
 
 // Reads every key of config/polygon_mapper.toml; throws ConfigError on bad values.
@@ -84,6 +89,13 @@ struct MapperCounters {
   std::int64_t slam_updates = 0;          // slam: updates applied
   std::int64_t updates_without_scan = 0;  // slam: updates whose scan never arrived
   std::int64_t best_switches = 0;         // slam: the best particle changed
+  // slam: updates that did not continue the maps held (an update missed, a
+  // SLAM restored from an older checkpoint, this mapper restored): every
+  // particle went on from the best map held.
+  std::int64_t slam_resyncs = 0;
+  // slam: a SLAM started afresh (another epoch, another map frame): the maps
+  // of the old one were dropped, never mixed with the new.
+  std::int64_t slam_epoch_changes = 0;
 };
 
 class Mapper {
@@ -111,6 +123,16 @@ class Mapper {
   const particle_maps::ParticleMaps& particle_maps() const { return particle_maps_; }
   const MapperOptions& options() const { return options_; }
 
+  // The map survives a restart: the published map (the best particle's) with
+  // the SLAM lineage it belongs to, as a sealed archive (archive/byte_archive.hpp).
+  std::string checkpoint() const;
+  // Takes up a checkpoint before the first input: "" or why it was refused
+  // (damaged, another pose source, another tile grid); then nothing changed.
+  // With pose_source "slam" the restored map stands in for every particle
+  // once an update of the same epoch arrives, and is dropped if SLAM's epoch
+  // is another (its frame is not the map's).
+  std::string restore(std::string_view checkpoint);
+
  private:
   void process_pending();
   // Inserts if the robot moved enough; false if the scan must wait for a pose.
@@ -136,7 +158,10 @@ class Mapper {
   particle_maps::ParticleMaps particle_maps_;
   std::deque<pex::slam_update_t> waiting_updates_;  // their scan has not arrived yet
   int best_ = -1;
-  std::int64_t generation_ = 0;
+  std::int64_t epoch_ = 0;       // SLAM lineage of the maps held (slam_update_t.epoch)
+  std::int64_t generation_ = 0;  // of the last update applied
+  // A restored map waiting for the first update (slam): published meanwhile.
+  std::optional<mapping::PolygonMap> restored_;
 };
 
 // The MAP message for a typed multipolygon (outer rings CCW, holes CW).

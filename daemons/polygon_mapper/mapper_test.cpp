@@ -246,5 +246,162 @@ TEST(MapperSlam, MalformedUpdatesAreRefusedAndTheMapsKept) {
   EXPECT_GT(mapper.map().free_area_m2(), area);
 }
 
+// Two particles driving along y = 5 (particle 1 believes y = 5.3), one update
+// per scan, epoch `epoch`, generations from `first_generation`.
+void drive(Mapper& mapper, std::int64_t epoch, std::int64_t first_generation, const std::vector<double>& xs,
+           std::int64_t first_utime) {
+  for (std::size_t g = 0; g < xs.size(); ++g) {
+    const auto scan = room_scan(first_utime + 1'000'000 * static_cast<std::int64_t>(g), {xs[g], 5.0, 0.0});
+    mapper.on_scan(scan);
+    const int parent0 = g == 0 && first_generation == 0 ? -1 : 0;
+    const int parent1 = g == 0 && first_generation == 0 ? -1 : 1;
+    auto u = slam_update(first_generation + static_cast<std::int64_t>(g), scan.utime, 0,
+                         {{{xs[g], 5.0, 0.0}, parent0}, {{xs[g], 5.3, 0.0}, parent1}});
+    u.epoch = epoch;
+    mapper.on_slam_update(u);
+  }
+}
+
+mapping::TypedMultiPolygon planning(const Mapper& mapper) {
+  const auto merged = mapper.map().planning_map();
+  EXPECT_TRUE(merged.ok) << merged.error;
+  return merged.polygons;
+}
+
+// area(a - b): what `b` misses of `a`. The planning layer is derived anew
+// after every insert (simplified, bands united), so slivers of rounding are
+// not a loss; following the wrong parent loses metres.
+constexpr double kSliver_m2 = 1e-3;
+double area_missing(const mapping::TypedMultiPolygon& a, const mapping::TypedMultiPolygon& b) {
+  mapping::MultiPolygon ga, gb, out;
+  for (const auto& p : a) ga.push_back(p.geometry);
+  for (const auto& p : b) gb.push_back(p.geometry);
+  mapping::bg::difference(ga, gb, out);
+  return mapping::bg::area(out);
+}
+
+TEST(MapperSlam, AMissedUpdateGoesOnFromTheBestMapInsteadOfFollowingParentsOfAnotherGeneration) {
+  Mapper mapper(slam_options());
+  drive(mapper, 77, 0, {2.0, 3.0}, 1'000'000);
+  const auto before = planning(mapper);
+  EXPECT_EQ(mapper.counters().slam_resyncs, 0);
+  // Generation 2 is lost; generation 3 names parents in generation 2's set:
+  // a resampling that made particle 0 a child of particle 1 (the shifted map).
+  const auto scan = room_scan(9'000'000, {4.0, 5.0, 0.0});
+  mapper.on_scan(scan);
+  auto u = slam_update(3, scan.utime, 0, {{{4.0, 5.0, 0.0}, 1}, {{4.0, 5.3, 0.0}, 1}});
+  u.epoch = 77;
+  mapper.on_slam_update(u);
+  EXPECT_EQ(mapper.counters().slam_resyncs, 1);
+  EXPECT_EQ(mapper.counters().slam_epoch_changes, 0);
+  // The map went on from the best map (particle 0's, at y = 5), not from
+  // particle 1's shifted one: nothing of it is lost.
+  EXPECT_LT(area_missing(before, planning(mapper)), kSliver_m2);
+  // And the next update follows parents again.
+  drive(mapper, 77, 4, {5.0}, 10'000'000);
+  EXPECT_EQ(mapper.counters().slam_resyncs, 1);
+  EXPECT_EQ(mapper.counters().slam_updates, 4);
+}
+
+TEST(MapperSlam, ARepublishedParticleSetContinuesTheMaps) {
+  Mapper mapper(slam_options());
+  drive(mapper, 77, 0, {2.0, 3.0}, 1'000'000);
+  const auto scan = room_scan(5'000'000, {3.0, 5.0, 0.0});
+  mapper.on_scan(scan);
+  auto u = slam_update(1, scan.utime, 0, {{{3.0, 5.0, 0.0}, 0}, {{3.0, 5.3, 0.0}, 1}});
+  u.epoch = 77;
+  u.republished = true;
+  mapper.on_slam_update(u);
+  EXPECT_EQ(mapper.counters().slam_updates, 3);
+  EXPECT_EQ(mapper.counters().slam_resyncs, 0);
+}
+
+TEST(MapperSlam, ASlamOfAnotherEpochStartsANewMapNeverMixedWithTheOld) {
+  Mapper mapper(slam_options());
+  drive(mapper, 77, 0, {2.0, 3.0, 4.0, 5.0}, 1'000'000);
+  // A SLAM started afresh: its frame has the robot at the origin.
+  drive(mapper, 88, 0, {0.5}, 10'000'000);
+  EXPECT_EQ(mapper.counters().slam_epoch_changes, 1);
+  EXPECT_EQ(mapper.counters().slam_resyncs, 0);
+  // The map is the one scan of the new filter, nothing of the old.
+  Mapper fresh(slam_options());
+  drive(fresh, 88, 0, {0.5}, 10'000'000);
+  EXPECT_DOUBLE_EQ(mapper.map().free_area_m2(), fresh.map().free_area_m2());
+}
+
+TEST(MapperSlam, ARestoredMapperPublishesTheSavedMapAndGoesOnFromItWithTheSameSlam) {
+  Mapper mapper(slam_options());
+  drive(mapper, 77, 0, {2.0, 4.0, 6.0}, 1'000'000);
+  const std::string saved = mapper.checkpoint();
+  const auto before = planning(mapper);
+
+  Mapper restarted(slam_options());
+  ASSERT_EQ(restarted.restore(saved), "");
+  // Published at once, before any input: the map of before.
+  const auto msg = restarted.map_message(20'000'000);
+  ASSERT_TRUE(msg.has_value());
+  EXPECT_DOUBLE_EQ(msg->free_area_m2, mapper.map_message(20'000'000)->free_area_m2);
+  EXPECT_EQ(msg->vertex_count, mapper.map_message(20'000'000)->vertex_count);
+  EXPECT_EQ(msg->scan_utime, mapper.map_message(20'000'000)->scan_utime);
+  // SLAM (the same lineage) went on meanwhile: generation 7 follows 6, which
+  // this mapper never saw.
+  drive(restarted, 77, 7, {8.0, 10.0}, 30'000'000);
+  EXPECT_EQ(restarted.counters().slam_resyncs, 1);
+  EXPECT_LT(area_missing(before, planning(restarted)), kSliver_m2);
+  // It is the map the mapper that never stopped makes of the same scans
+  // (generations 3 and 4 for it), tile layer for tile layer.
+  drive(mapper, 77, 3, {8.0, 10.0}, 30'000'000);
+  EXPECT_EQ(mapper.counters().slam_resyncs, 0);
+  EXPECT_EQ(restarted.map().free_area_m2(), mapper.map().free_area_m2());
+  EXPECT_EQ(restarted.map().free_vertex_count(), mapper.map().free_vertex_count());
+  EXPECT_EQ(restarted.map().planning_vertex_count(), mapper.map().planning_vertex_count());
+
+  // The same checkpoint with a SLAM of another epoch: the saved map is in
+  // another frame and is dropped.
+  Mapper other(slam_options());
+  ASSERT_EQ(other.restore(saved), "");
+  drive(other, 88, 0, {8.0}, 30'000'000);
+  EXPECT_EQ(other.counters().slam_epoch_changes, 1);
+  EXPECT_GT(area_missing(before, planning(other)), 1.0);
+}
+
+TEST(Mapper, ACheckpointOfAnotherKindOrDamagedIsRefusedAndNothingChanges) {
+  Mapper slam_mapper(slam_options());
+  drive(slam_mapper, 77, 0, {2.0, 4.0}, 1'000'000);
+  const std::string saved = slam_mapper.checkpoint();
+  Mapper odometry_mapper(MapperOptions{});
+  EXPECT_NE(odometry_mapper.restore(saved).find("pose_source"), std::string::npos);
+  EXPECT_FALSE(odometry_mapper.map_message(1).has_value());
+  Mapper damaged(slam_options());
+  std::string broken = saved;
+  broken[broken.size() / 2] ^= 0x01;
+  EXPECT_NE(damaged.restore(broken).find("checksum"), std::string::npos);
+  EXPECT_NE(damaged.restore(saved.substr(0, saved.size() / 2)).find("cut short"), std::string::npos);
+  EXPECT_FALSE(damaged.map_message(1).has_value());
+}
+
+TEST(Mapper, AnOdometryMapperRestoresItsMapAndLastInsertPose) {
+  std::vector<mapping::testing::Wall> walls;
+  mapping::testing::add_box(walls, 0, 0, 10, 5);
+  MapperOptions options;
+  options.insert_max_interval_s = 0.0;  // only motion inserts, so the restored last pose decides
+  Mapper mapper(options);
+  for (int k = 0; k <= 20; ++k) {
+    const std::int64_t t = 1'000'000 + k * 100'000;
+    mapper.on_pose({t, {1.0 + 0.1 * k, 2.5, 0.0}});
+    if (k % 2 == 1 && k < 20) mapper.on_scan(make_scan(walls, {1.0 + 0.1 * k + 0.05, 2.5, 0.0}, t + 50'000));
+  }
+  Mapper restarted(options);
+  ASSERT_EQ(restarted.restore(mapper.checkpoint()), "");
+  EXPECT_EQ(restarted.map().free_area_m2(), mapper.map().free_area_m2());
+  EXPECT_EQ(restarted.counters().scans_inserted, mapper.counters().scans_inserted);
+  // The last insert pose came back too: a scan from the same place is skipped.
+  const auto last = mapper.map_message(5'000'000);
+  restarted.on_pose({10'000'000, {last->robot_x, last->robot_y, last->robot_theta}});
+  restarted.on_pose({10'200'000, {last->robot_x, last->robot_y, last->robot_theta}});
+  restarted.on_scan(make_scan(walls, {last->robot_x, last->robot_y, last->robot_theta}, 10'100'000));
+  EXPECT_EQ(restarted.counters().scans_skipped_no_motion, 1);
+}
+
 }  // namespace
 }  // namespace pex::polygon_mapper

@@ -58,6 +58,7 @@ void SlamNode::process(std::vector<slam::PairedScan> ready) {
     ++scans_processed_;
     if (!outputs_.publish_update || !filter_.initialized()) continue;
     const auto period_us = static_cast<std::int64_t>(options_.republish_period_s * 1e6);
+    if (updated && epoch_ == 0) epoch_ = paired.scan.utime > 0 ? paired.scan.utime : 1;  // a new lineage
     if (updated) {
       outputs_.publish_update(update_message(paired.scan.utime));
       last_published_scan_utime_ = paired.scan.utime;
@@ -73,6 +74,7 @@ slam_update_t SlamNode::republish_message(std::int64_t scan_utime) const {
   slam_update_t msg = update_message(scan_utime);
   // Every particle is its own parent: the maps are extended, none copied.
   msg.resampled = false;
+  msg.republished = true;
   for (std::size_t i = 0; i < msg.particles.size(); ++i) msg.particles[i].parent = static_cast<std::int32_t>(i);
   return msg;
 }
@@ -81,6 +83,7 @@ slam_update_t SlamNode::update_message(std::int64_t scan_utime) const {
   slam_update_t msg{};
   msg.utime = scan_utime;
   msg.scan_utime = scan_utime;
+  msg.epoch = epoch_;
   msg.generation = filter_.generation();
   msg.resampled = filter_.last_update().resampled;
   msg.best = static_cast<std::int32_t>(filter_.best_index());

@@ -55,6 +55,8 @@ class SlamNode {
   const slam::ParticleFilter& filter() const { return filter_; }
   std::int64_t scans_processed() const { return scans_processed_; }
   std::int64_t republished() const { return republished_; }
+  // The filter's lineage (slam_update_t.epoch): 0 before the first update.
+  std::int64_t epoch() const { return epoch_; }
 
  private:
   void process(std::vector<slam::PairedScan> ready);
@@ -70,6 +72,7 @@ class SlamNode {
   std::int64_t scans_processed_ = 0;
   std::int64_t last_published_scan_utime_ = -1;
   std::int64_t republished_ = 0;
+  std::int64_t epoch_ = 0;
 };
 
 }  // namespace pex::slam_daemon
