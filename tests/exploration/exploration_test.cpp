@@ -45,7 +45,7 @@ struct Outcome {
 
 // A whole mission on two_rooms at `speed`, to its end (at most 600 simulated s).
 Outcome explore_two_rooms(double speed, const std::string& tag) {
-  ExplorationSet m(tag, speed, /*autostart=*/true);
+  ExplorationSet m(tag, {.speed = speed});
   m.spin_to_end(600.0);
   m.bus().spin_for(500ms);  // the last commands after the end
   Outcome o;
@@ -101,7 +101,7 @@ TEST(Exploration, SpeedChangesOnlyTheWallTimeNotTheOutcome) {
 TEST(Exploration, MissionCommandsStartPauseResumeAndHome) {
   std::string why;
   ASSERT_TRUE(in_private_netns(&why)) << why;
-  ExplorationSet m("explore-commands", 5.0, /*autostart=*/false);
+  ExplorationSet m("explore-commands", {.speed = 5.0, .autostart = false});
 
   // Booted without autostart: it waits, wheels still, for 10 simulated seconds.
   ASSERT_TRUE(m.spin_sim([&] { return m.phase() == pex::explore_state_t::PHASE_WAITING_START && m.truth(); }, 60.0))

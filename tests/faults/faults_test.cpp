@@ -19,6 +19,11 @@
 //   kill -9 pex-explorer mid-mission and restart: the mission is taken up from
 //   its checkpoint (visited goals, distance, mission clock) and ends DONE.
 //
+//   kill -9 pex-polygon-mapper mid-mission (the set on SLAM, as on the robot)
+//   and restart: the restarted mapper publishes the map of before from its
+//   checkpoint at once, goes on from it with SLAM's next update (a resync: it
+//   missed updates), and the mission ends DONE with the world mapped.
+//
 //   kill -9 pex-lidar-reader mid-mission: the explorer stops the robot once
 //   no scan came for scan_timeout_ms (no driving blind) and says so in its
 //   health (DEGRADED, "no laser scans"; the mapper too: "no LIDAR_SCAN for
@@ -27,6 +32,7 @@
 #include <gtest/gtest.h>
 
 #include <pex/explore_state_t.hpp>
+#include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
 #include <pex/sim_clock_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
@@ -127,7 +133,7 @@ TEST(Faults, KilledBaseDriverStopsTheWheelsWithin300msAndARestartedOneDrivesAgai
 }
 
 TEST(Faults, KilledLidarReaderStopsTheRobotAndTheMissionEndsDoneAfterItsRestart) {
-  ExplorationSet set("faults-lidar", 1.0, /*autostart=*/true);
+  ExplorationSet set("faults-lidar", SetOptions{});
   Truth truth(set.bus());
   const std::vector<pex::pose_t>& poses = truth.poses;
   // Driving to a goal, well under way.
@@ -214,11 +220,7 @@ TEST(Faults, RestartedBaseDriverResetsOdometryAndSlamDoesNotJump) {
     largest_step = std::max(largest_step, std::hypot(slam_poses[i].x - slam_poses[i - 1].x,
                                                      slam_poses[i].y - slam_poses[i - 1].y));
   EXPECT_LT(largest_step, 0.15) << "the SLAM pose jumped";
-  const auto& status = bus.status().at("slam");
-  std::int64_t resets = -1;
-  for (int i = 0; i < status.ncounters; ++i)
-    if (status.counter_names[static_cast<std::size_t>(i)] == "odometry_resets") resets = status.counter_values[static_cast<std::size_t>(i)];
-  EXPECT_EQ(resets, 1);
+  EXPECT_EQ(counter_of(bus.status().at("slam"), "odometry_resets"), 1);
   for (Process* p : set) EXPECT_EQ(p->stop(5s), 0) << p->name() << "\n" << p->output();
   std::filesystem::remove_all(dir);
 }
@@ -267,8 +269,8 @@ TEST(Faults, MapperStartedLastStillGetsItsMapsAndTheRobotSetsOff) {
 
 TEST(Faults, KilledExplorerTakesItsMissionUpFromTheCheckpoint) {
   const std::string checkpoint = make_temp_dir("faults-explorer-state") + "/mission.txt";
-  ExplorationSet set("faults-explorer", 1.0, /*autostart=*/true, "two_rooms",
-                     {{"checkpoint_file", "\"" + checkpoint + "\""}, {"checkpoint_period_s", "0.5"}});
+  ExplorationSet set("faults-explorer",
+                     {.explorer_keys = {{"checkpoint_file", "\"" + checkpoint + "\""}, {"checkpoint_period_s", "0.5"}}});
   // Two goals reached, and a checkpoint written after the second.
   ASSERT_TRUE(set.spin_sim([&] { return set.state() && set.state()->goals_reached >= 2; }, 300.0))
       << set.report_with_logs();
@@ -292,4 +294,38 @@ TEST(Faults, KilledExplorerTakesItsMissionUpFromTheCheckpoint) {
   EXPECT_GT(set.bus().status().at("explorer").ncounters, 0);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
+}
+
+TEST(Faults, KilledMapperPublishesItsMapFromTheCheckpointAndGoesOnWithSlam) {
+  const std::string checkpoint = make_temp_dir("faults-mapper-state") + "/map.bin";
+  ExplorationSet set("faults-mapper",
+                     {.slam = true,
+                      .mapper_keys = {{"checkpoint_file", "\"" + checkpoint + "\""}, {"checkpoint_period_s", "0.5"}}});
+  std::vector<pex::polygon_map_t> maps;
+  set.bus().on<pex::polygon_map_t>(std::string(ch::kMap), [&](const pex::polygon_map_t& m) { maps.push_back(m); });
+  // Most of the world mapped (more than any one scan sees), a checkpoint after it.
+  ASSERT_TRUE(set.spin_sim([&] { return !maps.empty() && maps.back().free_area_m2 > 60.0; }, 300.0))
+      << set.report_with_logs();
+  set.spin_sim([] { return false; }, 1.5);
+  const pex::polygon_map_t before = maps.back();
+  set.process("polygon_mapper")->kill_hard();
+  const std::size_t maps_before_restart = maps.size();
+  set.restart("polygon_mapper");
+  ASSERT_TRUE(set.spin_sim([&] { return maps.size() > maps_before_restart; }, 30.0)) << set.report_with_logs();
+  // The restarted mapper's first map is the map of before (up to the scans of
+  // the last checkpoint period), not one scan's.
+  const pex::polygon_map_t first = maps[maps_before_restart];
+  EXPECT_GT(first.free_area_m2, 0.97 * before.free_area_m2)
+      << "the map after the restart has " << first.free_area_m2 << " m^2, before it " << before.free_area_m2;
+  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
+  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
+  // The whole world mapped (82.66 m^2 free), nothing beyond it (ghost space).
+  EXPECT_GT(set.state()->explored_area_m2, 0.9 * 82.66) << set.report();
+  EXPECT_LT(maps.back().free_area_m2, 1.03 * 82.66) << set.report();
+  const auto& status = set.bus().status().at("polygon_mapper");
+  EXPECT_GE(counter_of(status, "slam_resyncs"), 1) << "the restarted mapper followed parents it never saw";
+  EXPECT_EQ(counter_of(status, "slam_epoch_changes"), 0);
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
+  if (!::testing::Test::HasFailure()) std::filesystem::remove_all(std::filesystem::path(checkpoint).parent_path());
 }

@@ -29,12 +29,6 @@ namespace ch = pex::runtime::channels;
 
 namespace {
 
-std::int64_t counter_of(const pex::daemon_status_t& s, const std::string& name) {
-  for (int i = 0; i < s.ncounters; ++i) {
-    if (s.counter_names[static_cast<std::size_t>(i)] == name) return s.counter_values[static_cast<std::size_t>(i)];
-  }
-  return -1;
-}
 
 
 struct Recorder {

@@ -45,23 +45,37 @@ inline bool mission_finished(std::int8_t phase) {
          phase == pex::explore_state_t::PHASE_FAILED;
 }
 
+using ConfigKeys = std::vector<std::pair<std::string, std::string>>;  // (top-level key, TOML literal)
+
+struct SetOptions {
+  double speed = 1.0;  // the simulator's speed factor
+  bool autostart = true;
+  std::string world = "two_rooms";
+  // false: the mapper on SIM_TRUTH and the explorer on SIM_TRUTH, no SLAM.
+  // true: pex-slam in the set, the mapper on SLAM_UPDATE (a map per particle)
+  // and the explorer on SLAM_POSE, as on the robot.
+  bool slam = false;
+  ConfigKeys explorer_keys, mapper_keys, slam_keys;
+};
+
 // The exploration set on a world: pex-sim, pex-lidar-reader, pex-base-driver,
-// pex-polygon-mapper (SIM_TRUTH poses, so no SLAM) and pex-explorer (pose
-// channel SIM_TRUTH), each on the simulator's clock, with what the test bus
-// heard. For the exploration and the fault tests.
+// (pex-slam,) pex-polygon-mapper and pex-explorer, each on the simulator's
+// clock, with what the test bus heard. For the exploration and the fault tests.
 class ExplorationSet {
  public:
-  // explorer_keys: more top-level keys of the explorer's config (key, TOML literal).
-  ExplorationSet(const std::string& tag, double speed, bool autostart, const std::string& world = "two_rooms",
-                 const std::vector<std::pair<std::string, std::string>>& explorer_keys = {})
-      : dir_(make_temp_dir(tag)) {
+  ExplorationSet(const std::string& tag, const SetOptions& options) : dir_(make_temp_dir(tag)) {
     std::string sim = with_key(read_file(sim_config_of("sim")), "world_file",
-                               "\"" + source_path("worlds/" + world + ".wkt") + "\"");
-    sim = with_key(sim, "speed_factor", std::to_string(speed));
-    const std::string mapper = with_key(read_file(sim_config_of("polygon_mapper")), "pose_source", "\"sim_truth\"");
-    std::string explorer = with_key(read_file(sim_config_of("explorer")), "pose_channel", "\"SIM_TRUTH\"");
-    explorer = with_key(explorer, "autostart", autostart ? "true" : "false");
-    for (const auto& [key, value] : explorer_keys) explorer = with_key(explorer, key, value);
+                               "\"" + source_path("worlds/" + options.world + ".wkt") + "\"");
+    sim = with_key(sim, "speed_factor", std::to_string(options.speed));
+    std::string mapper = with_key(read_file(sim_config_of("polygon_mapper")), "pose_source",
+                                  options.slam ? "\"slam\"" : "\"sim_truth\"");
+    for (const auto& [key, value] : options.mapper_keys) mapper = with_key(mapper, key, value);
+    std::string explorer = with_key(read_file(sim_config_of("explorer")), "pose_channel",
+                                    options.slam ? "\"SLAM_POSE\"" : "\"SIM_TRUTH\"");
+    explorer = with_key(explorer, "autostart", options.autostart ? "true" : "false");
+    for (const auto& [key, value] : options.explorer_keys) explorer = with_key(explorer, key, value);
+    std::string slam = read_file(sim_config_of("slam"));
+    for (const auto& [key, value] : options.slam_keys) slam = with_key(slam, key, value);
 
     bus_.on<pex::explore_state_t>("EXPLORE_STATE", [this](const pex::explore_state_t& s) {
       if (states_.empty() || states_.back().phase != s.phase) states_.push_back(s);
@@ -77,6 +91,7 @@ class ExplorationSet {
     set_.push_back(start_daemon("sim", dir_, {}, write_config(dir_, "sim", sim)));
     set_.push_back(start_daemon("lidar_reader", dir_));
     set_.push_back(start_daemon("base_driver", dir_));
+    if (options.slam) set_.push_back(start_daemon("slam", dir_, {}, write_config(dir_, "slam", slam)));
     set_.push_back(start_daemon("polygon_mapper", dir_, {}, write_config(dir_, "polygon_mapper", mapper)));
     set_.push_back(start_daemon("explorer", dir_, {}, write_config(dir_, "explorer", explorer)));
   }

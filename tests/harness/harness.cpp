@@ -189,6 +189,12 @@ bool Bus::all_ok(const std::vector<std::string>& names) const {
   });
 }
 
+std::int64_t counter_of(const pex::daemon_status_t& status, const std::string& name) {
+  for (int i = 0; i < status.ncounters; ++i)
+    if (status.counter_names[static_cast<std::size_t>(i)] == name) return status.counter_values[static_cast<std::size_t>(i)];
+  return -1;
+}
+
 std::string program_of(const std::string& daemon_name) {
   std::string p = "pex-" + daemon_name;
   std::replace(p.begin(), p.end(), '_', '-');

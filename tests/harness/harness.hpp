@@ -117,6 +117,9 @@ std::unique_ptr<Process> start_daemon(const std::string& name, const std::string
 // Every process's name and output, for a failing test's message.
 std::string logs_of(const std::vector<Process*>& processes);
 
+// A counter of a DAEMON_STATUS by name; -1 if the status has none of that name.
+std::int64_t counter_of(const pex::daemon_status_t& status, const std::string& name);
+
 // A BASE_CMD stamped with the wall clock, as a test drives the robot.
 pex::velocity_cmd_t velocity_command(double v, double omega, const std::string& source);
 

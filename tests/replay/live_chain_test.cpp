@@ -25,11 +25,6 @@ namespace {
 
 constexpr int kScans = 500;  // about the first 100 s of the log
 
-int64_t counter_of(const pex::daemon_status_t& s, const std::string& name) {
-  for (int i = 0; i < s.ncounters; ++i)
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  return -1;
-}
 
 }  // namespace
 
