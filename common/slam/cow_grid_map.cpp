@@ -1,7 +1,12 @@
 #include "slam/cow_grid_map.hpp"
 
+#include <bit>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <unordered_map>
+
+#include "archive/byte_archive.hpp"
 
 namespace pex::slam {
 namespace {
@@ -23,6 +28,13 @@ std::size_t CowGridMap::tile_count() const {
   std::size_t n = 0;
   for (const auto& tile : tiles_) n += tile != nullptr;
   return n;
+}
+
+std::vector<const CowGridMap::Tile*> CowGridMap::tiles() const {
+  std::vector<const Tile*> held;
+  for (const auto& tile : tiles_)
+    if (tile) held.push_back(tile.get());
+  return held;
 }
 
 std::size_t CowGridMap::referenced_bytes() const {
@@ -208,6 +220,115 @@ PoseEvaluation CowGridMap::evaluate(const Pose2& pose, const ScanPoints& scan) c
   result.score = score;
   result.log_likelihood = log_likelihood;
   return result;
+}
+
+namespace {
+// One bit per cell of a tile says which cells follow.
+static_assert(CowGridMap::kTileSize * CowGridMap::kTileSize == 64);
+// A tile table bigger than this is refused when read (a damaged size must not
+// allocate gigabytes): 16 M slots, 4 km x 4 km of 5 cm cells.
+constexpr std::uint64_t kMaxSlots = std::uint64_t{1} << 24;
+}  // namespace
+
+void CowGridMap::write_shared(archive::ByteWriter& out, const std::vector<const CowGridMap*>& maps) {
+  // Distinct tiles in order of first use (maps in order, slots row-major), so
+  // the same maps always give the same bytes.
+  std::unordered_map<const Tile*, std::uint32_t> index;
+  std::vector<const Tile*> distinct;
+  for (const CowGridMap* map : maps)
+    for (const auto& tile : map->tiles_)
+      if (tile && index.emplace(tile.get(), static_cast<std::uint32_t>(distinct.size())).second)
+        distinct.push_back(tile.get());
+  out.put<std::uint64_t>(distinct.size());
+  for (const Tile* tile : distinct) {
+    std::uint64_t mask = 0;
+    for (std::size_t i = 0; i < tile->cells.size(); ++i)
+      if (tile->cells[i].hits != 0) mask |= std::uint64_t{1} << i;
+    out.put<std::uint64_t>(mask);
+    for (const Cell& c : tile->cells) {
+      if (c.hits == 0) continue;
+      out.put<float>(c.mean_x_m);
+      out.put<float>(c.mean_y_m);
+      out.put<float>(c.sxx);
+      out.put<float>(c.sxy);
+      out.put<float>(c.syy);
+      out.put<std::int8_t>(c.normal_x);
+      out.put<std::int8_t>(c.normal_y);
+      out.put<std::uint16_t>(c.hits);
+    }
+  }
+  out.put<std::uint64_t>(maps.size());
+  for (const CowGridMap* map : maps) {
+    out.put<std::int32_t>(map->tile_x0_);
+    out.put<std::int32_t>(map->tile_y0_);
+    out.put<std::int32_t>(map->tiles_w_);
+    out.put<std::int32_t>(map->tiles_h_);
+    out.put<std::uint64_t>(map->tile_count());
+    for (std::size_t slot = 0; slot < map->tiles_.size(); ++slot) {
+      if (!map->tiles_[slot]) continue;
+      out.put<std::uint32_t>(static_cast<std::uint32_t>(slot));
+      out.put<std::uint32_t>(index.at(map->tiles_[slot].get()));
+    }
+  }
+}
+
+std::vector<std::unique_ptr<CowGridMap>> CowGridMap::read_shared(archive::ByteReader& in,
+                                                                 const CowGridMapOptions& options) {
+  constexpr std::size_t kCellBytes = 5 * sizeof(float) + 2 * sizeof(std::int8_t) + sizeof(std::uint16_t);
+  const std::uint64_t tile_count = in.get_count(sizeof(std::uint64_t));
+  std::vector<std::shared_ptr<Tile>> distinct;
+  distinct.reserve(tile_count);
+  for (std::uint64_t t = 0; t < tile_count; ++t) {
+    auto tile = std::make_shared<Tile>();
+    const auto mask = in.get<std::uint64_t>();
+    if (static_cast<std::size_t>(std::popcount(mask)) * kCellBytes > in.remaining())
+      throw archive::ArchiveError("tile " + std::to_string(t) + " is cut short");
+    for (std::size_t i = 0; i < tile->cells.size(); ++i) {
+      if (!(mask >> i & 1)) continue;
+      Cell& c = tile->cells[i];
+      c.mean_x_m = in.get<float>();
+      c.mean_y_m = in.get<float>();
+      c.sxx = in.get<float>();
+      c.sxy = in.get<float>();
+      c.syy = in.get<float>();
+      c.normal_x = in.get<std::int8_t>();
+      c.normal_y = in.get<std::int8_t>();
+      c.hits = in.get<std::uint16_t>();
+      if (c.hits == 0) throw archive::ArchiveError("tile " + std::to_string(t) + " lists a cell without hits");
+    }
+    distinct.push_back(std::move(tile));
+  }
+  const std::uint64_t map_count = in.get_count(4 * sizeof(std::int32_t) + sizeof(std::uint64_t));
+  std::vector<std::unique_ptr<CowGridMap>> maps;
+  maps.reserve(map_count);
+  for (std::uint64_t m = 0; m < map_count; ++m) {
+    auto map = std::make_unique<CowGridMap>(options);
+    map->tile_x0_ = in.get<std::int32_t>();
+    map->tile_y0_ = in.get<std::int32_t>();
+    map->tiles_w_ = in.get<std::int32_t>();
+    map->tiles_h_ = in.get<std::int32_t>();
+    const std::string which = "map " + std::to_string(m);
+    if (map->tiles_w_ < 0 || map->tiles_h_ < 0 || (map->tiles_w_ == 0) != (map->tiles_h_ == 0) ||
+        static_cast<std::uint64_t>(map->tiles_w_) * static_cast<std::uint64_t>(map->tiles_h_) > kMaxSlots)
+      throw archive::ArchiveError(which + " has a tile table of " + std::to_string(map->tiles_w_) + " x " +
+                                  std::to_string(map->tiles_h_));
+    map->tiles_.resize(static_cast<std::size_t>(map->tiles_w_) * static_cast<std::size_t>(map->tiles_h_));
+    const std::uint64_t held = in.get_count(2 * sizeof(std::uint32_t));
+    std::int64_t previous_slot = -1;
+    for (std::uint64_t k = 0; k < held; ++k) {
+      const auto slot = in.get<std::uint32_t>();
+      const auto tile = in.get<std::uint32_t>();
+      // Slots ascend (as written): none out of the table, none twice.
+      if (static_cast<std::int64_t>(slot) <= previous_slot || slot >= map->tiles_.size() || tile >= distinct.size())
+        throw archive::ArchiveError(which + " refers to slot " + std::to_string(slot) + " / tile " +
+                                    std::to_string(tile) + " of " + std::to_string(map->tiles_.size()) + " / " +
+                                    std::to_string(distinct.size()));
+      map->tiles_[slot] = distinct[tile];
+      previous_slot = slot;
+    }
+    maps.push_back(std::move(map));
+  }
+  return maps;
 }
 
 }  // namespace pex::slam

@@ -12,6 +12,11 @@
 
 #include "slam/particle_map.hpp"
 
+namespace pex::archive {
+class ByteReader;
+class ByteWriter;
+}  // namespace pex::archive
+
 namespace pex::slam {
 
 struct CowGridMapOptions {
@@ -75,7 +80,24 @@ class CowGridMap final : public ParticleMap {
   // The cell containing world point (x, y), or nullptr when never written.
   const Cell* cell_at(double x_m, double y_m) const;
   std::size_t tile_count() const;
+  // The tiles this map holds, in slot order (row-major): maps that share a
+  // tile hold the same pointer, so the distinct pointers over a set of maps
+  // are the memory that set really uses.
+  std::vector<const Tile*> tiles() const;
   const CowGridMapOptions& options() const { return options_; }
+
+  // Checkpoints (archive/byte_archive.hpp) of maps that share tiles, as the
+  // particles' maps do: every distinct tile is written once (its cells with
+  // hits only; a cell without hits was never written, so it is all zeros) and
+  // every map as its tile table referring to them, in a deterministic order.
+  static void write_shared(archive::ByteWriter& out, const std::vector<const CowGridMap*>& maps);
+  // The maps written by write_shared, with `options` (the configuration's;
+  // the caller checks they are the saved maps'). Tiles are shared exactly as
+  // they were: a restored set of maps takes the memory the saved one took, and
+  // copies on write where it would have. Throws archive::ArchiveError for
+  // anything malformed (an index out of range, a cell without hits).
+  static std::vector<std::unique_ptr<CowGridMap>> read_shared(archive::ByteReader& in,
+                                                              const CowGridMapOptions& options);
 
  private:
   const Cell* cell(int ix, int iy) const {

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include "archive/byte_archive.hpp"
+#include "slam/pose_archive.hpp"
+
 namespace pex::slam {
 
 bool OdometrySync::possible_step(const Reading& from, const Reading& to) const {
@@ -124,6 +127,99 @@ std::vector<PairedScan> OdometrySync::flush() {
     scans_.pop_front();
   }
   return ready;
+}
+
+namespace {
+constexpr std::string_view kCheckpointMagic = "PEXODSYN";
+constexpr std::uint32_t kCheckpointVersion = 1;
+}  // namespace
+
+std::string OdometrySync::checkpoint() const {
+  archive::ByteWriter out;
+  auto put_reading = [&out](const std::optional<Reading>& r) {
+    out.put_bool(r.has_value());
+    if (!r) return;
+    out.put<std::int64_t>(r->utime);
+    put_pose(out, r->raw);
+    out.put<double>(r->heading_variance_rad2);
+  };
+  out.put<std::uint64_t>(odometry_.size());
+  for (const auto& [utime, pose] : odometry_) {
+    out.put<std::int64_t>(utime);
+    put_pose(out, pose);
+  }
+  out.put<std::uint64_t>(scans_.size());
+  for (const RangeScan& scan : scans_) {
+    out.put<std::int64_t>(scan.utime);
+    out.put<double>(scan.angle_min_rad);
+    out.put<double>(scan.angle_increment_rad);
+    out.put<double>(scan.range_min_m);
+    out.put<double>(scan.range_max_m);
+    put_pose(out, scan.sensor_pose);
+    out.put<std::uint64_t>(scan.ranges_m.size());
+    for (const float r : scan.ranges_m) out.put<float>(r);
+  }
+  out.put<std::int64_t>(newest_odometry_utime_);
+  put_reading(last_accepted_);
+  put_reading(held_);
+  put_pose(out, frame_);
+  out.put<std::uint64_t>(dropped_scans_);
+  out.put<std::uint64_t>(refused_odometry_);
+  out.put<std::uint64_t>(out_of_order_odometry_);
+  out.put<std::uint64_t>(impossible_steps_);
+  out.put<std::uint64_t>(odometry_resets_);
+  return archive::seal(kCheckpointMagic, kCheckpointVersion, out.bytes());
+}
+
+std::string OdometrySync::restore(std::string_view checkpoint) {
+  try {
+    const std::string payload = archive::unseal(kCheckpointMagic, kCheckpointVersion, checkpoint);
+    archive::ByteReader in(payload);
+    auto get_reading = [&in]() -> std::optional<Reading> {
+      if (!in.get_bool()) return std::nullopt;
+      Reading r;
+      r.utime = in.get<std::int64_t>();
+      r.raw = get_pose(in);
+      r.heading_variance_rad2 = in.get<double>();
+      return r;
+    };
+    OdometrySync restored(options_);  // replaces this one once all was read
+    const std::uint64_t readings = in.get_count(sizeof(std::int64_t) + 3 * sizeof(double));
+    for (std::uint64_t i = 0; i < readings; ++i) {
+      const auto utime = in.get<std::int64_t>();
+      restored.odometry_.emplace_back(utime, get_pose(in));
+    }
+    while (restored.odometry_.size() > options_.history) restored.odometry_.pop_front();
+    const std::uint64_t scans = in.get_count(sizeof(std::int64_t) + 7 * sizeof(double) + sizeof(std::uint64_t));
+    for (std::uint64_t i = 0; i < scans; ++i) {
+      RangeScan scan;
+      scan.utime = in.get<std::int64_t>();
+      scan.angle_min_rad = in.get<double>();
+      scan.angle_increment_rad = in.get<double>();
+      scan.range_min_m = in.get<double>();
+      scan.range_max_m = in.get<double>();
+      scan.sensor_pose = get_pose(in);
+      scan.ranges_m.resize(in.get_count(sizeof(float)));
+      for (float& r : scan.ranges_m) r = in.get<float>();
+      restored.scans_.push_back(std::move(scan));
+    }
+    restored.newest_odometry_utime_ = in.get<std::int64_t>();
+    restored.last_accepted_ = get_reading();
+    restored.held_ = get_reading();
+    restored.frame_ = get_pose(in);
+    restored.dropped_scans_ = in.get<std::uint64_t>();
+    restored.refused_odometry_ = in.get<std::uint64_t>();
+    restored.out_of_order_odometry_ = in.get<std::uint64_t>();
+    restored.impossible_steps_ = in.get<std::uint64_t>();
+    restored.odometry_resets_ = in.get<std::uint64_t>();
+    in.expect_end();
+    if (!restored.scans_.empty() && restored.odometry_.empty())
+      throw archive::ArchiveError("scans wait for odometry but no reading is kept");
+    *this = std::move(restored);
+    return "";
+  } catch (const archive::ArchiveError& e) {
+    return e.what();
+  }
 }
 
 }  // namespace pex::slam

@@ -29,6 +29,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -83,6 +84,16 @@ class OdometrySync {
   std::size_t out_of_order_odometry() const { return out_of_order_odometry_; }
   std::size_t impossible_steps() const { return impossible_steps_; }
   std::size_t odometry_resets() const { return odometry_resets_; }
+
+  // The pairing survives a restart of SLAM with the filter (issue 11): the
+  // frame that anchors a reset odometry (without it a SLAM restarted after a
+  // base driver restart would jump by the whole reset), the last accepted and
+  // the held reading (so an odometry reset during the restart is still seen),
+  // the readings kept for interpolation, the scans waiting for odometry and
+  // the counters. A sealed archive (archive/byte_archive.hpp).
+  std::string checkpoint() const;
+  // "" or why it was refused; unchanged then. The options stay this one's.
+  std::string restore(std::string_view checkpoint);
 
  private:
   struct Reading {

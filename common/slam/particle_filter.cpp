@@ -3,7 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
 #include <thread>
+#include <unordered_map>
+
+#include "archive/byte_archive.hpp"
+#include "slam/pose_archive.hpp"
 
 namespace pex::slam {
 namespace {
@@ -31,6 +37,7 @@ TrajectoryNode::~TrajectoryNode() {
 ParticleFilter::ParticleFilter(const ParticleFilterOptions& options, ParticleMapFactory map_factory)
     : options_(options), map_factory_(std::move(map_factory)), rng_(options.seed) {
   options_.particle_count = std::max(1, options_.particle_count);
+  grid_maps_ = !map_factory_;
   if (!map_factory_) {
     const CowGridMapOptions grid = options_.grid;
     map_factory_ = [grid] { return std::make_unique<CowGridMap>(grid); };
@@ -224,6 +231,150 @@ std::vector<Pose2> ParticleFilter::best_trajectory() const {
     if (node->generation >= 0 && node->generation <= generation_)
       poses[static_cast<std::size_t>(node->generation)] = node->pose;
   return poses;
+}
+
+namespace {
+constexpr std::string_view kCheckpointMagic = "PEXSLAMF";
+constexpr std::uint32_t kCheckpointVersion = 1;
+}  // namespace
+
+std::string ParticleFilter::checkpoint() const {
+  if (!grid_maps_) throw std::logic_error("a filter with a custom map factory cannot be checkpointed");
+  archive::ByteWriter out;
+  // What the saved state only makes sense with; restore() refuses another.
+  out.put<std::uint32_t>(static_cast<std::uint32_t>(options_.particle_count));
+  out.put<double>(options_.grid.resolution_m);
+  out.put<std::int32_t>(CowGridMap::kTileBits);
+
+  out.put_bool(initialized_);
+  out.put<std::int64_t>(generation_);
+  std::ostringstream rng;  // the standard's text form of the engine: its whole state
+  rng << rng_;
+  out.put_string(rng.str());
+  put_pose(out, last_odometry_);
+  put_pose(out, odometry_at_update_);
+  out.put<double>(linear_since_update_m_);
+  out.put<double>(angular_since_update_rad_);
+  out.put<std::int64_t>(last_update_.generation);
+  out.put_bool(last_update_.resampled);
+  out.put<double>(last_update_.effective_sample_size);
+  out.put<std::int32_t>(last_update_.matcher_evaluations);
+  out.put<std::int32_t>(last_update_.failed_matches);
+
+  // The trajectory tree: every node a particle reaches, once, parents before
+  // their children (a particle's chain is walked up to the first node already
+  // written, then written from the oldest down).
+  std::unordered_map<const TrajectoryNode*, std::int64_t> node_index;
+  std::vector<const TrajectoryNode*> nodes, chain;
+  for (const Particle& p : particles_) {
+    chain.clear();
+    for (const TrajectoryNode* n = p.trajectory.get(); n && !node_index.contains(n); n = n->parent.get())
+      chain.push_back(n);
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+      node_index.emplace(*it, static_cast<std::int64_t>(nodes.size()));
+      nodes.push_back(*it);
+    }
+  }
+  out.put<std::uint64_t>(nodes.size());
+  for (const TrajectoryNode* n : nodes) {
+    put_pose(out, n->pose);
+    out.put<std::int64_t>(n->generation);
+    out.put<std::int64_t>(n->parent ? node_index.at(n->parent.get()) : -1);
+  }
+
+  std::vector<const CowGridMap*> maps;
+  for (const Particle& p : particles_) maps.push_back(&dynamic_cast<const CowGridMap&>(*p.map));
+  CowGridMap::write_shared(out, maps);
+
+  out.put<std::uint64_t>(particles_.size());
+  for (const Particle& p : particles_) {
+    put_pose(out, p.pose);
+    put_pose(out, p.pose_at_update);
+    out.put<double>(p.log_weight);
+    out.put<double>(p.lineage_log_likelihood);
+    out.put<std::int32_t>(p.parent);
+    out.put<std::int64_t>(p.trajectory ? node_index.at(p.trajectory.get()) : -1);
+  }
+  return archive::seal(kCheckpointMagic, kCheckpointVersion, out.bytes());
+}
+
+std::string ParticleFilter::restore(std::string_view checkpoint) {
+  if (!grid_maps_) return "this filter's maps come from a custom map factory: it cannot take up a checkpoint";
+  try {
+    const std::string payload = archive::unseal(kCheckpointMagic, kCheckpointVersion, checkpoint);
+    archive::ByteReader in(payload);
+    const auto particle_count = in.get<std::uint32_t>();
+    if (particle_count != static_cast<std::uint32_t>(options_.particle_count))
+      return "the checkpoint has " + std::to_string(particle_count) + " particles, the configuration " +
+             std::to_string(options_.particle_count);
+    const auto resolution_m = in.get<double>();
+    const auto tile_bits = in.get<std::int32_t>();
+    if (resolution_m != options_.grid.resolution_m || tile_bits != CowGridMap::kTileBits)
+      return "the checkpoint's maps have " + std::to_string(resolution_m) + " m cells in tiles of 2^" +
+             std::to_string(tile_bits) + ", this filter's " + std::to_string(options_.grid.resolution_m) +
+             " m cells in tiles of 2^" + std::to_string(CowGridMap::kTileBits);
+
+    // Everything is read into a new filter, which replaces this one only once
+    // all of it was read and checked.
+    ParticleFilter restored(options_, map_factory_);
+    restored.grid_maps_ = grid_maps_;
+    restored.initialized_ = in.get_bool();
+    restored.generation_ = in.get<std::int64_t>();
+    std::istringstream rng(in.get_string());
+    rng >> restored.rng_;
+    if (rng.fail()) throw archive::ArchiveError("the random generator's state does not read");
+    restored.last_odometry_ = get_pose(in);
+    restored.odometry_at_update_ = get_pose(in);
+    restored.linear_since_update_m_ = in.get<double>();
+    restored.angular_since_update_rad_ = in.get<double>();
+    restored.last_update_.generation = in.get<std::int64_t>();
+    restored.last_update_.resampled = in.get_bool();
+    restored.last_update_.effective_sample_size = in.get<double>();
+    restored.last_update_.matcher_evaluations = in.get<std::int32_t>();
+    restored.last_update_.failed_matches = in.get<std::int32_t>();
+
+    constexpr std::size_t kNodeBytes = 3 * sizeof(double) + 2 * sizeof(std::int64_t);
+    const std::uint64_t node_count = in.get_count(kNodeBytes);
+    std::vector<std::shared_ptr<const TrajectoryNode>> nodes;
+    nodes.reserve(node_count);
+    for (std::uint64_t i = 0; i < node_count; ++i) {
+      const Pose2 pose = get_pose(in);
+      const auto generation = in.get<std::int64_t>();
+      const auto parent = in.get<std::int64_t>();
+      if (parent < -1 || parent >= static_cast<std::int64_t>(i))
+        throw archive::ArchiveError("trajectory node " + std::to_string(i) + " has parent " + std::to_string(parent));
+      nodes.push_back(std::make_shared<const TrajectoryNode>(
+          pose, generation, parent >= 0 ? nodes[static_cast<std::size_t>(parent)] : nullptr));
+    }
+
+    std::vector<std::unique_ptr<CowGridMap>> maps = CowGridMap::read_shared(in, options_.grid);
+    const std::uint64_t count = in.get_count(2 * 3 * sizeof(double) + 2 * sizeof(double));
+    const std::uint64_t expected = restored.initialized_ ? particle_count : 0;
+    if (count != expected || maps.size() != count)
+      throw archive::ArchiveError(std::to_string(count) + " particles and " + std::to_string(maps.size()) +
+                                  " maps where " + std::to_string(expected) + " belong");
+    restored.particles_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      Particle& p = restored.particles_[i];
+      p.pose = get_pose(in);
+      p.pose_at_update = get_pose(in);
+      p.log_weight = in.get<double>();
+      p.lineage_log_likelihood = in.get<double>();
+      p.parent = in.get<std::int32_t>();
+      const auto node = in.get<std::int64_t>();
+      if (p.parent < -1 || p.parent >= static_cast<std::int32_t>(count) || node < -1 ||
+          node >= static_cast<std::int64_t>(nodes.size()))
+        throw archive::ArchiveError("particle " + std::to_string(i) + " has parent " + std::to_string(p.parent) +
+                                    " and trajectory node " + std::to_string(node));
+      if (node >= 0) p.trajectory = nodes[static_cast<std::size_t>(node)];
+      p.map = std::move(maps[i]);
+    }
+    in.expect_end();
+    *this = std::move(restored);
+    return "";
+  } catch (const archive::ArchiveError& e) {
+    return e.what();
+  }
 }
 
 }  // namespace pex::slam

@@ -13,6 +13,8 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "slam/cow_grid_map.hpp"
@@ -111,6 +113,23 @@ class ParticleFilter {
   // The best particle's pose at every update generation so far (index = generation).
   std::vector<Pose2> best_trajectory() const;
 
+  // The filter survives a restart (issue 11). Its whole state as a sealed
+  // archive (archive/byte_archive.hpp): every particle (pose, pose at the
+  // update, weights, parent), the maps with each tile they share written once,
+  // the trajectory tree with each shared node once (the whole tree, not only
+  // the best path: any particle may be the best one later, and
+  // best_trajectory() must then still reach back to generation 0), the
+  // generator, the generation, the odometry bookkeeping. A restored filter fed
+  // the same scans gives bit for bit what the one that never stopped gives.
+  // Pure: bytes, no file. Throws std::logic_error for a filter made with a
+  // custom map factory (only CowGridMap maps are written).
+  std::string checkpoint() const;
+  // Takes up a checkpoint: "" or why it was refused (cut short, damaged, of
+  // another kind or format version, another particle count or grid
+  // resolution); the filter is unchanged then. The options are this filter's
+  // (the configuration's), not the saved ones.
+  std::string restore(std::string_view checkpoint);
+
  private:
   void initialize(const ScanPoints& points, const Pose2& odometry);
   void update(const ScanPoints& points, const Pose2& odometry);
@@ -118,6 +137,7 @@ class ParticleFilter {
 
   ParticleFilterOptions options_;
   ParticleMapFactory map_factory_;
+  bool grid_maps_ = true;  // the maps are CowGridMaps (no custom factory): they can be checkpointed
   std::mt19937_64 rng_;
   std::vector<Particle> particles_;
   bool initialized_ = false;

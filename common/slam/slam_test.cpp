@@ -1,8 +1,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <random>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "archive/byte_archive.hpp"
+#include "evaluation/carmen_log.hpp"
 
 #include "slam/cow_grid_map.hpp"
 #include "slam/motion_model.hpp"
@@ -387,6 +395,226 @@ TEST(TrajectoryRecorder, CarriesUpdatePosesForwardByOdometry) {
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_NEAR(poses[1].pose.x_m, later.x_m, 1e-9);
   EXPECT_NEAR(poses[1].pose.theta_rad, later.theta_rad, 1e-9);
+}
+
+// --- Checkpoints (issue 11: SLAM survives a restart) ---
+
+// The first `scans` laser readings of the Intel Research Lab log as the filter
+// gets them (scan, odometry at the scan); empty when the log is not there.
+std::vector<std::pair<RangeScan, Pose2>> intel_head(int scans) {
+  std::ifstream file(std::filesystem::path(PEX_SHARED_DIR) / "data" / "intel.clf");
+  std::stringstream head;
+  std::string line;
+  for (int n = 0; n < scans && std::getline(file, line);) {
+    head << line << '\n';
+    n += line.rfind("FLASER ", 0) == 0;
+  }
+  const evaluation::CarmenLog log = evaluation::parse_carmen_log(head);
+  std::vector<std::pair<RangeScan, Pose2>> out;
+  for (const evaluation::CarmenLaser& laser : log.lasers) {
+    RangeScan scan;
+    scan.utime = static_cast<std::int64_t>(laser.timestamp_s * 1e6);
+    scan.angle_min_rad = laser.angle_min_rad;
+    scan.angle_increment_rad = laser.angle_increment_rad;
+    scan.range_max_m = laser.max_range_m;
+    scan.sensor_pose = relative(laser.odometry, laser.laser_pose);
+    scan.ranges_m = laser.ranges_m;
+    out.emplace_back(std::move(scan), laser.odometry);
+  }
+  return out;
+}
+
+// Every tile of every particle's map, named by the index of its first
+// appearance (particles in order, slots row-major): two filters whose maps
+// share tiles the same way give the same list, and the largest name + 1 is
+// the number of distinct tiles (the memory the maps really take).
+std::vector<std::size_t> tile_sharing(const ParticleFilter& filter) {
+  std::unordered_map<const CowGridMap::Tile*, std::size_t> names;
+  std::vector<std::size_t> sharing;
+  for (const Particle& p : filter.particles())
+    for (const CowGridMap::Tile* tile : dynamic_cast<const CowGridMap&>(*p.map).tiles())
+      sharing.push_back(names.emplace(tile, names.size()).first->second);
+  return sharing;
+}
+std::size_t distinct(const std::vector<std::size_t>& names) {
+  return std::unordered_set<std::size_t>(names.begin(), names.end()).size();
+}
+std::size_t trajectory_nodes(const ParticleFilter& filter) {
+  std::unordered_set<const TrajectoryNode*> nodes;
+  for (const Particle& p : filter.particles())
+    for (const TrajectoryNode* n = p.trajectory.get(); n && nodes.insert(n).second; n = n->parent.get()) {
+    }
+  return nodes.size();
+}
+
+void expect_same_particles(const ParticleFilter& a, const ParticleFilter& b) {
+  ASSERT_EQ(a.particles().size(), b.particles().size());
+  EXPECT_EQ(a.generation(), b.generation());
+  for (std::size_t i = 0; i < a.particles().size(); ++i) {
+    const Particle& p = a.particles()[i];
+    const Particle& q = b.particles()[i];
+    // Bit for bit: == on doubles, not NEAR.
+    EXPECT_EQ(p.pose.x_m, q.pose.x_m) << "particle " << i;
+    EXPECT_EQ(p.pose.y_m, q.pose.y_m) << "particle " << i;
+    EXPECT_EQ(p.pose.theta_rad, q.pose.theta_rad) << "particle " << i;
+    EXPECT_EQ(p.pose_at_update.x_m, q.pose_at_update.x_m) << "particle " << i;
+    EXPECT_EQ(p.log_weight, q.log_weight) << "particle " << i;
+    EXPECT_EQ(p.lineage_log_likelihood, q.lineage_log_likelihood) << "particle " << i;
+    EXPECT_EQ(p.parent, q.parent) << "particle " << i;
+  }
+  const auto ta = a.best_trajectory(), tb = b.best_trajectory();
+  ASSERT_EQ(ta.size(), tb.size());
+  for (std::size_t g = 0; g < ta.size(); ++g) EXPECT_EQ(ta[g].x_m, tb[g].x_m) << "generation " << g;
+}
+
+TEST(FilterCheckpoint, ARestoredFilterGoesOnBitForBitAsTheOneThatNeverStopped) {
+  constexpr std::size_t kSaveAt = 300;
+  const auto log = intel_head(900);
+  if (log.empty()) GTEST_SKIP() << "no Intel log in " << PEX_SHARED_DIR;
+  ParticleFilterOptions options;  // the shipped defaults: 30 particles
+  ParticleFilter never_stopped(options);
+  std::string saved;
+  int resampled_after = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    if (i == kSaveAt) saved = never_stopped.checkpoint();
+    if (never_stopped.process(log[i].first, log[i].second) && i >= kSaveAt)
+      resampled_after += never_stopped.last_update().resampled;
+  }
+  ParticleFilter restarted(options);
+  ASSERT_EQ(restarted.restore(saved), "");
+  const std::int64_t generation_at_save = restarted.generation();
+  for (std::size_t i = kSaveAt; i < log.size(); ++i) restarted.process(log[i].first, log[i].second);
+  // The stretch after the restart had updates with resampling (the generator
+  // drew for every scan's motion and for the resampling).
+  EXPECT_GT(never_stopped.generation(), generation_at_save + 10);
+  EXPECT_GT(resampled_after, 0);
+  expect_same_particles(never_stopped, restarted);
+  // Everything else (maps cell by cell, the trajectory tree, the generator,
+  // the odometry bookkeeping) through the checkpoints' bytes, which hold all.
+  EXPECT_TRUE(never_stopped.checkpoint() == restarted.checkpoint());
+  std::cout << "checkpoint of 30 particles after " << kSaveAt << " Intel scans (generation " << generation_at_save
+            << "): " << saved.size() << " bytes; after " << log.size() << " (generation "
+            << never_stopped.generation() << "): " << never_stopped.checkpoint().size() << " bytes\n";
+}
+
+TEST(FilterCheckpoint, SharedTilesAndTrajectoryNodesAreRestoredSharedNotCopied) {
+  const auto log = intel_head(901);
+  if (log.empty()) GTEST_SKIP() << "no Intel log in " << PEX_SHARED_DIR;
+  ParticleFilter filter(ParticleFilterOptions{});
+  for (std::size_t i = 0; i < 900; ++i) filter.process(log[i].first, log[i].second);
+  ParticleFilter restored(ParticleFilterOptions{});
+  ASSERT_EQ(restored.restore(filter.checkpoint()), "");
+  const auto original = tile_sharing(filter);
+  const auto copy = tile_sharing(restored);
+  // The maps do share (early in the log, before much resampling, a quarter of
+  // the references are to a tile another particle holds too).
+  EXPECT_LT(distinct(original), original.size());
+  EXPECT_EQ(distinct(copy), distinct(original)) << "the restored maps take more memory than the saved ones";
+  EXPECT_EQ(copy, original) << "tiles are shared between other particles than before";
+  EXPECT_EQ(trajectory_nodes(restored), trajectory_nodes(filter));
+  EXPECT_LT(trajectory_nodes(filter), filter.particles().size() * static_cast<std::size_t>(filter.generation() + 1));
+  // And copy-on-write goes on as before: after the next scan, the same sharing.
+  filter.process(log[900].first, log[900].second);
+  restored.process(log[900].first, log[900].second);
+  EXPECT_EQ(tile_sharing(restored), tile_sharing(filter));
+  std::cout << original.size() << " tile references to " << distinct(original) << " tiles, "
+            << trajectory_nodes(filter) << " trajectory nodes for " << filter.particles().size() << " particles x "
+            << filter.generation() + 1 << " generations\n";
+}
+
+TEST(FilterCheckpoint, BrokenInputIsRefusedWithAReasonAndChangesNothing) {
+  const Drive d = drive(3);
+  ParticleFilter source(small_filter(5));
+  for (std::size_t i = 0; i < 40; ++i) source.process(scan_from(d.truth[i], static_cast<std::int64_t>(i)), d.odometry[i]);
+  const std::string good = source.checkpoint();
+  // The filter that is offered the broken files has a state of its own.
+  ParticleFilter filter(small_filter(5));
+  for (std::size_t i = 0; i < 20; ++i) filter.process(scan_from(d.truth[i], static_cast<std::int64_t>(i)), d.odometry[i]);
+  const std::string before = filter.checkpoint();
+  auto refused = [&](const std::string& bytes, const std::string& reason) {
+    const std::string why = filter.restore(bytes);
+    EXPECT_NE(why.find(reason), std::string::npos) << "expected '" << reason << "', got '" << why << "'";
+    EXPECT_TRUE(filter.checkpoint() == before) << "a refused checkpoint changed the filter (" << why << ")";
+  };
+  for (const std::size_t size : {std::size_t{0}, std::size_t{10}, good.size() / 2, good.size() - 1})
+    refused(good.substr(0, size), "cut short");
+  for (const std::size_t at : {std::size_t{9}, std::size_t{30}, good.size() / 3, good.size() - 20}) {
+    std::string flipped = good;
+    flipped[at] = static_cast<char>(flipped[at] ^ 0x10);
+    refused(flipped, at == 9 ? "version" : "checksum");
+  }
+  const std::string payload = archive::unseal("PEXSLAMF", 1, good);
+  refused(archive::seal("PEXSLAMF", 2, payload), "format version 2");
+  refused(OdometrySync().checkpoint(), "not a PEXSLAMF archive");
+  // Well formed, but not this filter's: another particle count or cell size.
+  ParticleFilterOptions more = small_filter(5);
+  more.particle_count = 11;
+  refused(ParticleFilter(more).checkpoint(), "11 particles");
+  ParticleFilterOptions finer = small_filter(5);
+  finer.grid.resolution_m = 0.025;
+  refused(ParticleFilter(finer).checkpoint(), "m cells");
+  // A checksum that holds over a payload that lies (a trajectory node whose
+  // parent does not come before it): refused by the reader's own checks.
+  archive::ByteWriter lying;
+  lying.put<std::uint32_t>(10);  // particles, cell size, tile size: this filter's
+  lying.put<double>(0.05);
+  lying.put<std::int32_t>(CowGridMap::kTileBits);
+  lying.put_bool(true);         // initialized, generation 0
+  lying.put<std::int64_t>(0);
+  std::ostringstream engine;
+  engine << std::mt19937_64(1);
+  lying.put_string(engine.str());
+  for (int i = 0; i < 8; ++i) lying.put<double>(0.0);  // two odometry poses, the two accumulators
+  lying.put<std::int64_t>(0);                          // the last update's statistics
+  lying.put_bool(false);
+  lying.put<double>(5.0);
+  lying.put<std::int32_t>(0);
+  lying.put<std::int32_t>(0);
+  lying.put<std::uint64_t>(1);  // one trajectory node ...
+  for (int i = 0; i < 3; ++i) lying.put<double>(0.0);
+  lying.put<std::int64_t>(0);
+  lying.put<std::int64_t>(3);  // ... whose parent is node 3
+  refused(archive::seal("PEXSLAMF", 1, lying.bytes()), "trajectory node 0 has parent 3");
+  // And the good one is taken up.
+  EXPECT_EQ(filter.restore(good), "");
+  EXPECT_TRUE(filter.checkpoint() == good);
+}
+
+TEST(OdometrySyncCheckpoint, ARestoredPairingKeepsTheResetFrameAndTheWaitingScans) {
+  OdometrySync sync;
+  std::int64_t t = 0;
+  double x = 0.0;
+  drive(sync, t, x, 100);  // 1 m, then the base driver restarts: a reset at (1, 0)
+  x = 0.0;
+  t += 20'000;
+  EXPECT_FALSE(sync.add_odometry(t, {0.0, 0.0, 0.0}));
+  drive(sync, t, x, 10);
+  ASSERT_EQ(sync.odometry_resets(), 1u);
+  RangeScan waiting;  // a scan that waits for odometry at its time
+  waiting.utime = t + 10'000;
+  waiting.ranges_m = {1.0f, 2.0f};
+  sync.add_scan(waiting);
+  OdometrySync restored;
+  ASSERT_EQ(restored.restore(sync.checkpoint()), "");
+  EXPECT_EQ(restored.odometry_resets(), 1u);
+  EXPECT_TRUE(restored.checkpoint() == sync.checkpoint());
+  // Both go on with the same readings (in the driver's new frame) alike.
+  for (OdometrySync* s : {&sync, &restored}) {
+    std::int64_t ts = t;
+    double xs = x;
+    drive(*s, ts, xs, 5);
+  }
+  const auto a = sync.take_ready(), b = restored.take_ready();
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(b[0].scan.ranges_m, waiting.ranges_m);
+  EXPECT_EQ(b[0].odometry.x_m, a[0].odometry.x_m);  // 1.1 m in the first frame, not 0.1
+  EXPECT_NEAR(b[0].odometry.x_m, 1.105, 1e-9);
+  // Broken: refused, unchanged.
+  const std::string before = restored.checkpoint();
+  const std::string good = sync.checkpoint();
+  EXPECT_NE(restored.restore(good.substr(0, good.size() - 3)), "");
+  EXPECT_TRUE(restored.checkpoint() == before);
 }
 
 }  // namespace

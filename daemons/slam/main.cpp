@@ -1,7 +1,8 @@
 // pex-slam: Rao-Blackwellized particle filter SLAM (GMapping's scheme).
 // LIDAR_SCAN + ODOMETRY in; SLAM_UPDATE after every filter update, SLAM_POSE at
 // odometry rate. Offline: `pex-slam --log IN.lcm --poses OUT.txt` feeds the log
-// through the same handlers and writes one `timestamp_s x y theta` per scan.
+// through the same handlers and writes one `timestamp_s x y theta` per scan
+// (and with --checkpoint-out the filter's checkpoint at the log's end).
 #include <cstdio>
 #include <fstream>
 #include <chrono>
@@ -11,7 +12,9 @@
 #include <spdlog/spdlog.h>
 
 #include "runtime/channels.hpp"
+#include "runtime/checkpoint.hpp"
 #include "runtime/daemon.hpp"
+#include "runtime/files.hpp"
 #include "runtime/input_watch.hpp"
 #include "slam_options.hpp"
 
@@ -20,10 +23,12 @@ using pex::slam_daemon::SlamNode;
 
 int main(int argc, char** argv) {
   std::string poses_path;
+  std::string checkpoint_out;
   pex::runtime::DaemonInfo info{"slam", "Rao-Blackwellized particle filter SLAM"};
   info.supports_replay = true;
   info.add_options = [&](CLI::App& app) {
     app.add_option("--poses", poses_path, "offline: write the best trajectory, one `t x y theta` per scan");
+    app.add_option("--checkpoint-out", checkpoint_out, "offline: write the filter's checkpoint at the end of the log");
   };
   return pex::runtime::run_daemon(argc, argv, info, [&](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
     const auto options = pex::slam_daemon::load_options(config);
@@ -35,6 +40,12 @@ int main(int argc, char** argv) {
     };
     outputs.publish_pose = [&node](const pex::pose_t& msg) { node.publish(ch::kSlamPose, msg); };
     auto slam = std::make_shared<SlamNode>(options, outputs);
+    // The filter survives a restart: the same epoch and generations go on, so
+    // the mapper keeps its maps. Saved on stop before the flush below: scans
+    // still waiting for odometry stay waiting in the checkpoint.
+    pex::runtime::keep_checkpoint(node, {options.checkpoint_file, options.checkpoint_period_s, "filter",
+                                         [slam](const std::string& bytes) { return slam->restore(bytes); },
+                                         [slam] { return slam->checkpoint(); }});
     // Health: without scans or odometry the filter stands still (DEGRADED, says which).
     auto watch = std::make_shared<pex::runtime::InputWatch>();
     const auto timeout_us = static_cast<std::int64_t>(options.input_timeout_s * 1e6);
@@ -66,11 +77,18 @@ int main(int argc, char** argv) {
       node.counter("filter_updates") = slam->filter().generation() + 1;
       node.counter("updates_republished") = slam->republished();
     });
-    node.on_shutdown([slam, &node, &poses_path] {
+    node.on_shutdown([slam, &node, &poses_path, &checkpoint_out] {
       slam->flush();
       node.counter("scans_processed") = slam->scans_processed();
       node.counter("filter_updates") = slam->filter().generation() + 1;
       node.counter("updates_republished") = slam->republished();
+      if (!checkpoint_out.empty()) {
+        const std::string bytes = slam->checkpoint();
+        if (const auto why = pex::runtime::write_file_atomically(checkpoint_out, bytes); !why.empty())
+          spdlog::error("{}", why);
+        else
+          spdlog::info("wrote the filter's checkpoint ({} bytes) to {}", bytes.size(), checkpoint_out);
+      }
       if (poses_path.empty()) return;
       std::ofstream out(poses_path);
       out << slam->trajectory_text();

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "archive/byte_archive.hpp"
+
 namespace pex::slam_daemon {
 
 SlamNode::SlamNode(const SlamNodeOptions& options, SlamOutputs outputs)
@@ -111,6 +113,49 @@ std::string SlamNode::trajectory_text() const {
     text.append(line, static_cast<std::size_t>(n));
   }
   return text;
+}
+
+namespace {
+constexpr std::string_view kCheckpointMagic = "PEXSLAMN";
+constexpr std::uint32_t kCheckpointVersion = 1;
+}  // namespace
+
+std::string SlamNode::checkpoint() const {
+  archive::ByteWriter out;
+  out.put<std::int64_t>(epoch_);
+  out.put<std::int64_t>(last_published_scan_utime_);
+  out.put<std::int64_t>(scans_processed_);
+  out.put<std::int64_t>(republished_);
+  out.put_string(filter_.checkpoint());
+  out.put_string(sync_.checkpoint());
+  return archive::seal(kCheckpointMagic, kCheckpointVersion, out.bytes());
+}
+
+std::string SlamNode::restore(std::string_view checkpoint) {
+  try {
+    const std::string payload = archive::unseal(kCheckpointMagic, kCheckpointVersion, checkpoint);
+    archive::ByteReader in(payload);
+    const auto epoch = in.get<std::int64_t>();
+    const auto last_published_scan_utime = in.get<std::int64_t>();
+    const auto scans_processed = in.get<std::int64_t>();
+    const auto republished = in.get<std::int64_t>();
+    // Both parts are taken up into new ones first: all or nothing.
+    slam::ParticleFilter filter(options_.filter);
+    if (auto why = filter.restore(in.get_string()); !why.empty()) return "the filter: " + why;
+    slam::OdometrySync sync(options_.sync);
+    if (auto why = sync.restore(in.get_string()); !why.empty()) return "the odometry pairing: " + why;
+    in.expect_end();
+    filter_ = std::move(filter);
+    sync_ = std::move(sync);
+    recorder_ = slam::TrajectoryRecorder{};
+    epoch_ = epoch;
+    last_published_scan_utime_ = last_published_scan_utime;
+    scans_processed_ = scans_processed;
+    republished_ = republished;
+    return "";
+  } catch (const archive::ArchiveError& e) {
+    return e.what();
+  }
 }
 
 }  // namespace pex::slam_daemon

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include <pex/laser_scan_t.hpp>
 #include <pex/odometry_t.hpp>
@@ -29,6 +30,10 @@ struct SlamNodeOptions {
   // waits for its map. 0 = never.
   double republish_period_s = 1.0;
   double input_timeout_s = 3.0;  // no LIDAR_SCAN or no ODOMETRY this long: DEGRADED (health)
+  // The filter across restarts (SlamNode::checkpoint), written every
+  // checkpoint_period_s (node clock) and on stop, read at start: "" = none.
+  std::string checkpoint_file;
+  double checkpoint_period_s = 2.0;
 };
 
 struct SlamOutputs {
@@ -57,6 +62,19 @@ class SlamNode {
   std::int64_t republished() const { return republished_; }
   // The filter's lineage (slam_update_t.epoch): 0 before the first update.
   std::int64_t epoch() const { return epoch_; }
+
+  // SLAM survives a restart (issue 11): the filter (ParticleFilter::checkpoint),
+  // the odometry pairing (its frame: a restored SLAM does not jump) and what
+  // makes the restored node's next update the continuation of the saved one's
+  // for the mapper: the same epoch, the filter's generation, the scan time of
+  // the last publication (the republish timer), the counters. A sealed archive.
+  // Not in it: the per-scan trajectory of the offline pose file
+  // (trajectory_text), which one `pex-slam --log` run makes from the log's
+  // start; after a restore it covers the scans since.
+  std::string checkpoint() const;
+  // Takes up a checkpoint: "" or why it was refused (damaged, another version,
+  // another particle count or grid); then nothing changed.
+  std::string restore(std::string_view checkpoint);
 
  private:
   void process(std::vector<slam::PairedScan> ready);

@@ -131,5 +131,96 @@ TEST(SlamNode, TrajectoryHasOneLinePerScan) {
   EXPECT_EQ(text.rfind("0.001000 ", 0), 0u);
 }
 
+// Odometry and a scan every 50 ms while driving along x at 0.4 m/s: a filter
+// update every 0.5 m (25 steps).
+void drive_steps(SlamNode& node, int from, int to) {
+  for (int i = from; i < to; ++i) {
+    const std::int64_t t = 1'000'000 + 50'000 * static_cast<std::int64_t>(i);
+    node.on_odometry(odometry(t, 0.02 * i));
+    node.on_scan(box_scan(t));
+  }
+}
+
+void expect_same_update(const slam_update_t& a, const slam_update_t& b) {
+  EXPECT_EQ(a.epoch, b.epoch);
+  EXPECT_EQ(a.generation, b.generation);
+  EXPECT_EQ(a.scan_utime, b.scan_utime);
+  EXPECT_EQ(a.republished, b.republished);
+  EXPECT_EQ(a.resampled, b.resampled);
+  EXPECT_EQ(a.best, b.best);
+  ASSERT_EQ(a.particles.size(), b.particles.size());
+  for (std::size_t i = 0; i < a.particles.size(); ++i) {
+    EXPECT_EQ(a.particles[i].x, b.particles[i].x);
+    EXPECT_EQ(a.particles[i].y, b.particles[i].y);
+    EXPECT_EQ(a.particles[i].theta, b.particles[i].theta);
+    EXPECT_EQ(a.particles[i].log_weight, b.particles[i].log_weight);
+    EXPECT_EQ(a.particles[i].parent, b.particles[i].parent);
+  }
+}
+
+// kill -9 and restart from the checkpoint: the restored node publishes what
+// the node that never stopped publishes, update for update and pose for pose:
+// the same epoch, the next generation (so the mapper follows its parents), no
+// jump in SLAM_POSE.
+TEST(SlamNode, ARestoredNodeGoesOnWithTheSameEpochAndTheNextGeneration) {
+  Published never_stopped_out, restarted_out;
+  SlamNode never_stopped = make_node(never_stopped_out);
+  drive_steps(never_stopped, 0, 60);
+  const std::string saved = never_stopped.checkpoint();
+  const std::size_t updates_at_save = never_stopped_out.updates.size();
+  const std::size_t poses_at_save = never_stopped_out.poses.size();
+  const std::int64_t generation_at_save = never_stopped.filter().generation();
+  ASSERT_GE(generation_at_save, 2);
+  drive_steps(never_stopped, 60, 130);
+
+  SlamNode restarted = make_node(restarted_out);
+  ASSERT_EQ(restarted.restore(saved), "");
+  EXPECT_EQ(restarted.epoch(), never_stopped.epoch());
+  drive_steps(restarted, 60, 130);
+  ASSERT_GE(restarted_out.updates.size(), 2u);
+  ASSERT_EQ(restarted_out.updates.size(), never_stopped_out.updates.size() - updates_at_save);
+  // The first update after the restore continues the saved generation (a
+  // republish of it while no update is due, as the node that never stopped).
+  const auto first_update = std::find_if(restarted_out.updates.begin(), restarted_out.updates.end(),
+                                         [](const slam_update_t& u) { return !u.republished; });
+  ASSERT_NE(first_update, restarted_out.updates.end());
+  EXPECT_EQ(first_update->generation, generation_at_save + 1);
+  for (std::size_t k = 0; k < restarted_out.updates.size(); ++k)
+    expect_same_update(restarted_out.updates[k], never_stopped_out.updates[updates_at_save + k]);
+  ASSERT_EQ(restarted_out.poses.size(), never_stopped_out.poses.size() - poses_at_save);
+  for (std::size_t k = 0; k < restarted_out.poses.size(); ++k) {
+    EXPECT_EQ(restarted_out.poses[k].x, never_stopped_out.poses[poses_at_save + k].x) << k;
+    EXPECT_EQ(restarted_out.poses[k].theta, never_stopped_out.poses[poses_at_save + k].theta) << k;
+  }
+  EXPECT_EQ(restarted.scans_processed(), never_stopped.scans_processed());
+  EXPECT_TRUE(restarted.checkpoint() == never_stopped.checkpoint());
+}
+
+TEST(SlamNode, ABrokenCheckpointIsRefusedWithAReasonAndChangesNothing) {
+  Published out;
+  SlamNode source = make_node(out);
+  drive_steps(source, 0, 40);
+  const std::string good = source.checkpoint();
+  SlamNode node = make_node(out);
+  drive_steps(node, 0, 10);
+  const std::string before = node.checkpoint();
+  std::string flipped = good;
+  flipped[good.size() / 2] = static_cast<char>(flipped[good.size() / 2] ^ 1);
+  std::string other_version = good;
+  other_version[8] = 2;  // the format version's low byte
+  for (const std::string& bad : {good.substr(0, good.size() - 1), flipped, other_version, std::string("PEXSLAMN")}) {
+    EXPECT_NE(node.restore(bad), "");
+    EXPECT_TRUE(node.checkpoint() == before);
+  }
+  // Another particle count: the filter inside refuses, and nothing changes.
+  Published other_out;
+  SlamNode other = make_node(other_out, 6);
+  const std::string why = node.restore(other.checkpoint());
+  EXPECT_NE(why.find("6 particles"), std::string::npos) << why;
+  EXPECT_TRUE(node.checkpoint() == before);
+  EXPECT_EQ(node.restore(good), "");
+  EXPECT_EQ(node.epoch(), source.epoch());
+}
+
 }  // namespace
 }  // namespace pex::slam_daemon

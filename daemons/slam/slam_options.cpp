@@ -71,6 +71,9 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   l.max_omega_radps = sync.get<double>("odometry_max_omega_radps", l.max_omega_radps, positive<double>());
   o.republish_period_s = config.get<double>("republish_period_s", o.republish_period_s, non_negative<double>());
   o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, positive<double>());
+  o.checkpoint_file = config.get_path("checkpoint_file", o.checkpoint_file, /*must_exist=*/false);
+  o.checkpoint_period_s =
+      config.get<double>("checkpoint_period_s", o.checkpoint_period_s, in_range(0.1, 3600.0));
   o.max_beams = static_cast<std::size_t>(config.get<int>("max_beams", static_cast<int>(o.max_beams),
                                                          in_range(1, 1 << 20)));
   return o;
