@@ -1,9 +1,9 @@
 #include "driver.hpp"
 
 #include <chrono>
-#include <cmath>
+#include <utility>
+#include <vector>
 
-#include <linux/can/error.h>
 #include <pex/daemon_status_t.hpp>
 #include <pex/odometry_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
@@ -79,55 +79,52 @@ std::unique_ptr<hwio::FrameTransport> open_transport(const DriverOptions& o) {
   return std::move(*transport);
 }
 
-canopen::Cia402Master::Options master_options(const DriverOptions& o) {
-  canopen::Cia402Master::Options m;
-  m.node_ids = {o.left_node_id, o.right_node_id};
-  m.heartbeat_timeout_us = 1000ll * o.heartbeat_timeout_ms;
-  m.sdo_timeout_us = 1000ll * o.sdo_timeout_ms;
-  m.master_node_id = static_cast<std::uint8_t>(o.master_node_id);
-  m.master_heartbeat_period_us = 1000ll * o.master_heartbeat_period_ms;
-  m.drive_heartbeat_consumer_us = 1000ll * o.drive_heartbeat_consumer_ms;
-  m.abort_option = o.drive_abort_option == "fault"             ? canopen::AbortConnectionOption::kFault
-                   : o.drive_abort_option == "disable_voltage" ? canopen::AbortConnectionOption::kDisableVoltage
-                                                               : canopen::AbortConnectionOption::kQuickStop;
-  m.quick_stop_deceleration =
-      static_cast<std::uint32_t>(std::lround(o.quick_stop_decel_mps2 * o.geometry.counts_per_m()));
-  return m;
+const DriverOptions& validated(const DriverOptions& o) {
+  if (std::string e = o.geometry.validate(); !e.empty()) throw runtime::ConfigError(e);
+  return o;
+}
+
+std::chrono::microseconds period_of(double rate_hz) {
+  return std::chrono::microseconds(static_cast<std::int64_t>(1e6 / rate_hz));
 }
 
 }  // namespace
 
-Driver::Driver(runtime::Node& node, DriverOptions options)
-    : node_(node),
-      options_(std::move(options)),
-      can_(open_transport(options_)),
-      master_(master_options(options_)),
-      limiter_(options_.geometry, options_.limits),
-      odometry_(options_.geometry, options_.odometry) {
-  if (std::string e = options_.geometry.validate(); !e.empty()) throw runtime::ConfigError(e);
-  node_.subscribe<pex::velocity_cmd_t>(runtime::channels::kBaseCmd,
-                                       [this](const pex::velocity_cmd_t& cmd) { on_command(cmd); });
-  node_.watch_fd(can_->fd(), [this] { on_frames(); });
-  node_.every(std::chrono::microseconds(static_cast<std::int64_t>(1e6 / options_.control_rate_hz)),
-              [this](std::int64_t) { control(node_.monotonic_us()); });
-  node_.every(std::chrono::microseconds(static_cast<std::int64_t>(1e6 / options_.odometry_rate_hz)),
-              [this](std::int64_t) { publish_odometry(node_.monotonic_us()); });
+Driver::Driver(runtime::Node& node, const DriverOptions& options)
+    : node_(node), can_(open_transport(options)), core_(validated(options), outputs()) {
+  node_.subscribe<pex::velocity_cmd_t>(runtime::channels::kBaseCmd, [this](const pex::velocity_cmd_t& cmd) {
+    const std::string refused = core_.on_command(cmd, node_.monotonic_us());
+    if (!refused.empty()) throw runtime::BadInput(refused);
+    show_counters();
+  });
+  node_.watch_fd(can_->fd(), [this] { read_frames(); });
+  node_.every(period_of(options.control_rate_hz), [this](std::int64_t) {
+    read_frames();
+    core_.control(node_.monotonic_us());
+  });
+  node_.every(period_of(options.odometry_rate_hz), [this](std::int64_t) {
+    core_.publish_odometry(node_.monotonic_us());
+    show_counters();
+  });
   node_.set_state(pex::daemon_status_t::STATE_DEGRADED, "waiting for the drives on " + can_->describe());
-  spdlog::info("CAN {} nodes {} and {}, {:.1f} counts/m, cmd timeout {} ms", can_->describe(),
-               options_.left_node_id, options_.right_node_id, options_.geometry.counts_per_m(),
-               options_.cmd_timeout_ms);
+  spdlog::info("CAN {} nodes {} and {}, {:.1f} counts/m, cmd timeout {} ms", can_->describe(), options.left_node_id,
+               options.right_node_id, options.geometry.counts_per_m(), options.cmd_timeout_ms);
 }
 
-void Driver::on_command(const pex::velocity_cmd_t& cmd) {
-  if (!std::isfinite(cmd.v) || !std::isfinite(cmd.omega)) {
-    throw runtime::BadInput("BASE_CMD with a non-finite velocity from '" + cmd.source + "'");
-  }
-  command_ = kinematics::BodyVelocity{cmd.v, cmd.omega};
-  command_us_ = node_.monotonic_us();
-  ++node_.counter("commands");
+DriverOutputs Driver::outputs() {
+  DriverOutputs out;
+  out.send_frame = [this](const canopen::Frame& frame, std::string* error) { return can_->send(frame, error); };
+  out.publish_odometry = [this](const pex::odometry_t& msg) { node_.publish(runtime::channels::kOdometry, msg); };
+  out.report = [this](const DriverHealth& health) {
+    show_counters();  // first: a change of state publishes DAEMON_STATUS at once
+    node_.set_state(health.state, health.reason);
+  };
+  out.error = [this](std::string_view key, const std::string& text) { node_.error(key, text); };
+  out.reject = [this](std::string_view key, const std::string& text) { node_.reject(key, text); };
+  return out;
 }
 
-void Driver::on_frames() {
+void Driver::read_frames() {
   if (!node_.clock_started()) {
     // clock = "sim" before the first SIM_CLOCK: a frame cannot be timed, and
     // one timed 0 would read as a heartbeat lost when the clock starts. The
@@ -137,128 +134,30 @@ void Driver::on_frames() {
   }
   // Heartbeat, SDO and velocity timing on the monotonic clock; the odometry
   // stamp (ODOMETRY utime) on the stamping clock.
-  const std::int64_t now_us = node_.monotonic_us();
-  while (auto frame = can_->receive()) {
-    if (frame->can_id & CAN_ERR_FLAG) {
-      // A bus error (bus-off, error passive, lost arbitration, ...): stop and hold.
-      ++node_.counter("can_error_frames");
-      last_error_frame_us_ = now_us;
-      node_.error("can", "CAN error frame, class 0x" + [&] {
-        char b[16];
-        std::snprintf(b, sizeof b, "%X", frame->can_id & CAN_ERR_MASK);
-        return std::string(b);
-      }());
-      continue;
-    }
-    master_.handle(*frame, now_us);
-  }
+  std::vector<canopen::Frame> frames;
+  while (auto frame = can_->receive()) frames.push_back(*frame);
+  core_.on_frames(frames, node_.monotonic_us(), node_.now_utime());
   node_.counter("can_malformed_datagrams") = static_cast<std::int64_t>(can_->malformed());
-  // New encoder readings from both wheels -> odometry.
-  const auto& nodes = master_.nodes();
-  for (int i = 0; i < 2; ++i) {
-    if (nodes[static_cast<std::size_t>(i)].restarts != restarts_seen_[i]) {
-      restarts_seen_[i] = nodes[static_cast<std::size_t>(i)].restarts;
-      odometry_.rebaseline();  // its counter restarted from zero
-    }
-  }
-  if (nodes[0].position_seen && nodes[1].position_seen && nodes[0].position_time_us != last_positions_us_[0] &&
-      nodes[1].position_time_us != last_positions_us_[1]) {
-    last_positions_us_[0] = nodes[0].position_time_us;
-    last_positions_us_[1] = nodes[1].position_time_us;
-    positions_utime_ = node_.now_utime();
-    const std::uint64_t rejected = odometry_.rejected_jumps();
-    odometry_.update(nodes[0].position_actual, nodes[1].position_actual, now_us);
-    if (odometry_.rejected_jumps() != rejected) node_.reject("encoder", "implausible encoder jump: re-baselined");
-  }
 }
 
-void Driver::control(std::int64_t now_us) {
-  on_frames();
-  const double dt = last_control_us_ ? (now_us - last_control_us_) * 1e-6 : 0.0;
-  last_control_us_ = now_us;
-  const bool stale = command_us_ == 0 || now_us - command_us_ > 1000ll * options_.cmd_timeout_ms;
-  if (stale && !cmd_timed_out_ && command_us_ != 0) ++node_.counter("cmd_timeouts");
-  cmd_timed_out_ = stale;
-  const bool error_recent = last_error_frame_us_ != 0 && now_us - last_error_frame_us_ < 1000ll * options_.error_frame_hold_ms;
-  const bool drives_ok = master_.all_ready();
-  safe_stop_ = stale || error_recent || !drives_ok;
-  if (!drives_ok || error_recent) limiter_.reset();  // restart from standstill when they come back
-  const kinematics::WheelSpeeds wheels = limiter_.step(safe_stop_ ? kinematics::BodyVelocity{} : command_, dt);
-  const double per_m = options_.geometry.counts_per_m();
-  std::vector<std::int32_t> targets = {static_cast<std::int32_t>(std::lround(wheels.left_mps * per_m)),
-                                       static_cast<std::int32_t>(std::lround(wheels.right_mps * per_m))};
-  if (!drives_ok || error_recent) targets = {0, 0};
-  for (const auto& frame : master_.step(now_us, targets)) {
-    std::string error;
-    if (!can_->send(frame, &error)) {
-      ++node_.counter("can_send_errors");
-      node_.error("can_send", error);
-    }
+void Driver::show_counters() {
+  const DriverCounters& c = core_.counters();
+  // Event counters show once they have counted (as the node's own do).
+  for (const auto& [name, value] : {std::pair<const char*, std::int64_t>{"commands", c.commands},
+                                    {"cmd_timeouts", c.cmd_timeouts},
+                                    {"can_error_frames", c.can_error_frames},
+                                    {"can_send_errors", c.can_send_errors},
+                                    {"odometry_withheld", c.odometry_withheld}}) {
+    if (value != 0) node_.counter(name) = value;
   }
-  report(now_us, stale, error_recent);
-}
-
-void Driver::publish_odometry(std::int64_t now_us) {
-  const auto& s = odometry_.state();
-  pex::odometry_t msg{};
-  const auto& nodes = master_.nodes();
-  const std::int64_t newest_us = std::max(nodes[0].position_time_us, nodes[1].position_time_us);
-  if (positions_utime_ == 0) return;  // no encoder reading yet
-  // Encoder readings older than the heartbeat timeout mean the drives are
-  // gone: publish nothing rather than a stale pose with a fresh look.
-  if (now_us - newest_us > 1000ll * options_.heartbeat_timeout_ms) {
-    ++node_.counter("odometry_withheld");
-    return;
-  }
-  msg.utime = positions_utime_;
-  msg.x = s.pose.x_m;
-  msg.y = s.pose.y_m;
-  msg.theta = s.pose.theta_rad;
-  msg.v = s.v_mps;
-  msg.omega = s.omega_radps;
-  for (int i = 0; i < 9; ++i) msg.covariance[i] = s.covariance[static_cast<std::size_t>(i)];
-  node_.publish(runtime::channels::kOdometry, msg);
-}
-
-void Driver::report(std::int64_t, bool cmd_stale, bool error_recent) {
-  const auto& nodes = master_.nodes();
-  std::int64_t faults = 0, losses = 0, emcy = 0, restarts = 0;
-  std::string problem;
-  for (const auto& n : nodes) {
-    faults += static_cast<std::int64_t>(n.faults);
-    losses += static_cast<std::int64_t>(n.heartbeat_losses);
-    emcy += static_cast<std::int64_t>(n.emcy_count);
-    restarts += static_cast<std::int64_t>(n.restarts);
-    if (!problem.empty()) continue;
-    if (n.heartbeat_lost) {
-      problem = "node " + std::to_string(n.node_id) + ": no heartbeat";
-    } else if (n.statusword_seen && n.drive_state == canopen::DriveState::kFault) {
-      problem = "node " + std::to_string(n.node_id) + ": fault (EMCY 0x" + [&] {
-        char b[8];
-        std::snprintf(b, sizeof b, "%04X", n.last_emcy_code);
-        return std::string(b);
-      }() + ")";
-    } else if (n.phase != canopen::Cia402Master::Phase::kReady) {
-      problem = "node " + std::to_string(n.node_id) + ": " + canopen::to_string(n.phase);
-    }
-  }
-  node_.counter("node_faults") = faults;
-  node_.counter("heartbeat_losses") = losses;
-  node_.counter("emcy_frames") = emcy;
-  node_.counter("node_restarts") = restarts;
-  node_.counter("can_frames_malformed") = static_cast<std::int64_t>(master_.counters().frames_malformed);
-  node_.counter("sdo_aborts") = static_cast<std::int64_t>(master_.counters().sdo_aborts);
-  node_.counter("odometry_jumps") = static_cast<std::int64_t>(odometry_.rejected_jumps());
-  node_.counter("stopped") = safe_stop_ ? 1 : 0;
-  if (error_recent) {
-    node_.set_state(pex::daemon_status_t::STATE_ERROR, "CAN error frame: wheels stopped");
-  } else if (!problem.empty()) {
-    node_.set_state(pex::daemon_status_t::STATE_ERROR, problem + ": wheels stopped");
-  } else if (cmd_stale) {
-    node_.set_state(pex::daemon_status_t::STATE_OK, "no BASE_CMD: wheels held at zero");
-  } else {
-    node_.set_state(pex::daemon_status_t::STATE_OK);
-  }
+  node_.counter("node_faults") = c.node_faults;
+  node_.counter("heartbeat_losses") = c.heartbeat_losses;
+  node_.counter("emcy_frames") = c.emcy_frames;
+  node_.counter("node_restarts") = c.node_restarts;
+  node_.counter("can_frames_malformed") = c.can_frames_malformed;
+  node_.counter("sdo_aborts") = c.sdo_aborts;
+  node_.counter("odometry_jumps") = c.odometry_jumps;
+  node_.counter("stopped") = c.stopped;
 }
 
 }  // namespace pex::base_driver
