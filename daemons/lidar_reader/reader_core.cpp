@@ -1,0 +1,202 @@
+#include "reader_core.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <pex/daemon_status_t.hpp>
+
+namespace pex::lidar_reader {
+
+cola::ScanConfig ReaderOptions::scan_config() const {
+  // Device angles: 0 deg to the right, 90 deg straight ahead.
+  cola::ScanConfig c;
+  c.frequency_centihz = static_cast<std::uint32_t>(std::lround(scan_frequency_hz * 100.0));
+  c.angular_step_1e4deg = static_cast<std::uint32_t>(std::lround(angular_step_deg * 1e4));
+  c.start_angle_1e4deg = static_cast<std::int32_t>(std::lround((90.0 - 0.5 * fov_deg) * 1e4));
+  c.stop_angle_1e4deg = static_cast<std::int32_t>(std::lround((90.0 + 0.5 * fov_deg) * 1e4));
+  return c;
+}
+
+ReaderCore::ReaderCore(const ReaderOptions& options, ReaderOutputs outputs)
+    : options_(options),
+      outputs_(std::move(outputs)),
+      parser_(cola::Framer::Options{options_.max_telegram_bytes}) {
+  // The login and configuration sequence of SICK's telegram listing.
+  steps_.push_back({cola::set_access_mode_request(cola::kUserLevelAuthorizedClient, cola::kPasswordAuthorizedClient),
+                    "sAN", "SetAccessMode"});
+  if (options_.configure_scan) {
+    steps_.push_back({cola::set_scan_config_request(options_.scan_config()), "sAN", "mLMPsetscancfg"});
+  }
+  cola::ScanDataConfig data_config;
+  data_config.remission = options_.remission;
+  steps_.push_back({cola::scan_data_config_request(data_config), "sWA", "LMDscandatacfg"});
+  steps_.push_back({cola::output_range_request(options_.scan_config()), "sWA", "LMPoutputRange"});
+  steps_.push_back({cola::start_measurement_request(), "sAN", "LMCstartmeas"});
+  steps_.push_back({cola::run_request(), "sAN", "Run"});
+  steps_.push_back({cola::scan_output_request(true), "sEA", "LMDscandata"});
+  backoff_ms_ = options_.reconnect_initial_ms;
+}
+
+void ReaderCore::poll(std::int64_t now_us) {
+  switch (phase_) {
+    case Phase::kDisconnected:
+      if (now_us >= next_attempt_us_) connect(now_us);
+      break;
+    case Phase::kConfiguring:
+      if (now_us - step_sent_us_ > 1000ll * options_.reply_timeout_ms) {
+        disconnect("no answer to " + steps_[step_].answer_name + " within " +
+                       std::to_string(options_.reply_timeout_ms) + " ms",
+                   now_us);
+      }
+      break;
+    case Phase::kStreaming:
+      if (now_us - last_scan_us_ > 1000ll * options_.stale_timeout_ms) {
+        disconnect("no scan for " + std::to_string(options_.stale_timeout_ms) + " ms", now_us);
+      }
+      break;
+  }
+  // Framing problems are counted as rejected input, once each.
+  const auto& f = parser_.framer_counters();
+  if (f.truncated > reported_framer_.truncated || f.oversize > reported_framer_.oversize) {
+    outputs_.reject("telegram", "truncated or oversize telegram dropped");
+  }
+  counters_.skipped_bytes = static_cast<std::int64_t>(f.skipped_bytes);
+  counters_.truncated_telegrams = static_cast<std::int64_t>(f.truncated);
+  counters_.oversize_telegrams = static_cast<std::int64_t>(f.oversize);
+  reported_framer_ = f;
+}
+
+void ReaderCore::connect(std::int64_t now_us) {
+  ++counters_.connect_attempts;
+  std::string error;
+  if (!outputs_.connect(&error)) {
+    disconnect(error, now_us);
+    return;
+  }
+  parser_.reset();
+  clock_.reset();
+  phase_ = Phase::kConfiguring;
+  step_ = 0;
+  const std::string address = options_.host + ":" + std::to_string(options_.port);
+  outputs_.note("connected to " + address + ", configuring");
+  report(pex::daemon_status_t::STATE_DEGRADED, "configuring the sensor");
+  send_next_step(now_us);
+}
+
+void ReaderCore::disconnect(const std::string& why, std::int64_t now_us) {
+  const bool was_connected = phase_ != Phase::kDisconnected;
+  if (was_connected) {
+    outputs_.close();
+    ++counters_.disconnects;
+  }
+  phase_ = Phase::kDisconnected;
+  next_attempt_us_ = now_us + 1000ll * backoff_ms_;
+  outputs_.error("connection", why + "; retry in " + std::to_string(backoff_ms_) + " ms");
+  report(pex::daemon_status_t::STATE_ERROR,
+         "sensor " + options_.host + ":" + std::to_string(options_.port) + " unavailable: " + why);
+  backoff_ms_ = std::min(backoff_ms_ * 2, options_.reconnect_max_ms);
+}
+
+void ReaderCore::send_next_step(std::int64_t now_us) {
+  std::string error;
+  step_sent_us_ = now_us;
+  if (!outputs_.send(steps_[step_].request, &error)) {
+    disconnect("sending " + steps_[step_].answer_name + ": " + error, now_us);
+  }
+}
+
+void ReaderCore::on_bytes(std::string_view bytes, std::int64_t now_us, std::int64_t now_utime) {
+  if (phase_ == Phase::kDisconnected) return;  // left over from a connection we dropped
+  for (auto& event : parser_.push(bytes)) {
+    if (auto* scan = std::get_if<cola::ScanEvent>(&event)) {
+      on_scan(scan->scan, now_us, now_utime);
+    } else if (auto* reply = std::get_if<cola::ReplyEvent>(&event)) {
+      on_reply(reply->telegram, now_us);
+    } else {
+      outputs_.reject("telegram", "malformed telegram: " + std::get<cola::ErrorEvent>(event).message);
+      ++counters_.malformed_telegrams;
+    }
+    if (phase_ == Phase::kDisconnected) return;  // a reply may have ended the connection
+  }
+}
+
+void ReaderCore::on_closed(const std::string& error, std::int64_t now_us) {
+  disconnect(error.empty() ? "sensor closed the connection" : error, now_us);
+}
+
+void ReaderCore::on_reply(const cola::Telegram& t, std::int64_t now_us) {
+  if (phase_ != Phase::kConfiguring) {
+    ++counters_.unexpected_replies;
+    return;
+  }
+  const Step& expected = steps_[step_];
+  if (t.type == "sFA") {
+    disconnect("sensor refused " + expected.answer_name + " (sFA " + (t.args.empty() ? "" : t.args[0]) + ")", now_us);
+    return;
+  }
+  if (t.type != expected.answer_type || t.name != expected.answer_name) {
+    ++counters_.unexpected_replies;
+    return;  // e.g. a late answer: keep waiting for ours
+  }
+  // Answers with a result: SetAccessMode/Run 1 = success; mLMPsetscancfg 0 = ok.
+  const std::string result = t.args.empty() ? "" : t.args[0];
+  bool ok = true;
+  if (t.name == "SetAccessMode" || t.name == "Run") ok = result == "1";
+  if (t.name == "mLMPsetscancfg") ok = result == "0";
+  if (!ok) {
+    disconnect("sensor answered " + t.name + " " + result, now_us);
+    return;
+  }
+  if (++step_ < steps_.size()) {
+    send_next_step(now_us);
+    return;
+  }
+  phase_ = Phase::kStreaming;
+  last_scan_us_ = now_us;
+  backoff_ms_ = options_.reconnect_initial_ms;
+  outputs_.note("streaming scans from " + options_.host + ":" + std::to_string(options_.port));
+}
+
+void ReaderCore::on_scan(const cola::ScanData& scan, std::int64_t now_us, std::int64_t now_utime) {
+  if (phase_ != Phase::kStreaming) {
+    ++counters_.unexpected_scans;
+    return;
+  }
+  const cola::Channel* dist = scan.find_channel("DIST1");
+  if (!dist || dist->data.empty() || dist->angular_step_1e4deg == 0) {
+    outputs_.reject("scan", "scan telegram without a usable DIST1 channel");
+    return;
+  }
+  last_scan_us_ = now_us;
+  // Device times map to host time through the offset observed at reception.
+  const auto mapped = clock_.map(scan.time_since_startup_us, scan.time_of_transmission_us, now_utime);
+  constexpr double kDegToRad = std::numbers::pi / 180.0;
+  pex::laser_scan_t msg{};
+  msg.utime = mapped.host_us;
+  msg.device_utime = mapped.device_us;
+  msg.scan_counter = scan.scan_counter;
+  msg.angle_min = static_cast<float>((dist->start_angle_1e4deg * 1e-4 - 90.0) * kDegToRad);
+  msg.angle_increment = static_cast<float>(dist->angular_step_1e4deg * 1e-4 * kDegToRad);
+  msg.range_min = static_cast<float>(options_.range_min_m);
+  msg.range_max = static_cast<float>(options_.range_max_m);
+  msg.scan_time = scan.scan_frequency_centihz > 0 ? 100.0f / static_cast<float>(scan.scan_frequency_centihz) : 0.0f;
+  msg.sensor_x = static_cast<float>(options_.sensor_x_m);
+  msg.sensor_y = static_cast<float>(options_.sensor_y_m);
+  msg.sensor_theta = static_cast<float>(options_.sensor_theta_rad);
+  msg.ranges = cola::distances_m(*dist);
+  msg.nranges = static_cast<std::int32_t>(msg.ranges.size());
+  if (const cola::Channel* rssi = scan.find_channel("RSSI1"); rssi && rssi->data.size() == dist->data.size()) {
+    msg.intensities.assign(rssi->data.begin(), rssi->data.end());
+  }
+  msg.nintensities = static_cast<std::int32_t>(msg.intensities.size());
+  outputs_.publish_scan(msg);
+  ++counters_.scans_published;
+  report(pex::daemon_status_t::STATE_OK, "");
+}
+
+void ReaderCore::report(std::int8_t state, std::string reason) {
+  outputs_.report(ReaderHealth{state, std::move(reason)});
+}
+
+}  // namespace pex::lidar_reader

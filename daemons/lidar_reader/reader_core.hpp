@@ -1,0 +1,134 @@
+#pragma once
+// pex-lidar-reader's logic without a socket, a node or a clock: the
+// connection state machine (connect, log in, configure, stream, back off),
+// framing and parsing (cola::StreamParser), the device clock
+// (cola::DeviceClock) and LMDscandata -> laser_scan_t. Bytes and time in;
+// connect/send/close requests, LIDAR_SCAN and health out, through
+// ReaderOutputs. The daemon's shell (reader.hpp) owns the TCP socket and the
+// node; the tests play the sensor.
+//
+// Times: `now_us` is a monotonic clock (timeouts, back-off; any epoch, never
+// going back), `now_utime` the stamping clock (LIDAR_SCAN.utime).
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <pex/laser_scan_t.hpp>
+
+#include "cola/cola.hpp"
+
+namespace pex::lidar_reader {
+
+struct ReaderOptions {
+  std::string host = "192.168.0.1";      // the LMS1xx factory address; the sim uses 127.0.0.1
+  int port = 2111;
+  int connect_timeout_ms = 1000;
+  int reply_timeout_ms = 2000;           // per configuration request
+  int stale_timeout_ms = 1000;           // no scan for this long while streaming -> reconnect
+  int reconnect_initial_ms = 200;        // back-off starts here and doubles ...
+  int reconnect_max_ms = 5000;           // ... up to this
+  bool configure_scan = true;            // send mLMPsetscancfg (else keep the device's)
+  double scan_frequency_hz = 25.0;
+  double angular_step_deg = 0.5;
+  double fov_deg = 270.0;                // symmetric about straight ahead
+  bool remission = true;                 // request the RSSI1 channel
+  double range_min_m = 0.05;
+  double range_max_m = 20.0;
+  double sensor_x_m = 0.0, sensor_y_m = 0.0, sensor_theta_rad = 0.0;  // in the base frame
+  std::size_t max_telegram_bytes = 65536;
+
+  cola::ScanConfig scan_config() const;
+};
+
+// What DAEMON_STATUS counts under these names (docs/cola.md).
+struct ReaderCounters {
+  // Events, counted as they happen.
+  std::int64_t connect_attempts = 0;
+  std::int64_t disconnects = 0;          // connections lost or dropped by us
+  std::int64_t scans_published = 0;
+  std::int64_t malformed_telegrams = 0;  // framed, but not a telegram we can parse
+  std::int64_t unexpected_replies = 0;   // not the answer awaited (late, or while streaming)
+  std::int64_t unexpected_scans = 0;     // scan data before the configuration was done
+  // The framer's totals, as of the last poll.
+  std::int64_t skipped_bytes = 0;        // outside any telegram
+  std::int64_t truncated_telegrams = 0;  // cut off by a new STX
+  std::int64_t oversize_telegrams = 0;   // longer than max_telegram_bytes
+};
+
+struct ReaderHealth {
+  std::int8_t state = 0;  // daemon_status_t::STATE_*
+  std::string reason;
+};
+
+struct ReaderOutputs {
+  // Opens the connection to host:port within connect_timeout_ms; false, with
+  // the reason in *error, when it could not.
+  std::function<bool(std::string* error)> connect;
+  // Closes the open connection; the core expects no more bytes from it.
+  std::function<void()> close;
+  // Sends bytes on the open connection; false, with the reason in *error, when it could not.
+  std::function<bool(std::string_view bytes, std::string* error)> send;
+  std::function<void(const pex::laser_scan_t& msg)> publish_scan;
+  // At every change of phase, and with every scan; counters() is current.
+  std::function<void(const ReaderHealth& health)> report;
+  // The connection's progress, for the log ("connected to ...", "streaming ...").
+  std::function<void(const std::string& text)> note;
+  // An error (the connection's), and input that was refused: `key` groups
+  // them for rate-limited logging.
+  std::function<void(std::string_view key, const std::string& text)> error;
+  std::function<void(std::string_view key, const std::string& text)> reject;
+};
+
+class ReaderCore {
+ public:
+  enum class Phase { kDisconnected, kConfiguring, kStreaming };
+
+  ReaderCore(const ReaderOptions& options, ReaderOutputs outputs);
+
+  // Call often (the daemon: every 20 ms). Connects when the back-off is over,
+  // drops a connection whose answer or scans are overdue, and counts framing
+  // problems (one reject per poll that saw new ones).
+  void poll(std::int64_t now_us);
+  // Bytes read from the open connection, as they came (any split).
+  void on_bytes(std::string_view bytes, std::int64_t now_us, std::int64_t now_utime);
+  // The open connection ended: `error` says why, "" when the sensor closed it.
+  void on_closed(const std::string& error, std::int64_t now_us);
+
+  Phase phase() const { return phase_; }
+  // The wait before the next connection attempt after the next failure.
+  int backoff_ms() const { return backoff_ms_; }
+  const ReaderOptions& options() const { return options_; }
+  const ReaderCounters& counters() const { return counters_; }
+
+ private:
+  struct Step {
+    std::string request;       // framed bytes
+    std::string answer_type;   // "sAN", "sWA", "sEA"
+    std::string answer_name;
+  };
+
+  void connect(std::int64_t now_us);
+  void disconnect(const std::string& why, std::int64_t now_us);
+  void on_reply(const cola::Telegram& telegram, std::int64_t now_us);
+  void on_scan(const cola::ScanData& scan, std::int64_t now_us, std::int64_t now_utime);
+  void send_next_step(std::int64_t now_us);
+  void report(std::int8_t state, std::string reason);
+
+  ReaderOptions options_;
+  ReaderOutputs outputs_;
+  std::vector<Step> steps_;
+  Phase phase_ = Phase::kDisconnected;
+  cola::StreamParser parser_;
+  cola::DeviceClock clock_;
+  ReaderCounters counters_;
+  std::size_t step_ = 0;
+  std::int64_t step_sent_us_ = 0;
+  std::int64_t last_scan_us_ = 0;
+  std::int64_t next_attempt_us_ = 0;
+  int backoff_ms_ = 0;
+  cola::Framer::Counters reported_framer_{};
+};
+
+}  // namespace pex::lidar_reader
