@@ -1,0 +1,137 @@
+// Fault injection on pex-slam (ctest label `faults`): real daemons on a real
+// LCM bus in a private network namespace, checked against the simulator's
+// truth (SIM_TRUTH) on the simulated clock (SIM_CLOCK).
+//
+//   kill -9 pex-slam mid-mission (the set on SLAM, as on the robot) and
+//   restart: the restarted SLAM takes its filter up from its checkpoint
+//   (particles, maps, trajectories, generator, odometry frame; written every
+//   checkpoint_period_s) and goes on from there with the odometry of the same
+//   base driver. Its first pose is where the robot is (no jump: SLAM's motion
+//   over the restart is the truth's within a few cm), its updates carry the
+//   same epoch (the mapper keeps its maps: no epoch change, at most a resync
+//   for the updates made after the last checkpoint), and the mission ends
+//   DONE with the world mapped and nothing beyond it. Without the checkpoint
+//   the restarted SLAM is a new filter: a new epoch, and the mapper drops
+//   its maps.
+#include <gtest/gtest.h>
+
+#include <pex/explore_state_t.hpp>
+#include <pex/polygon_map_t.hpp>
+#include <pex/pose_t.hpp>
+#include <pex/slam_update_t.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "exploration_set.hpp"
+#include "harness.hpp"
+#include "runtime/channels.hpp"
+
+using namespace pex::testing;
+namespace ch = pex::runtime::channels;
+
+namespace {
+
+// The truth pose nearest in time to `utime` (SLAM_POSE carries its
+// odometry's stamp, SIM_TRUTH the simulator's: both the simulated clock).
+pex::pose_t truth_at(const std::vector<pex::pose_t>& truth, std::int64_t utime) {
+  const pex::pose_t* best = &truth.front();
+  for (const pex::pose_t& p : truth)
+    if (std::llabs(p.utime - utime) < std::llabs(best->utime - utime)) best = &p;
+  return *best;
+}
+
+// `to` seen from `from`: (forward, left, turn). The same for the truth and for
+// SLAM whatever their frames, so their motions compare directly.
+struct Motion {
+  double x, y, theta;
+};
+Motion motion(const pex::pose_t& from, const pex::pose_t& to) {
+  const double c = std::cos(from.theta), s = std::sin(from.theta);
+  const double dx = to.x - from.x, dy = to.y - from.y;
+  return {c * dx + s * dy, -s * dx + c * dy, std::remainder(to.theta - from.theta, 2.0 * std::numbers::pi)};
+}
+
+}  // namespace
+
+TEST(SlamFaults, KilledSlamGoesOnFromItsCheckpointWithTheSameEpochAndNoJump) {
+  const std::string checkpoint = make_temp_dir("faults-slam-state") + "/slam-filter.bin";
+  ExplorationSet set("faults-slam",
+                     {.slam = true,
+                      .slam_keys = {{"checkpoint_file", "\"" + checkpoint + "\""}, {"checkpoint_period_s", "0.5"}}});
+  std::vector<pex::pose_t> truth, slam_poses;
+  std::vector<pex::slam_update_t> updates;
+  std::vector<pex::polygon_map_t> maps;
+  set.bus().on<pex::pose_t>(std::string(ch::kSimTruth), [&](const pex::pose_t& p) { truth.push_back(p); });
+  set.bus().on<pex::pose_t>(std::string(ch::kSlamPose), [&](const pex::pose_t& p) { slam_poses.push_back(p); });
+  set.bus().on<pex::slam_update_t>(std::string(ch::kSlamUpdate), [&](const pex::slam_update_t& u) { updates.push_back(u); });
+  set.bus().on<pex::polygon_map_t>(std::string(ch::kMap), [&](const pex::polygon_map_t& m) { maps.push_back(m); });
+  auto checkpoints_written = [&] {
+    const auto it = set.bus().status().find("slam");
+    return it == set.bus().status().end() ? std::int64_t{-1} : counter_of(it->second, "checkpoints_written");
+  };
+  // Mid-mission: a good part of the world mapped, SLAM some updates in, the
+  // robot driving; then two more checkpoints, so the newest one is of now.
+  ASSERT_TRUE(set.spin_sim(
+      [&] {
+        return !maps.empty() && maps.back().free_area_m2 > 30.0 && !updates.empty() && updates.back().generation >= 10 &&
+               set.phase() == pex::explore_state_t::PHASE_MOVING;
+      },
+      300.0))
+      << set.report_with_logs();
+  const std::int64_t written = checkpoints_written();
+  ASSERT_TRUE(set.spin_sim([&] { return checkpoints_written() >= written + 2; }, 10.0)) << set.report_with_logs();
+  ASSERT_TRUE(set.spin_sim([&] { return set.phase() == pex::explore_state_t::PHASE_MOVING; }, 60.0))
+      << set.report_with_logs();
+
+  set.process("slam")->kill_hard();
+  set.spin_sim([] { return false; }, 0.3);  // whatever the killed SLAM sent is in
+  const pex::slam_update_t last_update = updates.back();
+  const pex::pose_t last_pose = slam_poses.back();
+  const std::size_t updates_before = updates.size(), poses_before = slam_poses.size();
+  set.restart("slam");
+  ASSERT_TRUE(set.spin_sim([&] { return slam_poses.size() > poses_before && updates.size() > updates_before; }, 30.0))
+      << set.report_with_logs();
+
+  // No jump: SLAM's motion from its last pose before the kill to its first
+  // after the restart is the robot's, within a few cm (the restored filter
+  // misses at most the updates of the last checkpoint period).
+  const pex::pose_t first_pose = slam_poses[poses_before];
+  const Motion slam_moved = motion(last_pose, first_pose);
+  const Motion truth_moved = motion(truth_at(truth, last_pose.utime), truth_at(truth, first_pose.utime));
+  const double error_m = std::hypot(slam_moved.x - truth_moved.x, slam_moved.y - truth_moved.y);
+  EXPECT_LT(error_m, 0.05) << "SLAM moved (" << slam_moved.x << ", " << slam_moved.y << ") over the restart, the robot ("
+                           << truth_moved.x << ", " << truth_moved.y << ")";
+  EXPECT_LT(std::abs(slam_moved.theta - truth_moved.theta), 0.03)
+      << "SLAM turned " << slam_moved.theta << " rad over the restart, the robot " << truth_moved.theta;
+  // The same lineage: the same epoch, generations going on from the checkpoint's.
+  const pex::slam_update_t& first_update = updates[updates_before];
+  EXPECT_EQ(first_update.epoch, last_update.epoch) << "the restarted SLAM is a new filter";
+  // At most the updates of one checkpoint period (0.5 s) are lost: a few
+  // while the robot turns (an update per 0.25 rad).
+  EXPECT_GE(first_update.generation, last_update.generation - 5) << "the restarted SLAM started from an old state";
+  EXPECT_LE(first_update.generation, last_update.generation + 1);
+  std::cout << "SLAM killed at generation " << last_update.generation << ", first update after the restart: generation "
+            << first_update.generation << (first_update.republished ? " (republished)" : "") << "; motion over the restart "
+            << "SLAM (" << slam_moved.x << ", " << slam_moved.y << ", " << slam_moved.theta << "), truth (" << truth_moved.x
+            << ", " << truth_moved.y << ", " << truth_moved.theta << ")\n";
+
+  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
+  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
+  const auto other_epoch = std::count_if(updates.begin() + static_cast<std::ptrdiff_t>(updates_before), updates.end(),
+                                         [&](const pex::slam_update_t& u) { return u.epoch != last_update.epoch; });
+  EXPECT_EQ(other_epoch, 0) << "updates of another epoch after the restart";
+  // The whole world mapped (82.66 m^2 free), nothing beyond it (ghost space).
+  EXPECT_GT(set.state()->explored_area_m2, 0.9 * 82.66) << set.report();
+  EXPECT_LT(maps.back().free_area_m2, 1.03 * 82.66) << set.report();
+  EXPECT_EQ(set.clock()->collisions, 0);
+  const auto& mapper = set.bus().status().at("polygon_mapper");
+  EXPECT_EQ(counter_of(mapper, "slam_epoch_changes"), 0) << "the mapper dropped its maps for a new SLAM";
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
+  if (!::testing::Test::HasFailure()) std::filesystem::remove_all(std::filesystem::path(checkpoint).parent_path());
+}
