@@ -87,7 +87,8 @@ int main(int argc, char** argv) {
         if (const auto why = pex::runtime::write_file_atomically(checkpoint_out, bytes); !why.empty())
           spdlog::error("{}", why);
         else
-          spdlog::info("wrote the filter's checkpoint ({} bytes) to {}", bytes.size(), checkpoint_out);
+          spdlog::info("wrote the filter's checkpoint ({} bytes, generation {}) to {}", bytes.size(),
+                       slam->filter().generation(), checkpoint_out);
       }
       if (poses_path.empty()) return;
       std::ofstream out(poses_path);
