@@ -138,6 +138,7 @@ void Driver::read_frames() {
   while (auto frame = can_->receive()) frames.push_back(*frame);
   core_.on_frames(frames, node_.monotonic_us(), node_.now_utime());
   node_.counter("can_malformed_datagrams") = static_cast<std::int64_t>(can_->malformed());
+  show_counters();
 }
 
 void Driver::show_counters() {
