@@ -9,6 +9,7 @@ PEX_DEBS=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libtomlplusplus-dev libcli11-dev libsystemd-dev
   iproute2 util-linux procps
+  nftables libfaketime   # fault tests: LCM datagrams dropped, the wall clock stepped
 )
 missing=()
 for p in "${PEX_DEBS[@]}"; do

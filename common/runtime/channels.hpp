@@ -18,6 +18,7 @@ inline constexpr std::string_view kDaemonStatus = "DAEMON_STATUS";
 inline constexpr std::string_view kSimTruth = "SIM_TRUTH";
 inline constexpr std::string_view kSimClock = "SIM_CLOCK";
 inline constexpr std::string_view kMissionCmd = "MISSION_CMD";
+inline constexpr std::string_view kSimFault = "SIM_FAULT";
 
 struct ChannelInfo {
   std::string_view name;
@@ -27,7 +28,7 @@ struct ChannelInfo {
   std::string_view publisher;   // daemon that publishes it
 };
 
-inline constexpr std::array<ChannelInfo, 11> kRegistry{{
+inline constexpr std::array<ChannelInfo, 12> kRegistry{{
     {kLidarScan, "pex.laser_scan_t", 25.0, true, "lidar_reader"},
     {kOdometry, "pex.odometry_t", 50.0, true, "base_driver"},
     {kBaseCmd, "pex.velocity_cmd_t", 10.0, true, "explorer"},
@@ -39,6 +40,7 @@ inline constexpr std::array<ChannelInfo, 11> kRegistry{{
     {kSimTruth, "pex.pose_t", 50.0, true, "sim"},
     {kSimClock, "pex.sim_clock_t", 100.0, true, "sim"},
     {kMissionCmd, "pex.mission_cmd_t", 0.0, true, "pex-mission"},
+    {kSimFault, "pex.sim_fault_t", 0.0, true, "tests, drills"},
 }};
 
 // nullptr if the name is not registered.

@@ -235,6 +235,7 @@ cola::ScanData Lms111Protocol::make_scan(const std::vector<float>& ranges_m, std
 #include <pex/pose_t.hpp>
 #include <pex/daemon_status_t.hpp>
 #include <pex/sim_clock_t.hpp>
+#include <pex/sim_fault_t.hpp>
 #include <spdlog/spdlog.h>
 
 #include "runtime/channels.hpp"
@@ -268,9 +269,8 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   laser_ = std::make_unique<sim::Laser>(options_.laser, options_.seed * 2 + 1);
   plant_ = std::make_unique<sim::DiffDrivePlant>(options_.plant, options_.start_override ? options_.start : world_.start,
                                                  options_.seed * 2 + 2);
-  auto listener = hwio::TcpListener::open_loopback(static_cast<std::uint16_t>(options_.cola_port));
-  if (!listener) throw runtime::Unavailable("lidar CoLa server: " + listener.error());
-  listener_ = std::move(*listener);
+  if (!open_listener()) throw runtime::Unavailable("lidar CoLa server: cannot listen on port " +
+                                                   std::to_string(options_.cola_port));
 
   auto can = options_.can_transport == "socketcan"
                  ? hwio::open_socketcan(hwio::SocketCanOptions{options_.can_interface, {}, false})
@@ -285,8 +285,16 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   // Present from the start, so "no collision" reads 0 rather than absent.
   node_.counter("collisions") = 0;
   node_.counter("collision_steps") = 0;
-  node_.watch_fd(listener_.fd(), [this] { accept_clients(); });
   node_.watch_fd(can_->fd(), [this] { receive_can(); });
+  node_.subscribe<pex::sim_fault_t>(runtime::channels::kSimFault, [this](const pex::sim_fault_t& msg) {
+    if (msg.fault != pex::sim_fault_t::FAULT_LASER_STALL && msg.fault != pex::sim_fault_t::FAULT_LASER_REFUSE)
+      throw runtime::BadInput("unknown fault " + std::to_string(msg.fault));
+    if (!std::isfinite(msg.duration_s) || msg.duration_s < 0.0 || msg.duration_s > 3600.0)
+      throw runtime::BadInput("fault duration " + std::to_string(msg.duration_s) + " s not in [0, 3600]");
+    spdlog::warn("fault from {}: laser {} for {} s", msg.source,
+                 msg.fault == pex::sim_fault_t::FAULT_LASER_STALL ? "stall" : "refuses connections", msg.duration_s);
+    start_laser_fault(msg.fault, msg.duration_s);
+  });
   // The sim is the clock source: its node runs on the system clock (run_daemon
   // refuses clock = "sim" for it), and it paces simulated time by the
   // monotonic clock x speed_factor.
@@ -321,7 +329,45 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
 
 Simulator::~Simulator() = default;
 
+bool Simulator::open_listener() {
+  auto listener = hwio::TcpListener::open_loopback(static_cast<std::uint16_t>(options_.cola_port));
+  if (!listener) {
+    spdlog::error("lidar CoLa server: {}", listener.error());
+    return false;
+  }
+  listener_ = std::move(*listener);
+  listener_watch_ = node_.watch_fd(listener_.fd(), [this] { accept_clients(); });
+  return true;
+}
+
+void Simulator::start_laser_fault(std::int8_t fault, double duration_s) {
+  if (laser_fault_ != 0) end_laser_fault();
+  if (duration_s <= 0.0) return;
+  laser_fault_ = fault;
+  laser_fault_until_us_ = sim_time_us_ + static_cast<std::int64_t>(duration_s * 1e6);
+  ++node_.counter("laser_faults");
+  if (fault == pex::sim_fault_t::FAULT_LASER_REFUSE) {
+    // The device's server is gone: its connections close, its port is shut.
+    for (auto& client : clients_) client->closed = true;
+    drop_closed_clients();
+    node_.unwatch_fd(listener_watch_);
+    listener_ = hwio::TcpListener{};
+  }
+}
+
+void Simulator::end_laser_fault() {
+  const bool refused = laser_fault_ == pex::sim_fault_t::FAULT_LASER_REFUSE;
+  laser_fault_ = 0;
+  if (refused && !open_listener()) {
+    // The port is taken meanwhile: try again next tick.
+    laser_fault_ = pex::sim_fault_t::FAULT_LASER_REFUSE;
+    return;
+  }
+  spdlog::info("laser fault over");
+}
+
 void Simulator::tick() {
+  if (laser_fault_ != 0 && sim_time_us_ >= laser_fault_until_us_) end_laser_fault();
   drop_closed_clients();
   const double step_s = 1.0 / options_.physics_rate_hz;
   const double wall_s = node_.monotonic_us() * 1e-6;
@@ -406,6 +452,7 @@ void Simulator::laser_step() {
 
 void Simulator::send_scan() {
   send_scan_us_ = 0;
+  if (laser_fault_ == pex::sim_fault_t::FAULT_LASER_STALL) return;  // a hung device sends nothing
   // One telegram per channel configuration among the streaming clients.
   std::string encoded[2][2];
   const std::vector<float>& ranges = pending_scan_;
@@ -452,6 +499,7 @@ void Simulator::read_client(ColaClient& client) {
       break;
     }
     if (r.bytes == 0) break;
+    if (laser_fault_ == pex::sim_fault_t::FAULT_LASER_STALL) continue;  // read, never answered
     for (auto& event : client.parser.push(std::string_view(buffer, r.bytes))) {
       if (auto* reply = std::get_if<cola::ReplyEvent>(&event)) {
         std::string error;

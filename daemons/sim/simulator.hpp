@@ -116,6 +116,10 @@ class Simulator {
   void drop_closed_clients();
   void receive_can();
   void send_can(const std::vector<canopen::Frame>& frames);
+  // SIM_FAULT: the laser stalls or refuses connections for a while.
+  void start_laser_fault(std::int8_t fault, double duration_s);
+  void end_laser_fault();
+  bool open_listener();
 
   runtime::Node& node_;
   SimOptions options_;
@@ -142,6 +146,9 @@ class Simulator {
   std::int64_t wall_start_utime_ = 0;
   double wall_start_s_ = 0.0;        // steady clock at start
   std::int64_t steps_done_ = 0;
+  int listener_watch_ = -1;
+  std::int8_t laser_fault_ = 0;            // sim_fault_t::FAULT_*, 0: none
+  std::int64_t laser_fault_until_us_ = 0;  // simulated time
 };
 
 }  // namespace pex::simd

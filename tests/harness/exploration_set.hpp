@@ -7,6 +7,7 @@
 #include <pex/sim_clock_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -56,6 +57,8 @@ struct SetOptions {
   // and the explorer on SLAM_POSE, as on the robot.
   bool slam = false;
   ConfigKeys explorer_keys, mapper_keys, slam_keys;
+  // Daemons of the set not started with it ("sim", "slam", ...): start() starts them.
+  std::vector<std::string> held_back;
 };
 
 // The exploration set on a world: pex-sim, pex-lidar-reader, pex-base-driver,
@@ -88,31 +91,37 @@ class ExplorationSet {
     bus_.on<pex::sim_clock_t>("SIM_CLOCK", [this](const pex::sim_clock_t& c) { clock_ = c; });
     bus_.on<pex::velocity_cmd_t>("BASE_CMD", [this](const pex::velocity_cmd_t& c) { cmd_ = c; });
 
-    set_.push_back(start_daemon("sim", dir_, {}, write_config(dir_, "sim", sim)));
-    set_.push_back(start_daemon("lidar_reader", dir_));
-    set_.push_back(start_daemon("base_driver", dir_));
-    if (options.slam) set_.push_back(start_daemon("slam", dir_, {}, write_config(dir_, "slam", slam)));
-    set_.push_back(start_daemon("polygon_mapper", dir_, {}, write_config(dir_, "polygon_mapper", mapper)));
-    set_.push_back(start_daemon("explorer", dir_, {}, write_config(dir_, "explorer", explorer)));
+    write_config(dir_, "sim", sim);
+    if (options.slam) write_config(dir_, "slam", slam);
+    write_config(dir_, "polygon_mapper", mapper);
+    write_config(dir_, "explorer", explorer);
+    for (const char* name : {"sim", "lidar_reader", "base_driver", "slam", "polygon_mapper", "explorer"}) {
+      if (std::string(name) == "slam" && !options.slam) continue;
+      set_.push_back({name, nullptr});
+      if (std::find(options.held_back.begin(), options.held_back.end(), name) == options.held_back.end())
+        start(name);
+    }
   }
 
   Bus& bus() { return bus_; }
   const std::string& dir() const { return dir_; }
-  // One daemon of the set ("lidar_reader", ...); nullptr if it is not one.
+  // One daemon of the set ("lidar_reader", ...); nullptr if it is not one or not started.
   Process* process(const std::string& name) {
-    for (auto& p : set_)
-      if (p->name() == bin_path(program_of(name)) || p->name() == program_of(name)) return p.get();
+    for (auto& [n, p] : set_)
+      if (n == name) return p.get();
     return nullptr;
   }
-  // Starts a daemon of the set again (after a kill), with its config.
-  void restart(const std::string& name) {
-    for (auto& p : set_)
-      if (p->name() == bin_path(program_of(name)) || p->name() == program_of(name)) {
+  // Starts a daemon of the set (held back, or again after a kill) with its config.
+  void start(const std::string& name) {
+    for (auto& [n, p] : set_)
+      if (n == name) {
         const std::string config = dir_ + "/" + name + ".toml";
         p = start_daemon(name, dir_, {}, std::filesystem::exists(config) ? config : "");
         return;
       }
+    ADD_FAILURE() << name << " is not a daemon of this set";
   }
+  void restart(const std::string& name) { start(name); }
   const std::optional<pex::explore_state_t>& state() const { return state_; }
   const std::optional<pex::pose_t>& truth() const { return truth_; }
   const std::optional<pex::pose_t>& first_truth() const { return first_truth_; }
@@ -153,7 +162,8 @@ class ExplorationSet {
   }
   std::string report_with_logs() const {
     std::string r = report();
-    for (const auto& p : set_) {
+    for (const auto& [name, p] : set_) {
+      if (!p) continue;
       const std::string out = p->output();
       r += "--- " + p->name() + " (tail)\n" + out.substr(out.size() > 3000 ? out.size() - 3000 : 0);
     }
@@ -162,7 +172,8 @@ class ExplorationSet {
 
   // Stops the set; every daemon must have run to the end and stop cleanly.
   void stop_all() {
-    for (auto& p : set_) {
+    for (auto& [name, p] : set_) {
+      if (!p) continue;
       EXPECT_TRUE(p->running()) << p->name() << " exited early:\n" << p->output();
       EXPECT_EQ(p->stop(5s), 0) << p->name();
     }
@@ -174,7 +185,7 @@ class ExplorationSet {
  private:
   std::string dir_;
   Bus bus_;
-  std::vector<std::unique_ptr<Process>> set_;
+  std::vector<std::pair<std::string, std::unique_ptr<Process>>> set_;  // (daemon, process or null)
   std::optional<pex::explore_state_t> state_;
   std::vector<pex::explore_state_t> states_;
   std::optional<pex::pose_t> truth_, first_truth_;
