@@ -53,5 +53,11 @@ function(pex_add_executable name)
   target_link_libraries(${name} PRIVATE ${ARG_LIBS})
   pex_target_options(${name})
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/bin)
-  install(TARGETS ${name} RUNTIME DESTINATION bin)
+  if(name MATCHES "^pex-bench-")
+    # Benchmarks are for the build tree only: not installed, not packaged.
+    install(TARGETS ${name} RUNTIME DESTINATION bin COMPONENT bench EXCLUDE_FROM_ALL)
+  else()
+    install(TARGETS ${name} RUNTIME DESTINATION bin)
+    set_property(GLOBAL APPEND PROPERTY PEX_INSTALLED_PROGRAMS ${name})  # cmake/Packaging.cmake
+  endif()
 endfunction()

@@ -10,6 +10,7 @@ PEX_DEBS=(
   libtomlplusplus-dev libcli11-dev libsystemd-dev
   iproute2 util-linux procps
   nftables libfaketime   # fault tests: LCM datagrams dropped, the wall clock stepped
+  dpkg-dev file          # scripts/package.sh: cpack runs dpkg-shlibdeps (and file) for Depends
 )
 missing=()
 for p in "${PEX_DEBS[@]}"; do

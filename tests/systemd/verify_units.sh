@@ -6,7 +6,7 @@ set -euo pipefail
 src=$1 bin=$2
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 cp "$src"/systemd/*.service "$src"/systemd/*.target "$tmp"/
-sed -i "s#/usr/local/bin#$bin#" "$tmp"/*.service
+sed -i "s#/usr/bin/pex-#$bin/pex-#" "$tmp"/*.service
 out=$(systemd-analyze verify "$tmp"/*.service "$tmp"/*.target 2>&1 | grep -F "$tmp" || true)
 if [ -n "$out" ]; then echo "systemd-analyze verify:"; echo "$out"; exit 1; fi
 for d in lidar-reader base-driver slam polygon-mapper explorer sim; do

@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# check_deb.sh SRC_DIR DEB_DIR VERSION "PROGRAMS": installs the package built by
+# build_deb.sh into a scratch root (dpkg -x) and checks what lands where, the
+# control data (Depends, conffiles, maintainer scripts), then verifies the
+# installed units with systemd-analyze pointed at the scratch root's binaries.
+# PEX_PKG_DROP=PATH removes PATH from the scratch root first (the self-test: the
+# check must then fail naming it). Every failure is printed; exit 1 if any.
+set -uo pipefail   # no -e: every check runs and reports
+src=$1 debdir=$2 version=$3 programs=$4
+deb=$(ls "$debdir"/polyexplore_*.deb) || exit 1
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+root=$tmp/root
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+
+arch=$(dpkg --print-architecture)
+[ "$(basename "$deb")" = "polyexplore_${version}_${arch}.deb" ] || fail "file name $(basename "$deb")"
+
+# --- control data ---
+field() { dpkg-deb -f "$deb" "$1"; }
+[ "$(field Package)" = polyexplore ] || fail "Package: $(field Package)"
+[ "$(field Version)" = "$version" ] || fail "Version: $(field Version)"
+depends=$(field Depends)
+for d in liblcm1 liblcm-bin libsystemd0 libspdlog adduser iproute2; do
+  [[ ", $depends" == *", $d"* ]] || fail "Depends lacks $d: $depends"
+done
+dpkg-deb -e "$deb" "$tmp/control" || exit 1
+for s in postinst prerm postrm; do
+  [ -x "$tmp/control/$s" ] || fail "no executable $s"
+  sh -n "$tmp/control/$s" || fail "$s: shell syntax"
+done
+grep -Eq '(adduser|useradd) --system.* polyexplore' "$tmp/control/postinst" || fail "postinst does not create the polyexplore system user"
+! grep -Eq 'deluser|userdel' "$tmp/control/postinst" "$tmp/control/prerm" "$tmp/control/postrm" || fail "a maintainer script removes the user"
+# conffiles: exactly the files under /etc
+dpkg-deb --fsys-tarfile "$deb" | tar -t | sed -n 's#^\./etc/\(.*[^/]\)$#/etc/\1#p' | sort >"$tmp/etc_files"
+sort "$tmp/control/conffiles" >"$tmp/conffiles"
+diff "$tmp/etc_files" "$tmp/conffiles" >/dev/null || fail "conffiles differ from the files in /etc: $(diff "$tmp/etc_files" "$tmp/conffiles" | tr '\n' ' ')"
+contents=$(dpkg-deb --contents "$deb")
+grep -q 'pex-bench-\|_test$' <<<"$contents" && fail "benchmarks or tests packaged: $(grep -o '[^ ]*\(pex-bench-[^ ]*\|_test\)$' <<<"$contents" | tr '\n' ' ')"
+
+# --- the files ---
+dpkg -x "$deb" "$root" || exit 1
+if [ -n "${PEX_PKG_DROP:-}" ]; then rm -f "$root$PEX_PKG_DROP"; fi
+need() { [ -f "$root$1" ] || { fail "$1 missing"; return 1; }; }
+same() { if need "$1"; then cmp -s "$2" "$root$1" || fail "$1 differs from ${2#"$src"/}"; fi; return 0; }
+
+for p in $programs; do
+  need /usr/bin/"$p" || continue
+  [ -x "$root/usr/bin/$p" ] || fail "/usr/bin/$p not executable"
+  "$root/usr/bin/$p" --help >/dev/null 2>&1 || fail "/usr/bin/$p --help fails (libraries?)"
+done
+n_bin=$(find "$root/usr/bin" -type f | wc -l)
+[ "$n_bin" -eq "$(wc -w <<<"$programs")" ] || fail "/usr/bin holds $n_bin files, expected: $programs"
+
+for u in "$src"/systemd/*.service "$src"/systemd/*.target "$src"/systemd/*.timer; do
+  [ -e "$u" ] && same /lib/systemd/system/"$(basename "$u")" "$u"
+done
+for e in "$src"/systemd/*.env; do same /etc/polyexplore/"$(basename "$e")" "$e"; done
+# configs: the robot's file where there is one, else config/'s; sim.toml names the installed world
+for c in "$src"/config/*.toml; do
+  n=$(basename "$c")
+  if [ -f "$src/config/robot/$n" ]; then same /etc/polyexplore/"$n" "$src/config/robot/$n"
+  elif [ "$n" = sim.toml ]; then
+    need /etc/polyexplore/sim.toml || continue
+    w=$(sed -n 's/^world_file = "\([^"]*\)".*/\1/p' "$root/etc/polyexplore/sim.toml")
+    [[ "$w" == /usr/share/polyexplore/worlds/*.wkt ]] || fail "sim.toml world_file = $w"
+    need "$w"
+    diff <(grep -v '^world_file' "$c") <(grep -v '^world_file' "$root/etc/polyexplore/sim.toml") >/dev/null || fail "sim.toml differs from config/sim.toml beyond world_file"
+  else same /etc/polyexplore/"$n" "$c"
+  fi
+  [ "$n" = sim.toml ] || same /usr/share/polyexplore/config/sim/"$n" "$c"
+done
+grep -q '^can_transport = "socketcan"' "$root/etc/polyexplore/base_driver.toml" 2>/dev/null || fail "base_driver.toml is not the robot's (socketcan)"
+for w in "$src"/worlds/*.wkt; do same /usr/share/polyexplore/worlds/"$(basename "$w")" "$w"; done
+if need /usr/share/java/pex_types.jar; then
+  classes=$(jar tf "$root/usr/share/java/pex_types.jar")
+  for t in "$src"/lcmtypes/*.lcm; do
+    n=$(basename "$t" .lcm); n=${n#pex_}
+    grep -qx "pex/$n.class" <<<"$classes" || fail "pex_types.jar lacks pex/$n.class"
+  done
+fi
+
+# --- the installed units, verified against the scratch root's programs ---
+mkdir "$tmp/units"
+cp "$root"/lib/systemd/system/* "$tmp/units/"
+# every program a unit runs is in the package, or comes with a declared dependency
+for exe in $(sed -n 's/^Exec[A-Za-z]*=[-@:+!]*\([^ ]*\).*/\1/p' "$tmp"/units/* | sort -u); do
+  if [ -e "$root$exe" ]; then continue; fi
+  case "$exe" in
+    /usr/bin/lcm-logger) [[ "$depends" == *liblcm-bin* ]] || fail "$exe: liblcm-bin not in Depends" ;;
+    /usr/sbin/ip|/sbin/ip|/bin/ip) [[ "$depends" == *iproute2* ]] || fail "$exe: iproute2 not in Depends" ;;
+    *) fail "a unit runs $exe, which is neither in the package nor a known dependency" ;;
+  esac
+done
+sed -i -e "s#=\([-@:+!]*\)/usr/bin/pex-#=\1$root/usr/bin/pex-#" -e "s#=\([-@:+!]*\)/usr/lib/polyexplore/#=\1$root/usr/lib/polyexplore/#" "$tmp"/units/*
+out=$(systemd-analyze verify "$tmp"/units/* 2>&1 | grep -F "$tmp" || true)
+[ -z "$out" ] || fail "systemd-analyze verify: $out"
+
+if ((fails)); then echo "$fails failure(s) in $(basename "$deb")"; exit 1; fi
+echo "$(basename "$deb"): $(wc -l <<<"$contents") entries, every check passed"
