@@ -5,7 +5,7 @@ set -euo pipefail
 PEX_DEBS=(
   build-essential cmake pkg-config
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
-  libeigen3-dev libboost-dev libspdlog-dev libfmt-dev
+  libeigen3-dev libboost-dev libspdlog-dev libfmt-dev libpolyclipping-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libtomlplusplus-dev libcli11-dev libsystemd-dev
   iproute2 util-linux procps

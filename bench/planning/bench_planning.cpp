@@ -12,13 +12,20 @@
 // Candidates are the map's own frontier candidates (intel; as the planner
 // makes them) in the robot's piece of the C-space and, where there are fewer
 // than asked for, random interior points of that piece (fixed seed); the
-// robot is at the first scan pose (intel) or the campus start. Figures are reported (docs/), never asserted;
+// robot is at the first scan pose (intel) or the campus start.
+// And whole plans (plan_exploration, both strategies), what the explorer's
+// worker runs every replan period, on the maps of emulated missions
+// (mission_maps.hpp) in worlds/campus.wkt and worlds/intel.wkt: BM_Plan on
+// the mission's largest map, BM_PlanMission on every map of the mission
+// (per-plan p50 / p99 / max). Figures are reported (docs/), never asserted;
 // CPU time, since the machine is shared. The last stdout line is one JSON
 // object.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -31,7 +38,9 @@
 #include "evaluation/carmen_log.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
+#include "mission_maps.hpp"
 #include "planning/cspace.hpp"
+#include "planning/exploration_planner.hpp"
 #include "planning/frontier_goals.hpp"
 #include "planning/goal_tour.hpp"
 #include "planning/path_matrix.hpp"
@@ -311,6 +320,128 @@ void BM_PlanTour(benchmark::State& state) {
   map_counters(state, s);
 }
 
+// The explorer's planner options (config/explorer.toml).
+PlannerOptions planner_options(GoalStrategy strategy) {
+  PlannerOptions o;
+  o.strategy = strategy;
+  o.cspace = cspace_options();
+  o.frontier.sensor_range_m = 4.0;
+  o.frontier.min_frontier_length_m = 0.4;
+  return o;
+}
+
+// Whole missions' maps (mission_maps.hpp) on worlds/campus.wkt and
+// worlds/intel.wkt, the robot following the greedy planner's paths: the
+// maps of every size a mission plans on, with their frontiers.
+struct MissionScene {
+  std::string name;
+  pex::bench::MissionMaps maps;
+  std::size_t largest = 0;  // snapshot with the most map vertices
+};
+
+MissionScene& mission_scene(int which) {
+  static std::map<int, std::unique_ptr<MissionScene>> cache;
+  auto& slot = cache[which];
+  if (slot) return *slot;
+  slot = std::make_unique<MissionScene>();
+  slot->name = which == 0 ? "campus" : "intel";
+  pex::bench::MissionMapsOptions options;
+  options.max_goals = 200;
+  // The maps must not depend on the planner being measured: the robot
+  // follows the reference planner (Boost's offset, the planner of before).
+  auto greedy = planner_options(GoalStrategy::kGreedy);
+  greedy.cspace.boost_offset = true;
+  auto tight = greedy;
+  tight.cspace.clearance_margin_m = 0.0;
+  slot->maps = pex::bench::emulate_mission(
+      std::string(PEX_SOURCE_DIR) + "/worlds/" + slot->name + ".wkt", options,
+      [&](const TypedMultiPolygon& map, const pex::mapping::Pose2& pose, const std::vector<Point>& blacklist) {
+        // The mission's tight fallback: nothing reachable, plan once more without the margin.
+        auto plan = plan_exploration(map, pose, blacklist, greedy);
+        return plan.best_candidate() ? plan : plan_exploration(map, pose, blacklist, tight);
+      });
+  std::size_t most = 0;
+  for (std::size_t i = 0; i < slot->maps.snapshots.size(); ++i) {
+    const std::size_t v = pex::mapping::vertex_count(slot->maps.snapshots[i].map);
+    if (v > most) {
+      most = v;
+      slot->largest = i;
+    }
+  }
+  double area = 0.0;
+  if (!slot->maps.snapshots.empty())
+    for (const auto& p : slot->maps.snapshots.back().map) area += boost::geometry::area(p.geometry);
+  std::fprintf(stderr, "mission %s: %zu snapshots, %d goals, %.0f m, done %d, largest map %zu vertices, last %.0f m2 %s\n",
+               slot->name.c_str(), slot->maps.snapshots.size(), slot->maps.goals, slot->maps.travelled_m,
+               slot->maps.done ? 1 : 0, most, area, slot->maps.error.c_str());
+  return *slot;
+}
+
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1)];
+}
+
+// One whole plan_exploration call (what the explorer's worker runs every
+// replan period) on the largest map of the mission.
+void BM_Plan(benchmark::State& state) {
+  MissionScene& s = mission_scene(static_cast<int>(state.range(0)));
+  if (s.maps.snapshots.empty()) {
+    state.SkipWithError((s.name + ": " + s.maps.error).c_str());
+    return;
+  }
+  const auto options = planner_options(state.range(1) == 0 ? GoalStrategy::kGreedy : GoalStrategy::kTour);
+  const auto& snap = s.maps.snapshots[s.largest];
+  Plan plan;
+  for (auto _ : state) {
+    plan = plan_exploration(snap.map, snap.pose, snap.blacklist, options);
+    benchmark::DoNotOptimize(plan);
+  }
+  state.SetLabel(s.name + (state.range(1) == 0 ? " greedy" : " tour"));
+  state.counters["map_vertices"] = static_cast<double>(pex::mapping::vertex_count(snap.map));
+  state.counters["reflex"] = plan.stats.reflex_nodes;
+  state.counters["candidates"] = static_cast<double>(plan.candidates.size());
+  state.counters["ok"] = plan.ok ? 1 : 0;
+}
+
+// Every map of the mission planned once: the per-plan CPU time's p50, p99
+// and max over the mission (the target is the p99).
+void BM_PlanMission(benchmark::State& state) {
+  MissionScene& s = mission_scene(static_cast<int>(state.range(0)));
+  if (s.maps.snapshots.empty()) {
+    state.SkipWithError((s.name + ": " + s.maps.error).c_str());
+    return;
+  }
+  const auto options = planner_options(state.range(1) == 0 ? GoalStrategy::kGreedy : GoalStrategy::kTour);
+  std::vector<double> ms;
+  for (auto _ : state) {
+    ms.clear();
+    for (const auto& snap : s.maps.snapshots) {
+      const double t0 = thread_cpu_ms();
+      benchmark::DoNotOptimize(plan_exploration(snap.map, snap.pose, snap.blacklist, options));
+      ms.push_back(thread_cpu_ms() - t0);
+    }
+  }
+  state.SetLabel(s.name + (state.range(1) == 0 ? " greedy" : " tour"));
+  state.counters["plans"] = static_cast<double>(ms.size());
+  state.counters["p50_ms"] = percentile(ms, 0.5);
+  state.counters["p99_ms"] = percentile(ms, 0.99);
+  state.counters["max_ms"] = percentile(ms, 1.0);
+}
+
+void missions(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"world", "tour"});
+  for (const int w : {0, 1})
+    for (const int t : {0, 1}) b->Args({w, t});
+}
+
 void maps(benchmark::internal::Benchmark* b) { b->ArgNames({"map"})->Arg(0)->Arg(1); }
 void maps_and_counts(benchmark::internal::Benchmark* b) {
   b->ArgNames({"map", "n"});
@@ -326,6 +457,9 @@ BENCHMARK(BM_StartRow)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->R
 BENCHMARK(BM_PathMatrix)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_Tour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_Plan)->Apply(missions)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)
+    ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
     ->ReportAggregatesOnly(true);
 

@@ -15,6 +15,7 @@
 
 #include <boost/geometry/index/rtree.hpp>
 
+#include "mapping/typed_ops.hpp"
 #include "mapping/typed_polygon.hpp"
 
 namespace pex::planning {
@@ -37,7 +38,19 @@ struct CSpaceOptions {
   // moved this far into the interior, so segment tests between them never
   // have to decide a touch at an end point.
   double interior_offset_m = 1e-3;
+  // true: offset with Boost.Geometry's buffer (mapping::typed_offset), the
+  // reference the tests compare offset_inward() with; several times slower
+  // on ragged real maps.
+  bool boost_offset = false;
 };
+
+// The free space shrunk by distance_m (> 0): Minkowski offset with round
+// joins of `points_per_circle` vertices per full circle, computed by Clipper
+// (ClipperLib::ClipperOffset, on a 10 um integer grid), each output edge
+// typed as the map edge it was offset from (mapping::assign_types). The same
+// set as mapping::typed_offset(free_space, -distance_m, points_per_circle)
+// up to the placement of the round joins' vertices and the grid.
+mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double distance_m, int points_per_circle);
 
 class ConfigurationSpace {
  public:
@@ -46,6 +59,7 @@ class ConfigurationSpace {
     EdgeType type;        // the type of the map edge it was offset from
     std::uint32_t prev;   // edge ending at a (same ring)
     std::uint32_t next;   // edge starting at b (same ring)
+    std::uint32_t polygon;  // index into polygons(): the connected piece it bounds
   };
 
   struct BuildResult {
@@ -66,6 +80,11 @@ class ConfigurationSpace {
 
   // True if p is inside or on the boundary.
   bool covers(const Point& p) const;
+  // The index into polygons() of the piece p is inside or on the boundary
+  // of, -1 if none: a polygon of the C-space is one connected piece, so two
+  // points are joined by a path in the C-space if and only if they are in
+  // the same piece. Costs about the edges along one line, not the map.
+  int piece_of(const Point& p) const;
   // Distance from p to the nearest boundary edge (+inf if there is none).
   double distance_to_boundary(const Point& p) const;
   // True if the segment a-b crosses or touches no boundary edge. With both
@@ -104,6 +123,7 @@ class ConfigurationSpace {
   std::vector<Point> reflex_nodes_;
   std::vector<std::uint32_t> reflex_edges_;
   std::unique_ptr<Tree> tree_;
+  double max_x_ = 0.0;  // of every boundary edge: where covers()'s ray ends
   mutable std::int64_t segment_tests_ = 0;
 };
 

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include "mapping/polygon_map.hpp"
+#include "mapping/test_support.hpp"
 #include "planning/test_maps.hpp"
 
 namespace pex::planning {
@@ -11,13 +15,14 @@ using testing::rectangle;
 using testing::rectangle_hole;
 using testing::typed_polygon;
 using testing::disk;
+using testing::RingSpec;
 
 
 TEST(ConfigurationSpace, SquareRoomShrinksByTheRadius) {
   ConfigurationSpace cs;
   ASSERT_TRUE(cs.build({typed_polygon(rectangle(0, 0, 10, 10))}, disk(0.5)).ok);
   ASSERT_EQ(cs.polygons().size(), 1u);
-  // Boost's buffer is exact to about 1e-6 m.
+  // The offset is exact up to its 10 um grid.
   EXPECT_NEAR(mapping::area(cs.polygons()), 9.0 * 9.0, 1e-4);
   EXPECT_TRUE(cs.covers(Point(5, 5)));
   EXPECT_TRUE(cs.covers(Point(0.6, 9.4)));
@@ -109,6 +114,158 @@ TEST(SegmentsIntersect, ProperTouchingAndDisjoint) {
   EXPECT_TRUE(segments_intersect(Point(0, 0), Point(2, 0), Point(1, 0), Point(3, 0)));  // overlap
   EXPECT_FALSE(segments_intersect(Point(0, 0), Point(2, 0), Point(3, 0), Point(4, 0)));  // collinear apart
   EXPECT_FALSE(segments_intersect(Point(0, 0), Point(2, 0), Point(0, 1), Point(2, 1)));
+}
+
+// Maps like the mapper's: a world of walls scanned with range noise along a
+// random walk and put together by a PolygonMap (ragged walls, frontiers,
+// clutter), planning layer merged.
+TypedMultiPolygon scanned_map(const std::vector<mapping::testing::Wall>& walls, double w, double h, int scans,
+                              std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> step(-1.0, 1.0), turn(-0.6, 0.6);
+  mapping::PolygonMap map;
+  mapping::ScanPolygonOptions scan_options;
+  scan_options.range_max_m = 10.0;
+  mapping::Pose2 pose{1.5, 1.5, 0.5};
+  for (int k = 0; k < scans; ++k) {
+    const auto ranges = mapping::testing::cast_scan(walls, pose, mapping::testing::ScanSpec{}, 0.012, &rng);
+    const auto scan = mapping::scan_to_polygon(ranges, -3.0 * std::numbers::pi / 4.0, std::numbers::pi / 360.0,
+                                               pose, scan_options);
+    if (scan.ok) map.insert(scan.polygon);
+    const double x = std::clamp(pose.x + step(rng), 1.0, w - 1.0), y = std::clamp(pose.y + step(rng), 1.0, h - 1.0);
+    if (mapping::testing::cast_ray(walls, pose.x, pose.y, std::atan2(y - pose.y, x - pose.x)) >
+        std::hypot(x - pose.x, y - pose.y) + 0.5) {
+      pose.x = x;
+      pose.y = y;
+    }
+    pose.theta += turn(rng);
+  }
+  auto merged = map.planning_map();
+  EXPECT_TRUE(merged.ok) << merged.error;
+  return merged.polygons;
+}
+
+std::vector<TypedMultiPolygon> oracle_maps() {
+  std::vector<TypedMultiPolygon> maps;
+  std::mt19937_64 rng(17);
+  for (int k = 0; k < 3; ++k) maps.push_back(scanned_map(mapping::testing::random_room(14, 10, 8, rng), 14, 10, 40, 100 + k));
+  maps.push_back(scanned_map(mapping::testing::rock_field(12, 12, 2.0, rng), 12, 12, 40, 7));
+  // Hand-drawn: two halls joined by a 0.8 m wide, 3 m long passage; a pillar.
+  maps.push_back({typed_polygon(
+      RingSpec{{Point(0, 0), Point(12, 0), Point(12, 3), Point(7.4, 3), Point(7.4, 6), Point(12, 6), Point(12, 9),
+                Point(0, 9), Point(0, 6), Point(6.6, 6), Point(6.6, 3), Point(0, 3)}, {}},
+      {rectangle_hole(3, 1.3, 3.4, 1.7)})});
+  return maps;
+}
+
+double min_distance_to_edges(const Point& p, const TypedMultiPolygon& map) {
+  double best = std::numeric_limits<double>::infinity();
+  mapping::for_each_edge(map, [&](const Point& a, const Point& b, EdgeType) {
+    best = std::min(best, distance(p, closest_point_on_segment(p, a, b)));
+  });
+  return best;
+}
+
+// Our offset (Clipper) against the reference (Boost.Geometry's buffer, the
+// C-space before): the same set up to where the round joins put their
+// vertices, the same connected pieces, and every C-space vertex at least the
+// clearance the docs promise from every map edge and inside the map.
+TEST(ConfigurationSpace, ClipperOffsetAgreesWithBoostOnScannedAndDrawnMaps) {
+  CSpaceOptions options;  // the explorer's
+  options.robot_radius_m = 0.27;
+  options.clearance_margin_m = 0.05;
+  const double shrink = options.robot_radius_m + options.clearance_margin_m;
+  auto reference_options = options;
+  reference_options.boost_offset = true;
+  int map_index = 0;
+  for (const auto& map : oracle_maps()) {
+    SCOPED_TRACE("map " + std::to_string(map_index++) + ", " + std::to_string(mapping::vertex_count(map)) + " vertices");
+    ASSERT_FALSE(map.empty());
+    ConfigurationSpace ours, reference;
+    ASSERT_TRUE(ours.build(map, options).ok);
+    ASSERT_TRUE(reference.build(map, reference_options).ok);
+    ASSERT_FALSE(ours.empty());
+    // The round joins' vertices lie on the arc in both; between them the
+    // chords differ by at most the sagitta (6 mm at 16 per circle), plus the
+    // simplification's epsilon on either side.
+    mapping::MultiPolygon a, b, diff;
+    for (const auto& p : ours.polygons()) a.push_back(p.geometry);
+    for (const auto& p : reference.polygons()) b.push_back(p.geometry);
+    boost::geometry::sym_difference(a, b, diff);
+    const double perimeter = boost::geometry::perimeter(b);
+    EXPECT_LT(boost::geometry::area(diff), 0.01 * perimeter) << "area " << boost::geometry::area(a) << " vs "
+                                                            << boost::geometry::area(b);
+    // The same pieces of any size (slivers at the clearance may differ).
+    auto big_pieces = [](const TypedMultiPolygon& polygons) {
+      int n = 0;
+      for (const auto& p : polygons) n += boost::geometry::area(p.geometry) > 0.05 ? 1 : 0;
+      return n;
+    };
+    EXPECT_EQ(big_pieces(ours.polygons()), big_pieces(reference.polygons()));
+    // Clearance: robot_radius + margin - simplify epsilon, less how far a
+    // round join's chords cut into its arc (at most 1 mm in ours; 1-2 mm
+    // in Boost's on these maps) and the grid. At vertices and mid-edges.
+    const double sagitta = 2e-3;
+    for (const auto* cs : {&ours, &reference}) {
+      double least = std::numeric_limits<double>::infinity();
+      for (const auto& e : cs->edges()) {
+        const Point mid(0.5 * (e.a.x() + e.b.x()), 0.5 * (e.a.y() + e.b.y()));
+        least = std::min({least, min_distance_to_edges(e.a, map), min_distance_to_edges(mid, map)});
+        ASSERT_TRUE(boost::geometry::covered_by(e.a, mapping::geometry_of(map)));
+      }
+      EXPECT_GE(least, shrink - options.simplify_epsilon_m - sagitta - 2e-5) << (cs == &ours ? "ours" : "Boost");
+    }
+  }
+}
+
+// The drawn map's 0.8 m passage is open for a 0.27 m robot with a 0.05 m
+// margin (0.64 m): both halls and the passage are one piece.
+TEST(ConfigurationSpace, ClipperOffsetKeepsAPassageTheRobotFitsThroughOpen) {
+  CSpaceOptions options;
+  options.robot_radius_m = 0.27;
+  options.clearance_margin_m = 0.05;
+  ConfigurationSpace cs;
+  ASSERT_TRUE(cs.build(oracle_maps().back(), options).ok);
+  EXPECT_EQ(cs.polygons().size(), 1u);
+  const int hall = cs.piece_of(Point(1, 1.5));
+  EXPECT_GE(hall, 0);
+  EXPECT_EQ(cs.piece_of(Point(7, 4.5)), hall);  // in the passage
+  EXPECT_EQ(cs.piece_of(Point(11, 7.5)), hall);
+  EXPECT_EQ(cs.piece_of(Point(5, 4.5)), -1);   // beside it: wall
+  // 0.84 m closes it: two pieces.
+  options.clearance_margin_m = 0.15;
+  ASSERT_TRUE(cs.build(oracle_maps().back(), options).ok);
+  EXPECT_EQ(cs.polygons().size(), 2u);
+  EXPECT_NE(cs.piece_of(Point(1, 1.5)), cs.piece_of(Point(11, 7.5)));
+}
+
+// covers() and piece_of() (a ray's crossings through the edge index) against
+// bg::covered_by on every polygon, at random points of scanned maps.
+TEST(ConfigurationSpace, PieceOfAgreesWithCoveredBy) {
+  CSpaceOptions options;
+  options.robot_radius_m = 0.27;
+  std::mt19937_64 rng(3);
+  int inside = 0, outside = 0;
+  for (const auto& map : oracle_maps()) {
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, options).ok);
+    const auto box = boost::geometry::return_envelope<mapping::Box>(mapping::geometry_of(map));
+    std::uniform_real_distribution<double> ux(box.min_corner().x() - 1, box.max_corner().x() + 1),
+        uy(box.min_corner().y() - 1, box.max_corner().y() + 1);
+    for (int k = 0; k < 2000; ++k) {
+      const Point p(ux(rng), uy(rng));
+      int expected = -1;
+      for (std::size_t i = 0; i < cs.polygons().size(); ++i)
+        if (boost::geometry::covered_by(p, cs.polygons()[i].geometry)) expected = static_cast<int>(i);
+      ASSERT_EQ(cs.piece_of(p), expected) << p.x() << "," << p.y();
+      ASSERT_EQ(cs.covers(p), expected >= 0);
+      (expected >= 0 ? inside : outside)++;
+    }
+    // Vertices lie on the boundary: covered.
+    for (const auto& e : cs.edges()) ASSERT_EQ(cs.piece_of(e.a), static_cast<int>(e.polygon));
+  }
+  EXPECT_GT(inside, 1000);
+  EXPECT_GT(outside, 1000);
 }
 
 }  // namespace

@@ -43,8 +43,9 @@ class ObstacleEdges {
 // The nearest point of `piece` (a C-space polygon) within `range_m` of the
 // frontier point `f` from which f is in view, moved into the interior.
 // Points along the piece's boundary every kStep are tried nearest first.
-std::optional<Point> approach_point(const ConfigurationSpace& cspace, const mapping::TypedPolygon& piece,
-                                    const Point& f, double range_m, const ObstacleEdges& obstacles) {
+std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_index, const Point& f,
+                                    double range_m, const ObstacleEdges& obstacles) {
+  const mapping::TypedPolygon& piece = cspace.polygons()[static_cast<std::size_t>(piece_index)];
   constexpr double kStep = 0.25;       // m between tried points along the boundary
   constexpr std::size_t kTries = 48;   // line-of-sight tests at most
   std::vector<std::pair<double, Point>> near;
@@ -73,7 +74,7 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, const mapp
   });
   for (std::size_t i = 0; i < near.size() && i < kTries; ++i) {
     const auto inside = cspace.nearest_interior_point(near[i].second, 0.05);
-    if (!inside || !bg::covered_by(*inside, piece.geometry)) continue;
+    if (!inside || cspace.piece_of(*inside) != piece_index) continue;
     // Stop 1 cm short of f: f lies on the map's boundary, often at the end
     // of an obstacle edge, which is not a wall in the way.
     const double d = distance(*inside, f);
@@ -154,12 +155,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;
   const std::optional<Point> start = setup->start;
-  const mapping::TypedPolygon* own_piece = nullptr;
-  for (const auto& polygon : cspace.polygons())
-    if (bg::covered_by(*start, polygon.geometry)) {
-      own_piece = &polygon;
-      break;
-    }
+  const int own_piece = cspace.piece_of(*start);
   std::optional<ObstacleEdges> obstacles;  // built on first need
 
   // 2. Candidates on the frontiers, moved into the C-space, or to an
@@ -171,10 +167,9 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   for (const auto& fp : points) {
     std::optional<Point> position = cspace.nearest_interior_point(fp.point, options.candidate_snap_distance_m);
     bool approach = false;
-    if (own_piece && options.approach_range_m > 0.0 &&
-        (!position || !bg::covered_by(*position, own_piece->geometry))) {
+    if (own_piece >= 0 && options.approach_range_m > 0.0 && (!position || cspace.piece_of(*position) != own_piece)) {
       if (!obstacles) obstacles.emplace(map);
-      if (auto a = approach_point(cspace, *own_piece, fp.point, options.approach_range_m, *obstacles)) {
+      if (auto a = approach_point(cspace, own_piece, fp.point, options.approach_range_m, *obstacles)) {
         position = a;
         approach = true;
         ++plan.stats.approach_candidates;

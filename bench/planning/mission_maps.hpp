@@ -1,0 +1,136 @@
+#pragma once
+// The maps an exploration mission plans on, without the daemons: a robot
+// that follows each plan's path exactly in a simulator world (pex::sim's
+// ray-cast LMS111 with its noise), a scan inserted into a PolygonMap every
+// `scan_step_m` of the path and one at each goal facing its frontier, the
+// planning map taken and planned on (greedy) every `replan_step_m` of travel
+// and at each goal, as the explorer's replan period does. Poses are the
+// truth (no SLAM), so the maps are those of a perfect localisation; the map
+// grows, frontiers come and go, and the planner sees every map size of a
+// mission. Deterministic: fixed seeds.
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "mapping/polygon_map.hpp"
+#include "mapping/scan_polygon.hpp"
+#include "planning/exploration_planner.hpp"
+#include "sim/sim.hpp"
+
+namespace pex::bench {
+
+struct MissionSnapshot {
+  mapping::TypedMultiPolygon map;
+  planning::Pose2 pose;
+  std::vector<mapping::Point> blacklist;
+};
+
+struct MissionMaps {
+  std::vector<MissionSnapshot> snapshots;  // in mission order
+  int goals = 0;
+  double travelled_m = 0.0;
+  bool done = false;  // no reachable candidate left before max_goals
+  std::string error;
+};
+
+struct MissionMapsOptions {
+  int max_goals = 40;
+  double scan_step_m = 0.25;    // the mapper inserts after 0.2 m; 0.25 keeps set-up time down
+  double replan_step_m = 2.0;   // a snapshot every this much travel (0.4 m/s, 1 s replans: 0.4)
+  double max_travel_m = 1e9;
+};
+
+// `plan` is the planner the emulated robot follows (the goal order and so the
+// maps depend on it: use one fixed planner for a benchmark's maps).
+inline MissionMaps emulate_mission(
+    const std::string& world_path, const MissionMapsOptions& options,
+    const std::function<planning::Plan(const mapping::TypedMultiPolygon&, const planning::Pose2&,
+                                       const std::vector<mapping::Point>&)>& plan) {
+  MissionMaps out;
+  std::ifstream in(world_path);
+  if (!in) {
+    out.error = "cannot read " + world_path;
+    return out;
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  auto parsed = sim::parse_world(text.str(), world_path);
+  if (const auto* e = std::get_if<sim::WorldError>(&parsed)) {
+    out.error = e->message;
+    return out;
+  }
+  const sim::World world = std::get<sim::World>(std::move(parsed));
+  const sim::RayCaster caster(world);
+  sim::Laser laser(sim::LaserOptions{}, 11);
+  mapping::ScanPolygonOptions scan_options;
+  scan_options.range_max_m = laser.options().max_range_m;
+  mapping::PolygonMap map;
+
+  auto insert_at = [&](double x, double y, double theta) {
+    const auto ranges = laser.scan(caster, sim::Pose2{x, y, theta});
+    const auto scan = mapping::scan_to_polygon(ranges, laser.options().first_angle_rad(),
+                                               laser.options().step_deg * std::numbers::pi / 180.0,
+                                               mapping::Pose2{x, y, theta}, scan_options);
+    if (scan.ok) map.insert(scan.polygon);
+  };
+  planning::Pose2 pose{world.start.x_m, world.start.y_m, world.start.theta_rad};
+  insert_at(pose.x, pose.y, pose.theta);
+  std::vector<mapping::Point> blacklist;
+  auto snapshot = [&]() -> const MissionSnapshot* {
+    auto merged = map.planning_map();
+    if (!merged.ok) return nullptr;
+    out.snapshots.push_back({std::move(merged.polygons), pose, blacklist});
+    return &out.snapshots.back();
+  };
+  double since_replan = 0.0;
+  while (out.goals < options.max_goals && out.travelled_m < options.max_travel_m) {
+    const MissionSnapshot* s = snapshot();
+    if (!s) {
+      out.error = "planning map failed";
+      return out;
+    }
+    const planning::Plan p = plan(s->map, s->pose, s->blacklist);
+    const planning::GoalCandidate* goal = p.best_candidate();
+    if (!goal) {
+      out.done = true;
+      break;
+    }
+    // Along the path: a scan every scan_step_m, a snapshot every replan_step_m.
+    const auto& path = goal->path;
+    for (std::size_t k = 1; k < path.size(); ++k) {
+      const double dx = path[k].x() - path[k - 1].x(), dy = path[k].y() - path[k - 1].y();
+      const double length = std::hypot(dx, dy);
+      if (length <= 0.0) continue;
+      const double heading = std::atan2(dy, dx);
+      for (double s_m = std::min(options.scan_step_m, length);; s_m = std::min(s_m + options.scan_step_m, length)) {
+        const double t = s_m / length;
+        pose = {path[k - 1].x() + t * dx, path[k - 1].y() + t * dy, heading};
+        insert_at(pose.x, pose.y, pose.theta);
+        since_replan += options.scan_step_m;
+        if (since_replan >= options.replan_step_m) {
+          since_replan = 0.0;
+          if (!snapshot()) {
+            out.error = "planning map failed";
+            return out;
+          }
+        }
+        if (s_m >= length) break;
+      }
+      out.travelled_m += length;
+    }
+    // At the goal: look at the frontier, then never choose that goal again.
+    pose.theta = std::atan2(goal->frontier_point.y() - pose.y, goal->frontier_point.x() - pose.x);
+    insert_at(pose.x, pose.y, pose.theta);
+    blacklist.push_back(goal->position);
+    ++out.goals;
+  }
+  return out;
+}
+
+}  // namespace pex::bench
