@@ -244,7 +244,7 @@ double iou(const MultiPolygon& map_free, const MultiPolygon& reachable) {
 
 MapScore score_map(const mapping::TypedMultiPolygon& map, const kinematics::Pose2& map_in_world,
                    const MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m,
-                   double obstacle_band_credit_m) {
+                   double obstacle_band_credit_m, CreditNear credit_near) {
   MapScore score;
   const mapping::TypedMultiPolygon typed_world = to_world(map, map_in_world);
   MultiPolygon free_world = mapping::geometry_of(typed_world);
@@ -252,12 +252,17 @@ MapScore score_map(const mapping::TypedMultiPolygon& map, const kinematics::Pose
   score.reachable_m2 = bg::area(reachable);
   score.obstacle_on_wall = obstacle_on_wall(typed_world, walls, wall_tolerance_m);
   if (obstacle_band_credit_m > 0.0) {
-    // The map plus the reachable space within the credit of an obstacle edge.
+    // The map plus the reachable space within the credit of an obstacle edge
+    // (or of a wall).
     const auto offsets = disk_offsets(obstacle_band_credit_m, 16);
     std::vector<MultiPolygon> capsules;
-    mapping::for_each_edge(typed_world, [&](const Point& a, const Point& b, mapping::EdgeType t) {
-      if (t == mapping::EdgeType::kObstacle) capsules.push_back({capsule(a, b, offsets)});
-    });
+    if (credit_near == CreditNear::kWorldWalls) {
+      for (const auto& w : walls.walls()) capsules.push_back({capsule(Point(w.x0, w.y0), Point(w.x1, w.y1), offsets)});
+    } else {
+      mapping::for_each_edge(typed_world, [&](const Point& a, const Point& b, mapping::EdgeType t) {
+        if (t == mapping::EdgeType::kObstacle) capsules.push_back({capsule(a, b, offsets)});
+      });
+    }
     const auto band = checked_overlay(union_or_nullopt(std::move(capsules)).value_or(MultiPolygon{}), reachable,
                                       mapping::OverlayOp::kIntersection);
     const auto credited = band ? checked_overlay(free_world, *band, mapping::OverlayOp::kUnion) : std::nullopt;

@@ -84,6 +84,14 @@ double iou(const mapping::MultiPolygon& map_free, const mapping::MultiPolygon& r
 // counts as mapped (added to the map for coverage and IoU, never outside the
 // reachable space, so the map's own overreach still counts against IoU).
 // Frontier edges get no credit. 0: the map as published.
+//
+// Where the credit is taken: near the map's obstacle edges (the benchmark's
+// "band credited" columns), or near the world's walls. The second is the
+// stricter score: a wall the map draws where the world has none (a ghost
+// wall, from a SLAM jump) loses its band of floor, where the first would
+// credit it back.
+enum class CreditNear { kMapObstacleEdges, kWorldWalls };
+
 struct MapScore {
   double explored_m2 = 0.0;       // area of the map's free space (as published, no credit)
   double reachable_m2 = 0.0;      // area of the reachable free space
@@ -94,6 +102,6 @@ struct MapScore {
 };
 MapScore score_map(const mapping::TypedMultiPolygon& map, const kinematics::Pose2& map_in_world,
                    const mapping::MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m,
-                   double obstacle_band_credit_m = 0.0);
+                   double obstacle_band_credit_m = 0.0, CreditNear credit_near = CreditNear::kMapObstacleEdges);
 
 }  // namespace pex::evaluation

@@ -222,6 +222,23 @@ TEST(MapScores, ObstacleBandCreditCountsTheStripBehindObstacleEdgesOnly) {
   EXPECT_DOUBLE_EQ(frontier.coverage, raw.coverage);
 }
 
+TEST(MapScores, CreditNearWorldWallsDoesNotHideAGhostWall) {
+  const auto world = world_from(kRoom);
+  const auto reachable = reachable_free_space(world, kR, world.start);
+  const WallIndex walls(world.walls);
+  // The inset room with a ghost wall across its middle: a 0.2 m strip of
+  // obstacle edges where the world has floor.
+  const auto ghost = polygon(
+      "POLYGON((0.05 0.05, 5.95 0.05, 5.95 3.95, 0.05 3.95, 0.05 0.05), (2.9 1, 2.9 3, 3.1 3, 3.1 1, 2.9 1))");
+  const auto near_map = score_map(typed(ghost), {}, reachable, walls, 0.1, 0.1);
+  EXPECT_NEAR(near_map.coverage, 1.0, 1e-9);  // the strip lies within 0.1 m of its own edges
+  const auto near_walls = score_map(typed(ghost), {}, reachable, walls, 0.1, 0.1, CreditNear::kWorldWalls);
+  EXPECT_NEAR(near_walls.coverage, 1.0 - 0.4 / bg::area(reachable), 1e-6);
+  // Without the ghost the two credits agree: the inset map's edges run along the walls.
+  const auto inset = polygon("POLYGON((0.05 0.05, 5.95 0.05, 5.95 3.95, 0.05 3.95, 0.05 0.05))");
+  EXPECT_NEAR(score_map(typed(inset), {}, reachable, walls, 0.1, 0.1, CreditNear::kWorldWalls).coverage, 1.0, 1e-9);
+}
+
 TEST(ObstacleOnWall, ShareOfObstacleLengthNearWalls) {
   const auto world = world_from(kRoom);
   // The left 3 x 4 m of the room: 10 m of its edges on walls, 4 m (x = 3)

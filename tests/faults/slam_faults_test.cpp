@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "exploration_set.hpp"
+#include "map_score.hpp"
 #include "harness.hpp"
 #include "runtime/channels.hpp"
 
@@ -132,6 +133,7 @@ TEST(SlamFaults, KilledSlamGoesOnFromItsCheckpointWithTheSameEpochAndNoJump) {
   EXPECT_EQ(set.clock()->collisions, 0);
   const auto& mapper = set.bus().status().at("polygon_mapper");
   EXPECT_EQ(counter_of(mapper, "slam_epoch_changes"), 0) << "the mapper dropped its maps for a new SLAM";
+  expect_map_matches_world(set);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
   if (!::testing::Test::HasFailure()) std::filesystem::remove_all(std::filesystem::path(checkpoint).parent_path());

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <pex/explore_state_t.hpp>
+#include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
 #include <pex/sim_clock_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
@@ -66,7 +67,7 @@ struct SetOptions {
 // clock, with what the test bus heard. For the exploration and the fault tests.
 class ExplorationSet {
  public:
-  ExplorationSet(const std::string& tag, const SetOptions& options) : dir_(make_temp_dir(tag)) {
+  ExplorationSet(const std::string& tag, const SetOptions& options) : dir_(make_temp_dir(tag)), options_(options) {
     std::string sim = with_key(read_file(sim_config_of("sim")), "world_file",
                                "\"" + source_path("worlds/" + options.world + ".wkt") + "\"");
     sim = with_key(sim, "speed_factor", std::to_string(options.speed));
@@ -90,6 +91,7 @@ class ExplorationSet {
     });
     bus_.on<pex::sim_clock_t>("SIM_CLOCK", [this](const pex::sim_clock_t& c) { clock_ = c; });
     bus_.on<pex::velocity_cmd_t>("BASE_CMD", [this](const pex::velocity_cmd_t& c) { cmd_ = c; });
+    bus_.on<pex::polygon_map_t>("MAP", [this](const pex::polygon_map_t& m) { map_ = m; });
 
     write_config(dir_, "sim", sim);
     if (options.slam) write_config(dir_, "slam", slam);
@@ -127,6 +129,8 @@ class ExplorationSet {
   const std::optional<pex::pose_t>& first_truth() const { return first_truth_; }
   const std::optional<pex::sim_clock_t>& clock() const { return clock_; }
   const std::optional<pex::velocity_cmd_t>& cmd() const { return cmd_; }
+  const std::optional<pex::polygon_map_t>& map() const { return map_; }  // the newest MAP
+  const SetOptions& options() const { return options_; }
   std::int8_t phase() const { return state_ ? state_->phase : std::int8_t{-1}; }
   double sim_seconds() const { return clock_ ? static_cast<double>(clock_->sim_time_us) * 1e-6 : 0.0; }
 
@@ -184,6 +188,7 @@ class ExplorationSet {
 
  private:
   std::string dir_;
+  SetOptions options_;
   Bus bus_;
   std::vector<std::pair<std::string, std::unique_ptr<Process>>> set_;  // (daemon, process or null)
   std::optional<pex::explore_state_t> state_;
@@ -191,6 +196,7 @@ class ExplorationSet {
   std::optional<pex::pose_t> truth_, first_truth_;
   std::optional<pex::sim_clock_t> clock_;
   std::optional<pex::velocity_cmd_t> cmd_;
+  std::optional<pex::polygon_map_t> map_;
 };
 
 

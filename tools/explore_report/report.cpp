@@ -126,7 +126,7 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
       const evaluation::WallIndex walls(world.walls);
       const auto score =
           evaluation::score_map(decoded.polygons, options.map_in_world, reachable, walls, options.wall_tolerance_m,
-                                options.obstacle_band_credit_m);
+                                options.obstacle_band_credit_m, options.credit_near);
       r.explored_m2 = score.explored_m2;
       r.coverage = finite(score.coverage);
       r.iou = finite(score.iou);

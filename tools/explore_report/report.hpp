@@ -39,6 +39,7 @@ struct ReportOptions {
   // Reachable space this close to a map obstacle edge counts as mapped
   // (evaluation::score_map): the obstacle band the mapper cuts out of MAP.
   double obstacle_band_credit_m = 0.0;
+  evaluation::CreditNear credit_near = evaluation::CreditNear::kMapObstacleEdges;
   // The pose of the MAP frame's origin in the world: the robot's start pose
   // (SLAM / odometry frame) or the identity (pose_source = "sim_truth").
   kinematics::Pose2 map_in_world;
