@@ -88,7 +88,7 @@ for exe in $(sed -n 's/^Exec[A-Za-z]*=[-@:+!]*\([^ ]*\).*/\1/p' "$tmp"/units/* |
   if [ -e "$root$exe" ]; then continue; fi
   case "$exe" in
     /usr/bin/lcm-logger) [[ "$depends" == *liblcm-bin* ]] || fail "$exe: liblcm-bin not in Depends" ;;
-    /usr/sbin/ip|/sbin/ip|/bin/ip) [[ "$depends" == *iproute2* ]] || fail "$exe: iproute2 not in Depends" ;;
+    /usr/bin/ip|/usr/sbin/ip|/sbin/ip|/bin/ip) [[ "$depends" == *iproute2* ]] || fail "$exe: iproute2 not in Depends" ;;
     *) fail "a unit runs $exe, which is neither in the package nor a known dependency" ;;
   esac
 done
