@@ -12,6 +12,11 @@
 // Time: message utime fields are the lines' ipc_timestamp (µs); the log events'
 // time stamps are the same but never decrease (lcm-logplayer paces by them).
 #include <CLI/CLI.hpp>
+#include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 #include <lcm/lcm-cpp.hpp>
 
 #include <cmath>
@@ -118,12 +123,17 @@ int main(int argc, char** argv) {
   app.add_option("--flaser-max-range-m", parse.flaser_max_range_m,
                  "FLASER readings at or beyond this are no return")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("pex-carmen2lcm ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
 
   std::ifstream in(in_path);
   if (!in) {
     std::fprintf(stderr, "pex-carmen2lcm: cannot open %s\n", in_path.c_str());
-    return 2;
+    return EX_NOINPUT;
   }
   // First pass: does the log have ODOM lines, and where is the front laser.
   bool has_odom = false;
@@ -144,7 +154,7 @@ int main(int argc, char** argv) {
   LogWriter out(out_path);
   if (!out.good()) {
     std::fprintf(stderr, "pex-carmen2lcm: cannot write %s\n", out_path.c_str());
-    return 2;
+    return EX_CANTCREAT;
   }
   std::size_t scans = 0, odometry = 0, malformed = 0, line_number = 0;
   std::string error;
@@ -174,7 +184,7 @@ int main(int argc, char** argv) {
     }
     if (!ok) {
       std::fprintf(stderr, "pex-carmen2lcm: cannot write %s\n", out_path.c_str());
-      return 2;
+      return EX_IOERR;  // 74: the output went bad while writing
     }
   }
   std::fprintf(stderr, "pex-carmen2lcm: %zu scans, %zu odometry readings (%s), %zu malformed lines\n",

@@ -1,6 +1,11 @@
 // pex-eval-slam --poses P --relations R: the Kümmerle et al. 2009 relations
 // metric of a trajectory (`timestamp_s x y theta` per line), printed as one JSON line.
 #include <CLI/CLI.hpp>
+#include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 
 #include <cstdio>
 #include <fstream>
@@ -19,17 +24,22 @@ int main(int argc, char** argv) {
   app.add_option("--max-time-difference-s", options.max_time_difference_s,
                  "a relation counts when both times have an estimated pose this close")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("pex-eval-slam ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
 
   std::ifstream poses_in(poses_path);
   if (!poses_in) {
     std::fprintf(stderr, "pex-eval-slam: cannot open %s\n", poses_path.c_str());
-    return 2;
+    return EX_NOINPUT;
   }
   std::ifstream relations_in(relations_path);
   if (!relations_in) {
     std::fprintf(stderr, "pex-eval-slam: cannot open %s\n", relations_path.c_str());
-    return 2;
+    return EX_NOINPUT;
   }
   const auto poses = pex::evaluation::read_poses(poses_in);
   const auto relations = pex::evaluation::read_relations(relations_in);

@@ -17,6 +17,10 @@
 
 #include <CLI/CLI.hpp>
 
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
+
 #include "report.hpp"
 
 namespace {
@@ -51,6 +55,7 @@ int main(int argc, char** argv) {
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
   app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed) to this SVG");
+  app.set_version_flag("--version", std::string("pex-explore-report ") + PEX_VERSION);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

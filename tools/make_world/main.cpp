@@ -5,6 +5,11 @@
 // space connected to the trajectory becomes the world's free space and its
 // boundary the walls (make_world.hpp says how and why).
 #include <CLI/CLI.hpp>
+#include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -69,7 +74,12 @@ int main(int argc, char** argv) {
   app.add_option("--simplify-m", o.simplify_m, "Ramer-Douglas-Peucker tolerance")->capture_default_str();
   app.add_option("--robot-radius-m", o.robot_radius_m, "for the reachable area")->capture_default_str();
   app.add_option("--start-clearance-m", o.start_clearance_m, "START's distance to every wall")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("pex-make-world ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
   if (const auto bad = g.validate(); !bad.empty()) {
     std::fprintf(stderr, "pex-make-world: %s\n", bad.c_str());
     return 64;
@@ -78,12 +88,12 @@ int main(int argc, char** argv) {
   std::ifstream log_in(log_path);
   if (!log_in) {
     std::fprintf(stderr, "pex-make-world: cannot open %s\n", log_path.c_str());
-    return 2;
+    return EX_NOINPUT;
   }
   std::ifstream poses_in(poses_path);
   if (!poses_in) {
     std::fprintf(stderr, "pex-make-world: cannot open %s\n", poses_path.c_str());
-    return 2;
+    return EX_NOINPUT;
   }
   const ev::CarmenLog log = ev::parse_carmen_log(log_in);
   const ev::PoseFile poses = ev::read_poses(poses_in);
@@ -160,19 +170,29 @@ int main(int argc, char** argv) {
   header.push_back("Format: see worlds/README.md. Every edge is a wall: the LINESTRING closes the free space,");
   header.push_back("each POLYGON is clutter inside it.");
 
+  // An output that cannot be written (no such folder, full disk): exit 73.
+  const auto cannot_write = [](const std::string& path) {
+    std::fprintf(stderr, "pex-make-world: cannot write %s\n", path.c_str());
+    return EX_CANTCREAT;
+  };
   std::ofstream out(out_path);
   out << mw::to_wkt(world, header);
-  if (!out) {
-    std::fprintf(stderr, "pex-make-world: cannot write %s\n", out_path.c_str());
-    return 2;
+  out.close();
+  if (!out) return cannot_write(out_path);
+  if (!svg_path.empty()) {
+    std::ofstream svg(svg_path);
+    svg << mw::to_svg(world);
+    svg.close();
+    if (!svg) return cannot_write(svg_path);
   }
-  if (!svg_path.empty()) std::ofstream(svg_path) << mw::to_svg(world);
   if (!png_path.empty()) {
     const auto pic = mw::render(world, grid, dx, dy, trajectory);
     pex::render_map::Image image{pic.width, pic.height, pic.rgb};
     const auto png = pex::render_map::encode_png(image);
-    std::ofstream(png_path, std::ios::binary)
-        .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    std::ofstream png_out(png_path, std::ios::binary);
+    png_out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    png_out.close();
+    if (!png_out) return cannot_write(png_path);
   }
   std::printf(
       "{\"size_m\": [%.2f, %.2f], \"edges\": %zu, \"obstacles\": %zu, \"free_area_m2\": %.1f, "

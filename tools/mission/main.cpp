@@ -10,6 +10,11 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/explore_state_t.hpp>
 #include <pex/mission_cmd_t.hpp>
@@ -58,7 +63,12 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or LCM's)");
   app.add_option("--timeout", timeout_s, "seconds to wait for the explorer to show the command in effect")
       ->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("pex-mission ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
 
   const std::map<std::string, pex::planning::MissionCommand> commands = {
       {"start", pex::planning::MissionCommand::kStart}, {"pause", pex::planning::MissionCommand::kPause},
@@ -69,7 +79,7 @@ int main(int argc, char** argv) {
   lcm::LCM lcm(url);
   if (!lcm.good()) {
     std::fprintf(stderr, "pex-mission: cannot open LCM at '%s'\n", url.c_str());
-    return 1;
+    return EX_UNAVAILABLE;
   }
   StateListener listener;
   lcm.subscribe(std::string(pex::runtime::channels::kExploreState), &StateListener::on_state, &listener);

@@ -12,6 +12,11 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
@@ -35,7 +40,12 @@ int main(int argc, char** argv) {
   app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
   app.add_flag("--tight", tight, "plan without the clearance margin (the explorer's tight fallback)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("pex-plan ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
 
   pex::explorer::ExplorerOptions options;
   try {
@@ -43,7 +53,7 @@ int main(int argc, char** argv) {
     options = pex::explorer::load_options(config);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pex-plan: %s\n", e.what());
-    return 64;
+    return EX_CONFIG;  // 78: a bad --config, as the daemons
   }
   pex::planning::PlannerOptions planner = options.mission.planner;
   if (tight) planner.cspace.clearance_margin_m = 0.0;
@@ -51,7 +61,7 @@ int main(int argc, char** argv) {
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {
     std::fprintf(stderr, "pex-plan: cannot read %s\n", log_path.c_str());
-    return 66;
+    return EX_NOINPUT;
   }
   std::optional<pex::polygon_map_t> map;
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
@@ -73,12 +83,12 @@ int main(int argc, char** argv) {
   if (!map || !pose) {
     std::fprintf(stderr, "pex-plan: no %s with a %s before it in %s\n", map_channel.c_str(), pose_channel.c_str(),
                  log_path.c_str());
-    return 65;
+    return EX_DATAERR;
   }
   const auto decoded = pex::explorer::decode_map(*map, options.map);
   if (!decoded.ok) {
     std::fprintf(stderr, "pex-plan: the MAP is bad input: %s\n", decoded.error.c_str());
-    return 65;
+    return EX_DATAERR;
   }
   const pex::mapping::Pose2 robot{pose->x, pose->y, pose->theta};
   const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner);
@@ -86,7 +96,13 @@ int main(int argc, char** argv) {
   cspace.build(decoded.polygons, planner.cspace);
   std::printf("%s", pex::plan_tool::describe(*map, *pose, cspace, plan).c_str());
   if (!svg_path.empty()) {
-    std::ofstream(svg_path) << pex::plan_tool::to_svg(decoded.polygons, robot, cspace, plan);
+    std::ofstream svg(svg_path);
+    svg << pex::plan_tool::to_svg(decoded.polygons, robot, cspace, plan);
+    svg.close();
+    if (!svg) {
+      std::fprintf(stderr, "pex-plan: cannot write %s\n", svg_path.c_str());
+      return EX_CANTCREAT;
+    }
     std::printf("wrote %s\n", svg_path.c_str());
   }
   return plan.ok ? 0 : 1;

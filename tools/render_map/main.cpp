@@ -1,9 +1,17 @@
 // pex-render-map --log IN.lcm [--channel MAP] --svg OUT.svg --png OUT.png
 // Draws the last MAP message of an LCM log (free space filled, obstacle edges
 // black, frontier edges orange) with the robot path from every MAP's pose.
+#include <unistd.h>
+
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
+#include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -21,15 +29,31 @@ int main(int argc, char** argv) {
   app.add_option("--svg", svg_path, "SVG output");
   app.add_option("--png", png_path, "PNG output");
   app.add_option("--pixels-per-m", options.pixels_per_m, "scale (shrinks for large maps)");
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("pex-render-map ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
   if (svg_path.empty() && png_path.empty()) {
     std::fprintf(stderr, "pex-render-map: give --svg and/or --png\n");
-    return 64;
+    return EX_USAGE;
   }
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {
     std::fprintf(stderr, "pex-render-map: cannot read %s\n", log_path.c_str());
-    return 66;
+    return EX_NOINPUT;
+  }
+  // An output that cannot be written (no such folder, full disk) is exit 73, never "rendered";
+  // a folder that is not there or not writable is found before the log is read.
+  const auto cannot_write = [](const std::string& path) {
+    std::fprintf(stderr, "pex-render-map: cannot write %s\n", path.c_str());
+    return EX_CANTCREAT;
+  };
+  for (const std::string& out : {svg_path, png_path}) {
+    if (out.empty()) continue;
+    const std::filesystem::path folder = std::filesystem::path(out).parent_path();
+    if (::access(folder.empty() ? "." : folder.c_str(), W_OK) != 0) return cannot_write(out);
   }
   pex::polygon_map_t last{};
   bool found = false;
@@ -50,15 +74,20 @@ int main(int argc, char** argv) {
   if (!found) {
     std::fprintf(stderr, "pex-render-map: no decodable %s message in %s (%ld rejected)\n", channel.c_str(),
                  log_path.c_str(), rejected);
-    return 65;
+    return EX_DATAERR;
   }
   if (!svg_path.empty()) {
-    std::ofstream(svg_path) << pex::render_map::to_svg(last, path, options);
+    std::ofstream svg(svg_path);
+    svg << pex::render_map::to_svg(last, path, options);
+    svg.close();
+    if (!svg) return cannot_write(svg_path);
   }
   if (!png_path.empty()) {
     const auto png = pex::render_map::encode_png(pex::render_map::rasterise(last, path, options));
-    std::ofstream(png_path, std::ios::binary).write(reinterpret_cast<const char*>(png.data()),
-                                                    static_cast<std::streamsize>(png.size()));
+    std::ofstream out(png_path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    out.close();
+    if (!out) return cannot_write(png_path);
   }
   std::printf("rendered %d rings, %d vertices, %.1f m2 free, %zu path points (%ld messages rejected)\n",
               last.nrings, last.vertex_count, last.free_area_m2, path.size(), rejected);

@@ -9,6 +9,11 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/daemon_status_t.hpp>
 #include <pex/explore_state_t.hpp>
@@ -113,12 +118,17 @@ int main(int argc, char** argv) {
                  "with --follow-mission: give up after this many wall-clock seconds (default: 3 x the mission "
                  "limit + 120, for a mission clock that stands still)")
       ->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", std::string("pex-status ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {
     std::fprintf(stderr, "pex-status: cannot open LCM at '%s'\n", url.c_str());
-    return 1;
+    return EX_UNAVAILABLE;
   }
   if (mission_s > 0) return follow_mission(lcm, mission_s, 5.0, wall_limit_s > 0 ? wall_limit_s : 3 * mission_s + 120);
   std::map<std::string, pex::daemon_status_t> latest;

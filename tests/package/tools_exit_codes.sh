@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# tools_exit_codes.sh BIN_DIR VERSION "TOOLS": the tools' exit codes are the README's
+# (64 bad command line, 66 an input that cannot be read, 73 an output that cannot be
+# written) and each answers --version with "<name> <version>". Every failure printed.
+set -uo pipefail
+bin=$1 version=$2 tools=$3
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+fails=0
+expect() { # CODE DESCRIPTION CMD...: CMD must exit CODE
+  local code=$1 what=$2; shift 2
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [ "$rc" != "$code" ]; then echo "FAIL: $what: exit $rc, expected $code: $* -> $(head -c 300 <<<"$out")"; fails=$((fails + 1)); fi
+}
+[ -n "$tools" ] || { echo "no tools given"; exit 1; }
+for t in $tools; do
+  out=$("$bin/$t" --version 2>&1); rc=$?
+  [ "$rc" = 0 ] && [ "$out" = "$t $version" ] || { echo "FAIL: $t --version: exit $rc, '$out'"; fails=$((fails + 1)); }
+  expect 0 "$t --help" "$bin/$t" --help
+  expect 64 "$t with an unknown flag" "$bin/$t" --no-such-flag
+done
+: >"$tmp/empty.lcm"
+printf 'FLASER 3 1.0 1.0 1.0 0 0 0 0 0 0 0.0 robot 0.0\n' >"$tmp/tiny.clf"
+for t in $tools; do
+  case $t in
+    pex-render-map)
+      expect 66 "$t: no such log" "$bin/$t" --log "$tmp/none.lcm" --png "$tmp/x.png"
+      expect 73 "$t: PNG into a missing folder" "$bin/$t" --log "$tmp/empty.lcm" --png /no/such/dir/x.png
+      expect 73 "$t: SVG into a missing folder" "$bin/$t" --log "$tmp/empty.lcm" --svg /no/such/dir/x.svg ;;
+    pex-carmen2lcm)
+      expect 66 "$t: no such log" "$bin/$t" "$tmp/none.clf" "$tmp/out.lcm"
+      expect 73 "$t: output into a missing folder" "$bin/$t" "$tmp/tiny.clf" /no/such/dir/x.lcm ;;
+    pex-eval-slam)
+      expect 66 "$t: no such poses file" "$bin/$t" --poses "$tmp/none.txt" --relations "$tmp/none.rel" ;;
+    pex-make-world)
+      expect 66 "$t: no such log" "$bin/$t" --log "$tmp/none.clf" --poses "$tmp/none.txt" --out "$tmp/w.wkt" ;;
+    pex-plan)
+      expect 66 "$t: no such log" "$bin/$t" --log "$tmp/none.lcm" ;;
+    pex-explore-report)
+      expect 66 "$t: no such world" "$bin/$t" --world "$tmp/none.wkt" --log "$tmp/empty.lcm" ;;
+  esac
+done
+if ((fails)); then echo "$fails failure(s)"; exit 1; fi
+echo "tools OK: $tools"
