@@ -411,6 +411,35 @@ void BM_Plan(benchmark::State& state) {
   state.counters["ok"] = plan.ok ? 1 : 0;
 }
 
+// The steps of BM_Plan's greedy plan one by one, on the same map: the C-space
+// (range 1 = 0), then the robot's row of the path matrix over its candidates
+// (1): the rest of a plan is candidates and approach points.
+void BM_PlanStep(benchmark::State& state) {
+  MissionScene& s = mission_scene(static_cast<int>(state.range(0)));
+  if (s.maps.snapshots.empty()) {
+    state.SkipWithError((s.name + ": " + s.maps.error).c_str());
+    return;
+  }
+  const auto options = planner_options(GoalStrategy::kGreedy);
+  const auto& snap = s.maps.snapshots[s.largest];
+  ConfigurationSpace cs;
+  cs.build(snap.map, options.cspace);
+  const auto plan = plan_exploration(snap.map, snap.pose, snap.blacklist, options);
+  std::vector<Point> targets;
+  for (const auto& c : plan.candidates) targets.push_back(c.position);
+  const auto start = cs.nearest_interior_point(Point(snap.pose.x, snap.pose.y), options.start_snap_distance_m);
+  for (auto _ : state) {
+    if (state.range(1) == 0) {
+      ConfigurationSpace fresh;
+      benchmark::DoNotOptimize(fresh.build(snap.map, options.cspace));
+    } else if (start) {
+      benchmark::DoNotOptimize(
+          shortest_path_matrix(cs, *start, targets, PathMatrixOptions{.between_targets = false}));
+    }
+  }
+  state.SetLabel(s.name + (state.range(1) == 0 ? " cspace" : " start row"));
+}
+
 // Every map of the mission planned once: the per-plan CPU time's p50, p99
 // and max over the mission (the target is the p99).
 void BM_PlanMission(benchmark::State& state) {
@@ -458,6 +487,12 @@ BENCHMARK(BM_PathMatrix)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)-
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_Tour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_Plan)->Apply(missions)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_PlanStep)
+    ->ArgNames({"world", "step"})
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)

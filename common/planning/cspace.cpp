@@ -160,6 +160,7 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
   reflex_nodes_.clear();
   reflex_edges_.clear();
   tree_.reset();
+  build_grid();  // empty until the edges are in
   BuildResult result;
   if (!(options.robot_radius_m >= 0.0) || !(options.clearance_margin_m >= 0.0) ||
       !(options.interior_offset_m > 0.0) || options.points_per_circle < 4) {
@@ -225,6 +226,7 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
   values.reserve(edges_.size());
   for (std::uint32_t i = 0; i < edges_.size(); ++i) values.emplace_back(box_of(edges_[i].a, edges_[i].b), i);
   tree_ = std::make_unique<Tree>(values.begin(), values.end());
+  build_grid();
 
   // Reflex vertices: a right turn, because the free space is on the left.
   for (std::uint32_t i = 0; i < edges_.size(); ++i) {
@@ -293,12 +295,80 @@ double ConfigurationSpace::distance_to_boundary(const Point& p) const {
   return best;
 }
 
+// Cells of about the edges' mean spacing (as many cells as edges, at most
+// 4x), each listing the edges whose boxes (grown by kGridSlack) meet it.
+void ConfigurationSpace::build_grid() {
+  grid_start_.clear();
+  grid_edges_.clear();
+  grid_nx_ = grid_ny_ = 0;
+  if (edges_.empty()) return;
+  double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  for (const Edge& e : edges_) {
+    x0 = std::min({x0, e.a.x(), e.b.x()});
+    y0 = std::min({y0, e.a.y(), e.b.y()});
+    x1 = std::max({x1, e.a.x(), e.b.x()});
+    y1 = std::max({y1, e.a.y(), e.b.y()});
+  }
+  const double n = static_cast<double>(edges_.size());
+  const double w = std::max(x1 - x0, 1e-6), h = std::max(y1 - y0, 1e-6);
+  double cell = std::sqrt(w * h / n);
+  cell = std::max({cell, std::max(w, h) / 4096.0, 1e-6});
+  grid_x0_ = x0 - kGridSlack;
+  grid_y0_ = y0 - kGridSlack;
+  grid_cell_ = cell;
+  grid_nx_ = static_cast<int>(std::floor((w + 2.0 * kGridSlack) / cell)) + 1;
+  grid_ny_ = static_cast<int>(std::floor((h + 2.0 * kGridSlack) / cell)) + 1;
+  const std::size_t cells = static_cast<std::size_t>(grid_nx_) * static_cast<std::size_t>(grid_ny_);
+  grid_start_.assign(cells + 1, 0);
+  auto for_cells = [&](const Edge& e, auto&& fn) {
+    const int cx0 = cell_x(std::min(e.a.x(), e.b.x()) - kGridSlack), cx1 = cell_x(std::max(e.a.x(), e.b.x()) + kGridSlack);
+    const int cy0 = cell_y(std::min(e.a.y(), e.b.y()) - kGridSlack), cy1 = cell_y(std::max(e.a.y(), e.b.y()) + kGridSlack);
+    for (int cy = cy0; cy <= cy1; ++cy)
+      for (int cx = cx0; cx <= cx1; ++cx) fn(static_cast<std::size_t>(cy) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(cx));
+  };
+  for (const Edge& e : edges_) for_cells(e, [&](std::size_t c) { ++grid_start_[c + 1]; });
+  for (std::size_t c = 0; c < cells; ++c) grid_start_[c + 1] += grid_start_[c];
+  grid_edges_.resize(grid_start_[cells]);
+  std::vector<std::uint32_t> fill(grid_start_.begin(), grid_start_.end() - 1);
+  for (std::uint32_t i = 0; i < edges_.size(); ++i) for_cells(edges_[i], [&](std::size_t c) { grid_edges_[fill[c]++] = i; });
+}
+
+int ConfigurationSpace::cell_x(double x) const {
+  return std::clamp(static_cast<int>(std::floor((x - grid_x0_) / grid_cell_)), 0, grid_nx_ - 1);
+}
+int ConfigurationSpace::cell_y(double y) const {
+  return std::clamp(static_cast<int>(std::floor((y - grid_y0_) / grid_cell_)), 0, grid_ny_ - 1);
+}
+
 bool ConfigurationSpace::segment_free(const Point& a, const Point& b) const {
   ++segment_tests_;
-  if (!tree_) return true;
-  for (auto it = tree_->qbegin(bgi::intersects(mapping::Segment(a, b))); it != tree_->qend(); ++it) {
-    const Edge& e = edges_[it->second];
-    if (segments_intersect(a, b, e.a, e.b)) return false;
+  if (grid_nx_ == 0) return true;
+  // Column by column, the rows the segment's stretch in that column spans,
+  // each grown by kGridSlack: a superset of the cells it touches, so every
+  // edge it could meet is tested (some twice; the answer is the same). The
+  // grid walks only the cells along the segment, where the rtree's segment
+  // query was most of the path matrix's time.
+  const double min_x = std::min(a.x(), b.x()), max_x = std::max(a.x(), b.x());
+  const double dx = b.x() - a.x(), dy = b.y() - a.y();
+  const int cx0 = cell_x(min_x - kGridSlack), cx1 = cell_x(max_x + kGridSlack);
+  for (int cx = cx0; cx <= cx1; ++cx) {
+    double ya, yb;
+    if (dx == 0.0) {
+      ya = a.y();
+      yb = b.y();
+    } else {
+      const double xl = std::max(min_x, grid_x0_ + cx * grid_cell_), xr = std::min(max_x, grid_x0_ + (cx + 1) * grid_cell_);
+      ya = a.y() + (xl - a.x()) / dx * dy;
+      yb = a.y() + (xr - a.x()) / dx * dy;
+    }
+    const int cy0 = cell_y(std::min(ya, yb) - kGridSlack), cy1 = cell_y(std::max(ya, yb) + kGridSlack);
+    for (int cy = cy0; cy <= cy1; ++cy) {
+      const std::size_t c = static_cast<std::size_t>(cy) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(cx);
+      for (std::uint32_t k = grid_start_[c]; k < grid_start_[c + 1]; ++k) {
+        const Edge& e = edges_[grid_edges_[k]];
+        if (segments_intersect(a, b, e.a, e.b)) return false;
+      }
+    }
   }
   return true;
 }

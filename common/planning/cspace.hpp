@@ -116,6 +116,12 @@ class ConfigurationSpace {
   using Tree = boost::geometry::index::rtree<Value, boost::geometry::index::rstar<16>>;
 
   std::optional<Point> inward(const Point& q, std::uint32_t edge, bool at_vertex_b) const;
+  void build_grid();
+  int cell_x(double x) const;  // clamped to the grid
+  int cell_y(double y) const;
+  // Cells are looked at this much beyond where a segment or an edge box
+  // reaches, so rounding at cell borders never leaves out a cell.
+  static constexpr double kGridSlack = 1e-6;
 
   CSpaceOptions options_;
   TypedMultiPolygon polygons_;
@@ -124,6 +130,12 @@ class ConfigurationSpace {
   std::vector<std::uint32_t> reflex_edges_;
   std::unique_ptr<Tree> tree_;
   double max_x_ = 0.0;  // of every boundary edge: where covers()'s ray ends
+  // Uniform grid over the boundary edges for segment_free(): cell (cx, cy)
+  // lists grid_edges_[grid_start_[c] .. grid_start_[c + 1]), c = cy * nx + cx.
+  double grid_x0_ = 0.0, grid_y0_ = 0.0, grid_cell_ = 1.0;
+  int grid_nx_ = 0, grid_ny_ = 0;
+  std::vector<std::uint32_t> grid_start_;
+  std::vector<std::uint32_t> grid_edges_;
   mutable std::int64_t segment_tests_ = 0;
 };
 

@@ -239,6 +239,21 @@ TEST(ConfigurationSpace, ClipperOffsetKeepsAPassageTheRobotFitsThroughOpen) {
   EXPECT_NE(cs.piece_of(Point(1, 1.5)), cs.piece_of(Point(11, 7.5)));
 }
 
+// Uniform random points over a map's box grown by 1 m.
+class PointSampler {
+ public:
+  explicit PointSampler(const TypedMultiPolygon& map) {
+    const auto box = boost::geometry::return_envelope<mapping::Box>(mapping::geometry_of(map));
+    x_ = std::uniform_real_distribution<double>(box.min_corner().x() - 1, box.max_corner().x() + 1);
+    y_ = std::uniform_real_distribution<double>(box.min_corner().y() - 1, box.max_corner().y() + 1);
+  }
+  Point operator()(std::mt19937_64& rng) { return Point(x_(rng), y_(rng)); }
+  double y(std::mt19937_64& rng) { return y_(rng); }
+
+ private:
+  std::uniform_real_distribution<double> x_, y_;
+};
+
 // covers() and piece_of() (a ray's crossings through the edge index) against
 // bg::covered_by on every polygon, at random points of scanned maps.
 TEST(ConfigurationSpace, PieceOfAgreesWithCoveredBy) {
@@ -249,11 +264,9 @@ TEST(ConfigurationSpace, PieceOfAgreesWithCoveredBy) {
   for (const auto& map : oracle_maps()) {
     ConfigurationSpace cs;
     ASSERT_TRUE(cs.build(map, options).ok);
-    const auto box = boost::geometry::return_envelope<mapping::Box>(mapping::geometry_of(map));
-    std::uniform_real_distribution<double> ux(box.min_corner().x() - 1, box.max_corner().x() + 1),
-        uy(box.min_corner().y() - 1, box.max_corner().y() + 1);
+    PointSampler sample(map);
     for (int k = 0; k < 2000; ++k) {
-      const Point p(ux(rng), uy(rng));
+      const Point p = sample(rng);
       int expected = -1;
       for (std::size_t i = 0; i < cs.polygons().size(); ++i)
         if (boost::geometry::covered_by(p, cs.polygons()[i].geometry)) expected = static_cast<int>(i);
@@ -266,6 +279,41 @@ TEST(ConfigurationSpace, PieceOfAgreesWithCoveredBy) {
   }
   EXPECT_GT(inside, 1000);
   EXPECT_GT(outside, 1000);
+}
+
+// segment_free() (a grid walk) against a test of every boundary edge, on
+// random segments of scanned maps: long and short, axis-parallel, and ending
+// on C-space vertices (touching counts as not free).
+TEST(ConfigurationSpace, SegmentFreeAgreesWithEveryEdge) {
+  CSpaceOptions options;
+  options.robot_radius_m = 0.27;
+  std::mt19937_64 rng(5);
+  int free = 0, blocked = 0;
+  for (const auto& map : oracle_maps()) {
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, options).ok);
+    ASSERT_FALSE(cs.edges().empty());
+    PointSampler sample(map);
+    std::uniform_real_distribution<double> near(-0.5, 0.5);
+    std::uniform_int_distribution<std::size_t> pick(0, cs.edges().size() - 1);
+    for (int k = 0; k < 3000; ++k) {
+      Point a = sample(rng), b;
+      switch (k % 4) {
+        case 0: b = sample(rng); break;
+        case 1: b = Point(a.x() + near(rng), a.y() + near(rng)); break;
+        case 2: b = Point(a.x(), sample.y(rng)); break;  // vertical
+        default:
+          a = cs.edges()[pick(rng)].a;  // on a vertex
+          b = Point(a.x() + 4 * near(rng), a.y() + 4 * near(rng));
+      }
+      bool expected = true;
+      for (const auto& e : cs.edges()) expected = expected && !segments_intersect(a, b, e.a, e.b);
+      ASSERT_EQ(cs.segment_free(a, b), expected) << a.x() << "," << a.y() << " - " << b.x() << "," << b.y();
+      (expected ? free : blocked)++;
+    }
+  }
+  EXPECT_GT(free, 2000);
+  EXPECT_GT(blocked, 2000);
 }
 
 }  // namespace
