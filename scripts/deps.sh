@@ -11,6 +11,8 @@ PEX_DEBS=(
   iproute2 util-linux procps
   nftables libfaketime   # fault tests: LCM datagrams dropped, the wall clock stepped
   dpkg-dev file          # scripts/package.sh: cpack runs dpkg-shlibdeps (and file) for Depends
+  strace                 # tests/systemd/sandbox_syscalls.sh: the units' syscall filters against the set
+  systemd                # systemd-analyze: the units verified and scored in the tests
 )
 missing=()
 for p in "${PEX_DEBS[@]}"; do

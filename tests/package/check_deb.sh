@@ -30,6 +30,16 @@ for s in postinst prerm postrm; do
   sh -n "$tmp/control/$s" || fail "$s: shell syntax"
 done
 grep -Eq '(adduser|useradd) --system.* polyexplore' "$tmp/control/postinst" || fail "postinst does not create the polyexplore system user"
+# postinst run with getent/adduser stand-ins: makes the user when missing, only then
+shim=$tmp/shim; mkdir -p "$shim"
+printf '#!/bin/sh\nexit "${PEX_SHIM_GETENT:-2}"\n' >"$shim/getent"
+printf '#!/bin/sh\necho "$*" >>"%s/adduser.calls"\n' "$tmp" >"$shim/adduser"
+chmod +x "$shim"/*
+PATH=$shim:$PATH PEX_SHIM_GETENT=2 sh "$tmp/control/postinst" configure || fail "postinst configure failed (no user yet)"
+grep -q -- '--system.* polyexplore$' "$tmp/adduser.calls" 2>/dev/null || fail "postinst did not run adduser --system ... polyexplore: $(cat "$tmp/adduser.calls" 2>/dev/null)"
+rm -f "$tmp/adduser.calls"
+PATH=$shim:$PATH PEX_SHIM_GETENT=0 sh "$tmp/control/postinst" configure || fail "postinst configure failed (user there)"
+[ ! -e "$tmp/adduser.calls" ] || fail "postinst ran adduser although the user exists"
 ! grep -Eq 'deluser|userdel' "$tmp/control/postinst" "$tmp/control/prerm" "$tmp/control/postrm" || fail "a maintainer script removes the user"
 # conffiles: exactly the files under /etc
 dpkg-deb --fsys-tarfile "$deb" | tar -t | sed -n 's#^\./etc/\(.*[^/]\)$#/etc/\1#p' | sort >"$tmp/etc_files"
