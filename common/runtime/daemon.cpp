@@ -6,6 +6,8 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 
+#include "runtime/log_file_error.hpp"
+
 namespace pex::runtime {
 
 namespace {
@@ -46,8 +48,7 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   if (info.supports_replay) {
     app.add_option("--log", g_args.replay_logs,
                    "replay this LCM log through the same handlers, as fast as possible, then exit "
-                   "(several: merged by event time)")
-        ->check(CLI::ExistingFile);
+                   "(several: merged by event time); a log that cannot be opened exits 66, a damaged one 65");
     app.add_option("--out", g_args.replay_out, "with --log: write what is published to this LCM log");
   }
   if (info.add_options) info.add_options(app);
@@ -95,6 +96,10 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   } catch (const ConfigError& e) {
     spdlog::critical("config error: {}", e.what());
     return exit_code::kConfig;
+  } catch (const LogFileError& e) {
+    spdlog::critical("input: {}", e.what());
+    spdlog::default_logger()->flush();
+    return e.kind() == LogFileError::Kind::kCannotOpen ? exit_code::kNoInput : exit_code::kDataError;
   } catch (const Unavailable& e) {
     spdlog::critical("unavailable: {}", e.what());
     return exit_code::kUnavailable;

@@ -25,6 +25,8 @@ namespace exit_code {
 inline constexpr int kOk = 0;
 inline constexpr int kFatal = 1;
 inline constexpr int kUsage = 64;
+inline constexpr int kDataError = 65;  // an input file's content is broken (a damaged or foreign log)
+inline constexpr int kNoInput = 66;    // an input file cannot be opened
 inline constexpr int kUnavailable = 69;
 inline constexpr int kConfig = 78;
 }  // namespace exit_code

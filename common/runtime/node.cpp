@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
@@ -15,6 +16,7 @@
 #include <pex/sim_clock_t.hpp>
 
 #include "runtime/channels.hpp"
+#include "runtime/log_file_error.hpp"
 
 namespace pex::runtime {
 
@@ -388,30 +390,77 @@ void Node::run() {
   shutdown();
 }
 
-int64_t Node::replay_logs(const std::vector<std::string>& paths) {
-  std::vector<std::unique_ptr<lcm::LogFile>> logs;
-  std::vector<const lcm::LogEvent*> heads;
-  for (const auto& path : paths) {
-    logs.push_back(std::make_unique<lcm::LogFile>(path, "r"));
-    if (!logs.back()->good()) throw std::runtime_error("cannot read LCM log '" + path + "'");
-    heads.push_back(logs.back()->readNextEvent());
+namespace {
+
+// LCM's reader returns no event both at the end of a log and at bytes that
+// are not an event (it says so on stderr at most), so a damaged log would
+// replay as a shorter one. It ends a good log at its last byte; anywhere else
+// the rest of the file is not events. A file without a single event is no
+// LCM log at all, whatever its size (the reader skips bytes looking for one).
+class CheckedLogReader {
+ public:
+  explicit CheckedLogReader(const std::string& path) : path_(path), log_(path, "r") {
+    std::error_code ec;
+    size_ = std::filesystem::file_size(path, ec);
+    if (!log_.good() || ec) throw LogFileError(LogFileError::Kind::kCannotOpen, "cannot read LCM log '" + path + "'");
   }
+  const lcm::LogEvent* next() {
+    const lcm::LogEvent* ev = log_.readNextEvent();
+    FILE* f = log_.getFilePtr();
+    if (ev) {
+      ++events_;
+      // The reader leaves the file at the next event's first byte.
+      end_of_events_ = f ? ::ftello(f) : -1;
+      return ev;
+    }
+    if (events_ == 0 && size_ > 0)
+      throw LogFileError(LogFileError::Kind::kNotAllEvents,
+                         "'" + path_ + "' is not an LCM log: no event in its " + std::to_string(size_) + " bytes");
+    const auto at = end_of_events_;
+    if (at < 0 || static_cast<std::uintmax_t>(at) < size_)
+      throw LogFileError(LogFileError::Kind::kNotAllEvents,
+                         "'" + path_ + "': no LCM event at byte " + std::to_string(at) + " of " +
+                             std::to_string(size_) + ", after " + std::to_string(events_) +
+                             " events (the log is damaged or cut)");
+    return nullptr;
+  }
+
+ private:
+  std::string path_;
+  lcm::LogFile log_;
+  std::uintmax_t size_ = 0;
+  int64_t events_ = 0;
+  off_t end_of_events_ = 0;  // the byte after the last whole event
+};
+
+}  // namespace
+
+int64_t Node::replay_logs(const std::vector<std::string>& paths) {
+  std::vector<std::unique_ptr<CheckedLogReader>> logs;
+  for (const auto& path : paths) logs.push_back(std::make_unique<CheckedLogReader>(path));
   if (state_ == pex::daemon_status_t::STATE_STARTING) set_state(pex::daemon_status_t::STATE_OK);
   int64_t events = 0;
-  while (!stop_) {
-    // The earliest head; strict < keeps ties in command-line order.
-    size_t next = heads.size();
-    for (size_t i = 0; i < heads.size(); ++i)
-      if (heads[i] && (next == heads.size() || heads[i]->timestamp < heads[next]->timestamp)) next = i;
-    if (next == heads.size()) break;
-    const lcm::LogEvent* ev = heads[next];
-    dispatch(ev->channel, ev->data, ev->datalen, ev->timestamp);
-    heads[next] = logs[next]->readNextEvent();  // invalidates ev
-    ++events;
-    if (signal_fd_ >= 0 && events % 4096 == 0) {
-      pollfd p{signal_fd_, POLLIN, 0};
-      if (::poll(&p, 1, 0) > 0) stop_ = true;
+  try {
+    std::vector<const lcm::LogEvent*> heads;
+    for (auto& log : logs) heads.push_back(log->next());
+    while (!stop_) {
+      // The earliest head; strict < keeps ties in command-line order.
+      size_t next = heads.size();
+      for (size_t i = 0; i < heads.size(); ++i)
+        if (heads[i] && (next == heads.size() || heads[i]->timestamp < heads[next]->timestamp)) next = i;
+      if (next == heads.size()) break;
+      const lcm::LogEvent* ev = heads[next];
+      dispatch(ev->channel, ev->data, ev->datalen, ev->timestamp);
+      heads[next] = logs[next]->next();  // invalidates ev
+      ++events;
+      if (signal_fd_ >= 0 && events % 4096 == 0) {
+        pollfd p{signal_fd_, POLLIN, 0};
+        if (::poll(&p, 1, 0) > 0) stop_ = true;
+      }
     }
+  } catch (const LogFileError&) {
+    shutdown();  // what was replayed is kept: outputs written, checkpoints saved
+    throw;
   }
   shutdown();
   return events;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <sys/timerfd.h>
@@ -12,10 +14,12 @@
 #include <pex/pose_t.hpp>
 #include <pex/sim_clock_t.hpp>
 
+#include "runtime/log_file_error.hpp"
 #include "runtime/channels.hpp"
 
 using pex::runtime::BadInput;
 using pex::runtime::ClockSource;
+using pex::runtime::LogFileError;
 using pex::runtime::Node;
 using pex::runtime::NodeOptions;
 using pex::daemon_status_t;
@@ -161,6 +165,87 @@ TEST(Node, ReplayOfSeveralLogsMergesThemByEventTime) {
   EXPECT_EQ(node.replay_logs({a, b}), 7);
   const std::vector<std::pair<int64_t, double>> expected = {{10, 1}, {20, 2}, {30, 1}, {30, 2}, {40, 2}, {50, 1}, {60, 2}};
   EXPECT_EQ(seen, expected);
+  std::filesystem::remove_all(dir);
+}
+
+namespace {
+
+// A log of `n` pose events on channel P, utime i.
+std::string write_pose_log(const std::filesystem::path& path, int n) {
+  lcm::LogFile log(path.string(), "w");
+  for (int i = 0; i < n; ++i) {
+    const auto buf = encode(pose(i, i));
+    lcm::LogEvent ev{};
+    ev.timestamp = i;
+    ev.channel = "P";
+    ev.datalen = static_cast<int32_t>(buf.size());
+    ev.data = const_cast<uint8_t*>(buf.data());
+    log.writeEvent(&ev);
+  }
+  return path.string();
+}
+
+}  // namespace
+
+TEST(Node, ReplayOfADamagedLogSaysWhereAndKeepsWhatCameBefore) {
+  const auto dir = std::filesystem::temp_directory_path() / ("pex_node_damaged_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = write_pose_log(dir / "d.lcm", 100);
+  const auto size = std::filesystem::file_size(path);
+  {  // 16 bytes flipped in the middle of the file
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(size / 2));
+    for (int i = 0; i < 16; ++i) f.put(static_cast<char>(0xA5));
+  }
+  Node node(NodeOptions{"t", "", true, "", 1.0});
+  int seen = 0;
+  node.subscribe<pex::pose_t>("P", [&](const pex::pose_t&) { ++seen; });
+  try {
+    node.replay_log(path);
+    FAIL() << "a damaged log replayed as a complete one";
+  } catch (const LogFileError& e) {
+    EXPECT_EQ(e.kind(), LogFileError::Kind::kNotAllEvents);
+    EXPECT_NE(std::string(e.what()).find("no LCM event at byte"), std::string::npos) << e.what();
+  }
+  EXPECT_GT(seen, 30);   // the events before the damage were handled
+  EXPECT_LT(seen, 100);
+  EXPECT_TRUE(node.stopping());
+  // A log cut short in its last event: the same.
+  const std::string cut = write_pose_log(dir / "c.lcm", 10);
+  std::filesystem::resize_file(cut, std::filesystem::file_size(cut) - 5);
+  Node node2(NodeOptions{"t", "", true, "", 1.0});
+  EXPECT_THROW(node2.replay_log(cut), LogFileError);
+  // The complete log replays to its end.
+  Node node3(NodeOptions{"t", "", true, "", 1.0});
+  EXPECT_EQ(node3.replay_log(write_pose_log(dir / "ok.lcm", 10)), 10);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Node, ReplayRefusesAForeignFileAndAMissingOne) {
+  const auto dir = std::filesystem::temp_directory_path() / ("pex_node_foreign_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string text = (dir / "notes.txt").string();
+  std::ofstream(text) << "# not a log\nsome text that is no LCM event at all\n";
+  Node node(NodeOptions{"t", "", true, "", 1.0});
+  try {
+    node.replay_log(text);
+    FAIL() << "a text file replayed as an empty log";
+  } catch (const LogFileError& e) {
+    EXPECT_EQ(e.kind(), LogFileError::Kind::kNotAllEvents);
+    EXPECT_NE(std::string(e.what()).find("is not an LCM log"), std::string::npos) << e.what();
+  }
+  Node node2(NodeOptions{"t", "", true, "", 1.0});
+  try {
+    node2.replay_log((dir / "missing.lcm").string());
+    FAIL() << "a missing log replayed";
+  } catch (const LogFileError& e) {
+    EXPECT_EQ(e.kind(), LogFileError::Kind::kCannotOpen);
+  }
+  // An empty file is an empty log (lcm-logger before its first message).
+  const std::string empty = (dir / "empty.lcm").string();
+  std::ofstream(empty).close();
+  Node node3(NodeOptions{"t", "", true, "", 1.0});
+  EXPECT_EQ(node3.replay_log(empty), 0);
   std::filesystem::remove_all(dir);
 }
 

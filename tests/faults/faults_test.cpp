@@ -208,12 +208,7 @@ TEST(Faults, KilledLidarReaderStopsTheRobotAndTheMissionEndsDoneAfterItsRestart)
 
   // The reader back (systemd restarts it): the mission goes on to its end.
   set.restart("lidar_reader");
-  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
-  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
-  // two_rooms: 82.66 m2 free; the map loses a band along each wall.
-  EXPECT_GT(set.state()->explored_area_m2, 0.8 * 82.66) << set.report();
-  EXPECT_EQ(set.clock()->collisions, 0);
-  expect_map_matches_world(set);
+  expect_done_with_the_world_mapped(set);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
 }
@@ -299,11 +294,8 @@ TEST(Faults, KilledExplorerTakesItsMissionUpFromTheCheckpoint) {
   EXPECT_GE(after.goals_reached, before.goals_reached) << "visited goals lost in the restart";
   EXPECT_GE(after.distance_travelled_m, before.distance_travelled_m - 0.5) << "the travelled distance restarted";
   EXPECT_GE(after.mission_time_s, before.mission_time_s) << "the mission clock restarted";
-  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
-  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
-  EXPECT_GT(set.state()->explored_area_m2, 0.8 * 82.66) << set.report();
+  expect_done_with_the_world_mapped(set);
   EXPECT_GT(set.bus().status().at("explorer").ncounters, 0);
-  expect_map_matches_world(set);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
 }
@@ -329,15 +321,10 @@ TEST(Faults, KilledMapperPublishesItsMapFromTheCheckpointAndGoesOnWithSlam) {
   const pex::polygon_map_t first = maps[maps_before_restart];
   EXPECT_GT(first.free_area_m2, 0.97 * before.free_area_m2)
       << "the map after the restart has " << first.free_area_m2 << " m^2, before it " << before.free_area_m2;
-  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
-  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
-  // The whole world mapped (82.66 m^2 free), nothing beyond it (ghost space).
-  EXPECT_GT(set.state()->explored_area_m2, 0.9 * 82.66) << set.report();
-  EXPECT_LT(maps.back().free_area_m2, 1.03 * 82.66) << set.report();
+  expect_done_with_the_world_mapped(set);
   const auto& status = set.bus().status().at("polygon_mapper");
   EXPECT_GE(counter_of(status, "slam_resyncs"), 1) << "the restarted mapper followed parents it never saw";
   EXPECT_EQ(counter_of(status, "slam_epoch_changes"), 0);
-  expect_map_matches_world(set);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
   if (!::testing::Test::HasFailure()) std::filesystem::remove_all(std::filesystem::path(checkpoint).parent_path());
@@ -371,13 +358,9 @@ void laser_fault_then_done(std::int8_t fault, double duration_s) {
                                              truth.poses[i].y - truth.poses[standing_from].y));
   }
   EXPECT_LT(wandered, 0.05) << "the robot moved during the laser fault";
-  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
-  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
-  EXPECT_GT(set.state()->explored_area_m2, 0.9 * 82.66) << set.report();
-  EXPECT_EQ(set.clock()->collisions, 0);
+  expect_done_with_the_world_mapped(set);
   EXPECT_GE(counter_of(set.bus().status().at("lidar_reader"), "disconnects"), 1);
   EXPECT_EQ(counter_of(set.bus().status().at("sim"), "laser_faults"), 1);
-  expect_map_matches_world(set);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
 }
@@ -463,12 +446,7 @@ TEST(Faults, FrozenSimulatorEveryDaemonSaysSoAndTheMissionGoesOnAfterIt) {
   EXPECT_TRUE(said_so) << "not every daemon said ERROR while the simulator was frozen\n" << set.report_with_logs();
   EXPECT_TRUE(set.bus().spin_until([&] { return all_in(pex::daemon_status_t::STATE_OK); }, 30s))
       << "not every daemon OK again after the simulator went on\n" << set.report_with_logs();
-  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
-  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
-  EXPECT_GT(set.state()->explored_area_m2, 0.9 * 82.66) << set.report();
-  EXPECT_LT(set.state()->explored_area_m2, 1.03 * 82.66) << set.report();
-  EXPECT_EQ(set.clock()->collisions, 0);
-  expect_map_matches_world(set);
+  expect_done_with_the_world_mapped(set);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
 }
@@ -511,12 +489,7 @@ TEST(Faults, AbsurdOdometryIsRefusedAndSlamDoesNotJump) {
     largest_step = std::max(largest_step, std::hypot(slam_poses[i].x - slam_poses[i - 1].x,
                                                      slam_poses[i].y - slam_poses[i - 1].y));
   EXPECT_LT(largest_step, 0.15) << "the SLAM pose jumped";
-  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
-  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
-  EXPECT_GT(set.state()->explored_area_m2, 0.9 * 82.66) << set.report();
-  EXPECT_LT(set.state()->explored_area_m2, 1.03 * 82.66) << set.report();
-  EXPECT_EQ(set.clock()->collisions, 0);
-  expect_map_matches_world(set);
+  expect_done_with_the_world_mapped(set);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
 }
@@ -539,12 +512,7 @@ TEST(Faults, TenPercentOfLcmMessagesDroppedTheMissionEndsDone) {
   ASSERT_EQ(rule.exit_code, 0) << rule.output;
   {
     ExplorationSet set("faults-lcm-drop", {.speed = 2.0, .slam = true});
-    ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
-    EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
-    EXPECT_GT(set.state()->explored_area_m2, 0.9 * 82.66) << set.report();
-    EXPECT_LT(set.state()->explored_area_m2, 1.03 * 82.66) << set.report();
-    EXPECT_EQ(set.clock()->collisions, 0);
-    expect_map_matches_world(set);
+    expect_done_with_the_world_mapped(set);
   set.stop_all();
     set.clean_up(::testing::Test::HasFailure());
   }

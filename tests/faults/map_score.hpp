@@ -57,4 +57,14 @@ inline void expect_map_matches_world(const ExplorationSet& set) {
   EXPECT_GE(*report.iou, 0.95) << "the map does not match the world (ghost walls or space, or lost parts)";
 }
 
+// The mission runs to its own end: DONE, no collision, the world mapped and
+// nothing else (above).
+inline void expect_done_with_the_world_mapped(ExplorationSet& set) {
+  ASSERT_TRUE(set.spin_to_end()) << set.report_with_logs();
+  EXPECT_EQ(set.phase(), +pex::explore_state_t::PHASE_DONE) << set.report_with_logs();
+  ASSERT_TRUE(set.clock());
+  EXPECT_EQ(set.clock()->collisions, 0) << set.report();
+  expect_map_matches_world(set);
+}
+
 }  // namespace pex::testing

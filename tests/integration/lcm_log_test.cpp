@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <string>
 
 #include "harness.hpp"
 #include "runtime/channels.hpp"
@@ -91,4 +93,57 @@ TEST(LcmLog, RecordsAndReplaysTheHeartbeatsOfARunningSet) {
     EXPECT_EQ(replayed[i].bytes, events[i].bytes) << i;
   }
   std::filesystem::remove_all(dir);
+}
+
+// `--log` of a file that is not a whole LCM log ends with an error naming the
+// file and the place, and a non-zero exit (65 damaged or foreign, 66 cannot
+// open), instead of replaying part of it as if it were all; what was replayed
+// before the damage is still written out.
+TEST(LcmLog, ReplayOfADamagedForeignOrMissingLogExitsNonZeroNamingIt) {
+  const std::string dir = make_temp_dir("damaged-log");
+  const std::string readme = source_path("README.md");
+  const auto foreign = run_to_completion(
+      {bin_path("pex-slam"), "--config", source_path("config/slam.toml"), "--log", readme}, 30s);
+  EXPECT_EQ(foreign.exit_code, 65) << foreign.output;
+  EXPECT_NE(foreign.output.find("is not an LCM log"), std::string::npos) << foreign.output;
+  EXPECT_NE(foreign.output.find(readme), std::string::npos) << foreign.output;
+
+  const auto missing = run_to_completion(
+      {bin_path("pex-slam"), "--config", source_path("config/slam.toml"), "--log", dir + "/no-such.lcm"}, 30s);
+  EXPECT_EQ(missing.exit_code, 66) << missing.output;
+
+  // A real log (the first 300 scans of the Intel log) with 64 bytes
+  // overwritten at two thirds of its length.
+  const std::filesystem::path clf = shared_path("data/intel.clf");
+  ASSERT_TRUE(std::filesystem::exists(clf)) << clf;
+  {
+    std::ifstream in(clf);
+    std::ofstream out(dir + "/head.clf");
+    std::string line;
+    for (int scans = 0; scans < 300 && std::getline(in, line);) {
+      out << line << '\n';
+      if (line.rfind("FLASER ", 0) == 0) ++scans;
+    }
+  }
+  const std::string log = dir + "/head.lcm";
+  ASSERT_EQ(run_to_completion({bin_path("pex-carmen2lcm"), dir + "/head.clf", log}).exit_code, 0);
+  const auto size = std::filesystem::file_size(log);
+  {
+    std::fstream f(log, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(size * 2 / 3));
+    for (int i = 0; i < 64; ++i) f.put(static_cast<char>(0x5A));
+  }
+  const std::string poses = dir + "/poses.txt";
+  const auto damaged = run_to_completion({bin_path("pex-slam"), "--config", source_path("config/slam.toml"), "--log",
+                                          log, "--poses", poses},
+                                         120s);
+  EXPECT_EQ(damaged.exit_code, 65) << damaged.output;
+  EXPECT_NE(damaged.output.find("no LCM event at byte"), std::string::npos) << damaged.output;
+  // The scans before the damage were processed and their poses written.
+  std::ifstream in(poses);
+  int lines = 0;
+  for (std::string line; std::getline(in, line);) ++lines;
+  EXPECT_GT(lines, 100) << damaged.output;
+  EXPECT_LT(lines, 300);
+  if (!::testing::Test::HasFailure()) std::filesystem::remove_all(dir);
 }

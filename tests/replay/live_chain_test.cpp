@@ -13,6 +13,7 @@
 #include <pex/polygon_map_t.hpp>
 #include <pex/slam_update_t.hpp>
 
+#include "exploration_set.hpp"
 #include "harness.hpp"
 #include "runtime/channels.hpp"
 
@@ -70,9 +71,16 @@ TEST(LiveChain, IntelHeadThroughLogplayerSlamAndPerParticleMapper) {
     ++maps;
     last_map = m;
   });
-  // Real data, no simulator: the robot's configs (clock = "system"; they name no device).
-  auto slam = start_daemon("slam", dir, {}, source_path("config/robot/slam.toml"));
-  auto mapper = start_daemon("polygon_mapper", dir, {}, source_path("config/robot/polygon_mapper.toml"));
+  // Real data, no simulator: the robot's configs (clock = "system"; they name
+  // no device), with their checkpoints in the test's folder: a robot's
+  // /var/lib/polyexplore, where one exists, is neither read nor written.
+  auto robot_config = [&](const std::string& daemon) {
+    return write_config(dir, daemon,
+                        with_key(read_file(source_path("config/robot/" + daemon + ".toml")), "checkpoint_file",
+                                 "\"" + dir + "/" + daemon + "-checkpoint.bin\""));
+  };
+  auto slam = start_daemon("slam", dir, {}, robot_config("slam"));
+  auto mapper = start_daemon("polygon_mapper", dir, {}, robot_config("polygon_mapper"));
   ASSERT_TRUE(bus.spin_until([&] { return bus.all_ok({"slam", "polygon_mapper"}); }, 5s));
 
   Process player({"/usr/bin/lcm-logplayer", "--speed=5", std::string("--lcm-url=") + kTestLcmUrl, head},
