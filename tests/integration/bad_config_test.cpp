@@ -118,11 +118,14 @@ TEST_P(BadConfig, SimulatorDeploymentConfigStarts) {
   {
     const std::string cfg = sim_config_of(GetParam());
     const std::string log = dir_ + "/ok.log";
+    Bus bus;
     Process p({bin_path(program_of(GetParam())), "--config", cfg, "--lcm-url", kTestLcmUrl}, log);
-    std::this_thread::sleep_for(300ms);
+    // Up: its first DAEMON_STATUS is on the bus (whatever its state: the
+    // daemons on the simulator's clock wait for it, DEGRADED).
+    const bool up = bus.spin_until([&] { return bus.status().count(GetParam()) > 0 || !p.running(); }, 30s);
     const bool alive = p.running();
     const int code = p.stop();
-    EXPECT_TRUE(alive) << cfg << "\n" << p.output();
+    EXPECT_TRUE(up && alive) << cfg << "\n" << p.output();
     EXPECT_EQ(code, 0) << cfg << "\n" << p.output();
   }
 }

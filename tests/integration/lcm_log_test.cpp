@@ -18,6 +18,35 @@ struct LoggedEvent {
   std::vector<uint8_t> bytes;
 };
 
+std::vector<LoggedEvent> read_log(const std::string& path);
+
+// Publishes a DAEMON_STATUS named `name` every 100 ms until lcm-logger has it
+// in its file at `path` (a registered type, so the log stays all decodable);
+// false after 30 s.
+bool logged_marker(Bus& bus, const std::string& path, const std::string& name) {
+  pex::daemon_status_t marker{};
+  marker.name = name;
+  auto in_file = [&] {
+    if (!std::filesystem::exists(path)) return false;
+    lcm::LogFile log(path, "r");  // a half-written last event just ends the reading
+    if (!log.good()) return false;
+    while (const lcm::LogEvent* ev = log.readNextEvent()) {
+      pex::daemon_status_t s{};
+      if (ev->channel == pex::runtime::channels::kDaemonStatus && s.decode(ev->data, 0, ev->datalen) == ev->datalen &&
+          s.name == name)
+        return true;
+    }
+    return false;
+  };
+  return bus.spin_until(
+      [&] {
+        bus.publish(std::string(pex::runtime::channels::kDaemonStatus), marker);
+        bus.spin_for(100ms);
+        return in_file();
+      },
+      30s);
+}
+
 std::vector<LoggedEvent> read_log(const std::string& path) {
   std::vector<LoggedEvent> out;
   lcm::LogFile log(path, "r");
@@ -43,19 +72,21 @@ TEST(LcmLog, RecordsAndReplaysTheHeartbeatsOfARunningSet) {
     Process logger({"/usr/bin/lcm-logger", "-f", "-q", "--channel=" + channels,
                     std::string("--lcm-url=") + kTestLcmUrl, log_path},
                    dir + "/logger.log");
-    std::this_thread::sleep_for(300ms);  // let the logger subscribe first
+    Bus bus;
+    // The logger is listening once a marker of ours is in its file.
+    ASSERT_TRUE(logged_marker(bus, log_path, "marker-start")) << logger.output();
     std::vector<std::unique_ptr<Process>> set;
     for (const auto& d : daemons) set.push_back(start_daemon(d, dir));
-    Bus bus;
-    bus.spin_until([&] {
+    EXPECT_TRUE(bus.spin_until([&] {
       for (const auto& d : daemons) {
         auto it = bus.status().find(d);
         if (it == bus.status().end() || it->second.msgs_out < 3) return false;
       }
       return true;
-    }, 6s);
+    }, 60s));
     for (auto& p : set) EXPECT_EQ(p->stop(), 0) << p->output();
-    std::this_thread::sleep_for(300ms);  // the logger flushes every 100 ms
+    // Everything the daemons sent is in the file once a marker sent after it is.
+    EXPECT_TRUE(logged_marker(bus, log_path, "marker-end")) << logger.output();
     EXPECT_EQ(logger.stop(), 0) << logger.output();
   }
 
@@ -84,9 +115,9 @@ TEST(LcmLog, RecordsAndReplaysTheHeartbeatsOfARunningSet) {
         }, &replayed);
   }
   Process player({"/usr/bin/lcm-logplayer", "--speed=4", std::string("--lcm-url=") + kTestLcmUrl, log_path}, dir + "/player.log");
-  bus.spin_until([&] { return replayed.size() >= events.size(); }, 15s);
-  bus.spin_for(200ms);
-  EXPECT_EQ(player.wait(5s), 0) << player.output();
+  EXPECT_TRUE(bus.spin_until([&] { return replayed.size() >= events.size(); }, 60s));
+  EXPECT_EQ(player.wait(30s), 0) << player.output();
+  bus.spin_for(200ms);  // anything beyond the log's events would be here by now: the player has exited
   ASSERT_EQ(replayed.size(), events.size());
   for (size_t i = 0; i < events.size(); ++i) {
     EXPECT_EQ(replayed[i].channel, events[i].channel) << i;
