@@ -14,18 +14,24 @@ std::int64_t to_utime(double seconds) { return static_cast<std::int64_t>(std::ll
 
 CarmenRunResult run_filter_on_carmen(const evaluation::CarmenLog& log,
                                      const slam::ParticleFilterOptions& options,
-                                     bool odometry_from_laser_requested) {
+                                     bool odometry_from_laser_requested,
+                                     const slam::OdometrySyncOptions& sync_options,
+                                     const std::function<void(const slam::ParticleFilter&, std::int64_t)>&
+                                         after_update) {
   CarmenRunResult result;
   slam::ParticleFilter filter(options);
-  slam::OdometrySync sync;
+  slam::OdometrySync sync(sync_options);
   slam::TrajectoryRecorder recorder;
   const bool odometry_from_laser = odometry_from_laser_requested || log.odometry.empty();
   auto feed = [&](std::vector<slam::PairedScan> ready) {
     for (const slam::PairedScan& paired : ready) {
       if (filter.process(paired.scan, paired.odometry)) {
+        sync.observe_update(paired.scan.utime, filter.best_turn_at_last_update());
+        result.odometry_lead_us_per_update.push_back(sync.lead_us());
         ++result.updates;
         result.resamplings += filter.last_update().resampled;
         result.matcher_evaluations += filter.last_update().matcher_evaluations;
+        if (after_update) after_update(filter, paired.scan.utime);
       }
       recorder.record(paired.scan.utime, filter, paired.odometry);
     }
@@ -56,6 +62,8 @@ CarmenRunResult run_filter_on_carmen(const evaluation::CarmenLog& log,
   for (const slam::TimedPose& p : recorder.resolve(filter))
     result.poses.push_back({static_cast<double>(p.utime) * 1e-6, p.pose});
   result.log_duration_s = last - first;
+  result.odometry_lead_us = sync.lead_us();
+  result.corrected_odometry_steps = filter.corrected_odometry_steps();
   return result;
 }
 

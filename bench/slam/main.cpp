@@ -41,12 +41,18 @@ int run_once(int argc, char** argv) {
   if (argc > 5) options.particle_count = std::stoi(argv[5]);
   if (argc > 6) options.seed = std::stoull(argv[6]);
   bool odometry_from_laser = true;
+  pex::slam::OdometrySyncOptions sync;
+  std::string trace_path;
   // Experiments: key=value overrides of the defaults.
   for (int i = 7; i < argc; ++i) {
     const std::string arg = argv[i];
     const auto eq = arg.find('=');
     if (eq == std::string::npos) throw std::runtime_error("expected key=value: " + arg);
     const std::string key = arg.substr(0, eq);
+    if (key == "trace") {  // per update: time, N_eff, resampled, distinct ancestors 10/50/200 updates back, best pose
+      trace_path = arg.substr(eq + 1);
+      continue;
+    }
     const double v = std::stod(arg.substr(eq + 1));
     if (key == "linear_update_m") options.linear_update_m = v;
     else if (key == "angular_update_rad") options.angular_update_rad = v;
@@ -76,10 +82,40 @@ int run_once(int argc, char** argv) {
     else if (key == "str") options.motion.str = v;
     else if (key == "stt") options.motion.stt = v;
     else if (key == "odometry_from_laser") odometry_from_laser = v != 0.0;
+    else if (key == "odometry_lead_s") sync.odometry_lead_us = std::llround(v * 1e6);
+    else if (key == "estimate_lead") sync.estimate_lead = v != 0.0;
+    else if (key == "resample_threshold") options.resample_threshold = v;
+    else if (key == "odometry_check") options.odometry_check.enabled = v != 0.0;
+    else if (key == "odometry_check_margin") options.odometry_check.margin = v;
+    else if (key == "odometry_check_halves" && v != 0.0)
+      options.odometry_check.translation_scales = {0.5, 0.0, -0.5, -1.0};
     else throw std::runtime_error("unknown key " + key);
   }
   const auto start = std::chrono::steady_clock::now();
-  auto run = pex::bench::run_filter_on_carmen(log, options, odometry_from_laser);
+  std::ofstream trace;
+  if (!trace_path.empty()) trace.open(trace_path);
+  auto after_update = [&trace](const pex::slam::ParticleFilter& filter, std::int64_t utime) {
+    if (!trace.is_open()) return;
+    // How many distinct ancestors the particle set has k updates back: 1 means
+    // every particle shares that part of its trajectory (and map).
+    auto ancestors = [&filter](std::int64_t back) {
+      std::vector<const pex::slam::TrajectoryNode*> roots;
+      for (const auto& p : filter.particles()) {
+        const pex::slam::TrajectoryNode* n = p.trajectory.get();
+        while (n && n->generation > filter.generation() - back) n = n->parent.get();
+        roots.push_back(n);
+      }
+      std::sort(roots.begin(), roots.end());
+      return std::unique(roots.begin(), roots.end()) - roots.begin();
+    };
+    const auto& best = filter.particles()[filter.best_index()];
+    trace << static_cast<double>(utime) * 1e-6 << ' ' << filter.generation() << ' '
+          << filter.last_update().effective_sample_size << ' ' << filter.last_update().resampled << ' '
+          << ancestors(10) << ' ' << ancestors(50) << ' ' << ancestors(200) << ' ' << best.pose.x_m << ' '
+          << best.pose.y_m << ' ' << best.pose.theta_rad << ' ' << filter.last_update().odometry_scale << ' '
+          << filter.last_update().odometry_check_ratio << '\n';
+  };
+  auto run = pex::bench::run_filter_on_carmen(log, options, odometry_from_laser, sync, after_update);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::stable_sort(run.poses.begin(), run.poses.end(),
                    [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
@@ -90,10 +126,14 @@ int run_once(int argc, char** argv) {
     for (const auto& p : run.poses)
       out << p.timestamp_s << ' ' << p.pose.x_m << ' ' << p.pose.y_m << ' ' << p.pose.theta_rad << '\n';
   }
+  if (trace.is_open())
+    for (const std::int64_t lead : run.odometry_lead_us_per_update) trace << "# lead_us " << lead << '\n';
   std::string json = pex::evaluation::to_json_line(metric);
   json.pop_back();
-  std::printf("%s,\"updates\":%lld,\"resamplings\":%lld,\"evaluations\":%lld,\"seconds\":%.3f,\"realtime_factor\":%.1f}\n",
-              json.c_str(), static_cast<long long>(run.updates), static_cast<long long>(run.resamplings),
+  std::printf("%s,\"odometry_lead_s\":%.3f,\"corrected_odometry_steps\":%lld,\"updates\":%lld,\"resamplings\":%lld,\"evaluations\":%lld,\"seconds\":%.3f,\"realtime_factor\":%.1f}\n",
+              json.c_str(), static_cast<double>(run.odometry_lead_us) * 1e-6,
+              static_cast<long long>(run.corrected_odometry_steps), static_cast<long long>(run.updates),
+              static_cast<long long>(run.resamplings),
               static_cast<long long>(run.matcher_evaluations), seconds, run.log_duration_s / seconds);
   return 0;
 }

@@ -99,8 +99,8 @@ MetricResult evaluate_relations(const std::vector<StampedPose>& poses,
                                 const std::vector<Relation>& relations,
                                 const MetricOptions& options) {
   MetricResult result;
-  std::vector<double> trans;
-  std::vector<double> rot;
+  result.split_gap_s = options.split_gap_s;
+  std::vector<double> trans, rot, near_trans, near_rot, far_trans, far_rot;
   for (const Relation& relation : relations) {
     const std::size_t i1 = nearest(poses, relation.t1_s, options.max_time_difference_s);
     const std::size_t i2 = nearest(poses, relation.t2_s, options.max_time_difference_s);
@@ -113,20 +113,50 @@ MetricResult evaluate_relations(const std::vector<StampedPose>& poses,
     result.errors.push_back(error);
     trans.push_back(error.translation_m);
     rot.push_back(error.rotation_deg);
+    const bool near = std::abs(relation.t2_s - relation.t1_s) < options.split_gap_s;
+    (near ? near_trans : far_trans).push_back(error.translation_m);
+    (near ? near_rot : far_rot).push_back(error.rotation_deg);
   }
   result.relations = result.errors.size();
   mean_std(trans, result.trans_mean_m, result.trans_std_m);
   mean_std(rot, result.rot_mean_deg, result.rot_std_deg);
+  auto summarise = [](const std::vector<double>& t, const std::vector<double>& r, ErrorSummary& out) {
+    out.relations = t.size();
+    mean_std(t, out.trans_mean_m, out.trans_std_m);
+    mean_std(r, out.rot_mean_deg, out.rot_std_deg);
+  };
+  summarise(near_trans, near_rot, result.near);
+  summarise(far_trans, far_rot, result.far);
   return result;
 }
 
-std::string to_json_line(const MetricResult& r) {
-  char buffer[256];
+namespace {
+
+std::string summary_fields(std::size_t relations, double trans_mean, double trans_std, double rot_mean,
+                           double rot_std) {
+  char buffer[192];
   std::snprintf(buffer, sizeof buffer,
-                "{\"relations\":%zu,\"trans_mean_m\":%.6f,\"trans_std_m\":%.6f,"
-                "\"rot_mean_deg\":%.6f,\"rot_std_deg\":%.6f}",
-                r.relations, r.trans_mean_m, r.trans_std_m, r.rot_mean_deg, r.rot_std_deg);
+                "\"relations\":%zu,\"trans_mean_m\":%.6f,\"trans_std_m\":%.6f,"
+                "\"rot_mean_deg\":%.6f,\"rot_std_deg\":%.6f",
+                relations, trans_mean, trans_std, rot_mean, rot_std);
   return buffer;
+}
+
+std::string summary_fields(const ErrorSummary& s) {
+  return summary_fields(s.relations, s.trans_mean_m, s.trans_std_m, s.rot_mean_deg, s.rot_std_deg);
+}
+
+}  // namespace
+
+std::string to_json_line(const MetricResult& r) {
+  std::string json = "{" + summary_fields(r.relations, r.trans_mean_m, r.trans_std_m, r.rot_mean_deg, r.rot_std_deg);
+  if (r.split_gap_s > 0.0) {
+    char gap[64];
+    std::snprintf(gap, sizeof gap, ",\"split_gap_s\":%g", r.split_gap_s);
+    json += gap;
+    json += ",\"near\":{" + summary_fields(r.near) + "},\"far\":{" + summary_fields(r.far) + "}";
+  }
+  return json + "}";
 }
 
 }  // namespace pex::evaluation

@@ -43,6 +43,18 @@ struct MetricOptions {
   // A relation counts only when both of its times have an estimated pose
   // within this many seconds (the pose at the nearest estimated timestamp).
   double max_time_difference_s = 0.05;
+  // > 0: the errors are also summarised apart for relations whose times are
+  // less than this apart and for the others. Far-apart relations span a loop
+  // (closed or not); near ones measure local accuracy.
+  double split_gap_s = 0.0;
+};
+
+struct ErrorSummary {
+  std::size_t relations = 0;
+  double trans_mean_m = 0.0;
+  double trans_std_m = 0.0;
+  double rot_mean_deg = 0.0;
+  double rot_std_deg = 0.0;
 };
 
 struct RelationError {
@@ -58,6 +70,9 @@ struct MetricResult {
   double rot_mean_deg = 0.0;
   double rot_std_deg = 0.0;
   std::vector<RelationError> errors;  // per matched relation, in input order
+  double split_gap_s = 0.0;           // MetricOptions::split_gap_s; the two below only when > 0
+  ErrorSummary near;                  // relations less than split_gap_s apart
+  ErrorSummary far;                   // the others
 };
 
 // The error of one estimated relative pose against its reference.
@@ -68,7 +83,8 @@ MetricResult evaluate_relations(const std::vector<StampedPose>& poses,
                                 const std::vector<Relation>& relations,
                                 const MetricOptions& options = {});
 
-// {"relations":N,"trans_mean_m":..,"trans_std_m":..,"rot_mean_deg":..,"rot_std_deg":..}
+// {"relations":N,"trans_mean_m":..,"trans_std_m":..,"rot_mean_deg":..,"rot_std_deg":..}, with
+// "split_gap_s":G,"near":{same fields},"far":{same fields} when split.
 std::string to_json_line(const MetricResult& result);
 
 }  // namespace pex::evaluation

@@ -1,6 +1,7 @@
 #include "slam/odometry_sync.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "archive/byte_archive.hpp"
 #include "slam/pose_archive.hpp"
@@ -86,7 +87,8 @@ bool OdometrySync::add_scan(RangeScan scan) {
   return true;
 }
 
-Pose2 OdometrySync::pose_at(std::int64_t utime) const {
+std::optional<Pose2> OdometrySync::odometry_at(std::int64_t utime) const {
+  if (odometry_.empty()) return std::nullopt;
   // Newest first: the reading of exactly this time, else the newest consecutive
   // pair (in arrival order) whose times enclose it.
   for (auto it = odometry_.rbegin(); it != odometry_.rend(); ++it)
@@ -101,18 +103,45 @@ Pose2 OdometrySync::pose_at(std::int64_t utime) const {
       return compose(before.second, {f * step.x_m, f * step.y_m, f * step.theta_rad});
     }
   }
+  return std::nullopt;
+}
+
+Pose2 OdometrySync::pose_at(std::int64_t utime) const {
+  if (const std::optional<Pose2> pose = odometry_at(utime)) return *pose;
+  // Before everything kept (a lead reaching back before the first reading):
+  // the oldest reading; else the newest.
+  if (utime < odometry_.front().first) return odometry_.front().second;
   return odometry_.back().second;
+}
+
+std::int64_t OdometrySync::lead_us() const {
+  return options_.estimate_lead && lag_.ready() ? lag_.lead_us() : options_.odometry_lead_us;
+}
+
+void OdometrySync::observe_update(std::int64_t scan_utime, std::optional<double> matched_turn_rad) {
+  if (options_.estimate_lead && last_update_utime_ && matched_turn_rad)
+    pending_turns_.push_back({*last_update_utime_, scan_utime, *matched_turn_rad});
+  last_update_utime_ = scan_utime;
+  constexpr std::size_t kMaxPending = 16;  // odometry that stopped coming: the oldest evidence goes
+  while (pending_turns_.size() > kMaxPending) pending_turns_.pop_front();
+  const auto reach_us = static_cast<std::int64_t>(std::llround(options_.lag.max_lead_s * 1e6));
+  while (!pending_turns_.empty() && pending_turns_.front().to_utime + reach_us <= newest_odometry_utime_) {
+    const PendingTurn& t = pending_turns_.front();
+    lag_.add(t.from_utime, t.to_utime, t.turn_rad, [this](std::int64_t utime) { return odometry_at(utime); });
+    pending_turns_.pop_front();
+  }
 }
 
 std::vector<PairedScan> OdometrySync::take_ready() {
   std::vector<PairedScan> ready;
   while (!scans_.empty()) {
     const RangeScan& scan = scans_.front();
-    const bool odometry_caught_up = newest_odometry_utime_ >= scan.utime;
+    const std::int64_t wanted = scan.utime - lead_us();
+    const bool odometry_caught_up = newest_odometry_utime_ >= wanted;
     const bool waited_too_long = scans_.back().utime - scan.utime > options_.max_wait_us ||
                                  scans_.size() > options_.max_buffered_scans;
     if (!odometry_caught_up && !waited_too_long) break;
-    const Pose2 odometry = pose_at(scan.utime);
+    const Pose2 odometry = pose_at(wanted);
     ready.push_back({std::move(scans_.front()), odometry});
     scans_.pop_front();
   }
@@ -122,7 +151,7 @@ std::vector<PairedScan> OdometrySync::take_ready() {
 std::vector<PairedScan> OdometrySync::flush() {
   std::vector<PairedScan> ready;
   while (!scans_.empty()) {
-    const Pose2 odometry = pose_at(scans_.front().utime);
+    const Pose2 odometry = pose_at(scans_.front().utime - lead_us());
     ready.push_back({std::move(scans_.front()), odometry});
     scans_.pop_front();
   }
@@ -131,7 +160,7 @@ std::vector<PairedScan> OdometrySync::flush() {
 
 namespace {
 constexpr std::string_view kCheckpointMagic = "PEXODSYN";
-constexpr std::uint32_t kCheckpointVersion = 1;
+constexpr std::uint32_t kCheckpointVersion = 2;  // 2: the odometry lead estimate
 }  // namespace
 
 std::string OdometrySync::checkpoint() const {
@@ -168,6 +197,15 @@ std::string OdometrySync::checkpoint() const {
   out.put<std::uint64_t>(out_of_order_odometry_);
   out.put<std::uint64_t>(impossible_steps_);
   out.put<std::uint64_t>(odometry_resets_);
+  out.put_bool(last_update_utime_.has_value());
+  out.put<std::int64_t>(last_update_utime_.value_or(0));
+  out.put<std::uint64_t>(pending_turns_.size());
+  for (const PendingTurn& t : pending_turns_) {
+    out.put<std::int64_t>(t.from_utime);
+    out.put<std::int64_t>(t.to_utime);
+    out.put<double>(t.turn_rad);
+  }
+  lag_.write(out);
   return archive::seal(kCheckpointMagic, kCheckpointVersion, out.bytes());
 }
 
@@ -212,6 +250,18 @@ std::string OdometrySync::restore(std::string_view checkpoint) {
     restored.out_of_order_odometry_ = in.get<std::uint64_t>();
     restored.impossible_steps_ = in.get<std::uint64_t>();
     restored.odometry_resets_ = in.get<std::uint64_t>();
+    const bool has_update = in.get_bool();
+    const auto update_utime = in.get<std::int64_t>();
+    if (has_update) restored.last_update_utime_ = update_utime;
+    const std::uint64_t pending = in.get_count(2 * sizeof(std::int64_t) + sizeof(double));
+    for (std::uint64_t i = 0; i < pending; ++i) {
+      PendingTurn t{};
+      t.from_utime = in.get<std::int64_t>();
+      t.to_utime = in.get<std::int64_t>();
+      t.turn_rad = in.get<double>();
+      restored.pending_turns_.push_back(t);
+    }
+    restored.lag_.read(in);
     in.expect_end();
     if (!restored.scans_.empty() && restored.odometry_.empty())
       throw archive::ArchiveError("scans wait for odometry but no reading is kept");

@@ -33,6 +33,7 @@
 #include <utility>
 #include <vector>
 
+#include "slam/odometry_lag.hpp"
 #include "slam/scan.hpp"
 
 namespace pex::slam {
@@ -53,6 +54,17 @@ struct OdometrySyncOptions {
   std::int64_t max_wait_us = 500'000;
   std::size_t max_buffered_scans = 64;  // beyond this the oldest scan is paired at once
   std::size_t history = 256;            // odometry readings kept for interpolation
+  // How far the odometry's time stamps run ahead of the scans' (us): a scan
+  // stamped t is paired with the odometry stamped t - lead. A logger that
+  // stamps odometry when it is read but scans when they were taken (or the
+  // reverse) skews the pairing by a fixed lag; while turning, 0.1 s of it is a
+  // few degrees of prior the matcher must undo at every update, and as much
+  // error in every pose carried forward between updates. Negative: the
+  // odometry lags. With estimate_lead this is only the value used until the
+  // estimate (OdometryLagEstimator, fed by observe_update) is ready.
+  std::int64_t odometry_lead_us = 0;
+  bool estimate_lead = false;
+  OdometryLagOptions lag;
 };
 
 struct PairedScan {
@@ -84,6 +96,17 @@ class OdometrySync {
   std::size_t out_of_order_odometry() const { return out_of_order_odometry_; }
   std::size_t impossible_steps() const { return impossible_steps_; }
   std::size_t odometry_resets() const { return odometry_resets_; }
+
+  // A filter update ran on the scan stamped scan_utime, and the best
+  // particle's lineage turned matched_turn_rad since the previous update
+  // (nullopt: not known): evidence for the odometry lead.
+  void observe_update(std::int64_t scan_utime, std::optional<double> matched_turn_rad);
+  // The lead (us) the pairing uses now.
+  std::int64_t lead_us() const;
+  const OdometryLagEstimator& lag_estimator() const { return lag_; }
+  // The odometry pose at utime, interpolated between the kept readings that
+  // enclose it; nullopt outside them.
+  std::optional<Pose2> odometry_at(std::int64_t utime) const;
 
   // The pairing survives a restart of SLAM with the filter (issue 11): the
   // frame that anchors a reset odometry (without it a SLAM restarted after a
@@ -119,6 +142,16 @@ class OdometrySync {
   std::size_t impossible_steps_ = 0;
   std::size_t odometry_resets_ = 0;
   std::string why_;
+  OdometryLagEstimator lag_{options_.lag};
+  std::optional<std::int64_t> last_update_utime_;
+  // Turns between updates waiting until the odometry reaches max_lead_s past
+  // them (a negative candidate lead looks into the odometry after the scan).
+  struct PendingTurn {
+    std::int64_t from_utime;
+    std::int64_t to_utime;
+    double turn_rad;
+  };
+  std::deque<PendingTurn> pending_turns_;
 };
 
 }  // namespace pex::slam

@@ -88,12 +88,52 @@ void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry)
   last_update_.effective_sample_size = static_cast<double>(particles_.size());
 }
 
+double ParticleFilter::check_odometry_step(const ScanPoints& match_points, const Pose2& odometry_step,
+                                           UpdateStats& stats) const {
+  const OdometryCheckOptions& check = options_.odometry_check;
+  if (!check.enabled || std::hypot(odometry_step.x_m, odometry_step.y_m) < check.min_translation_m) return 1.0;
+  const Particle& best = particles_[best_index()];
+  // The best particle's own motion noise since the update, kept whatever the step.
+  const Pose2 noise = relative(compose(best.pose_at_update, odometry_step), best.pose);
+  auto score = [&](double scale) {
+    const Pose2 step{scale * odometry_step.x_m, scale * odometry_step.y_m, odometry_step.theta_rad};
+    return match_scan(*best.map, match_points, compose(compose(best.pose_at_update, step), noise), options_.matcher)
+        .evaluation.score;
+  };
+  const double measured = score(1.0);
+  double chosen = 1.0;
+  double chosen_score = measured * (1.0 + check.margin);
+  double best_other = 0.0;
+  for (const double scale : check.translation_scales) {
+    const double s = score(scale);
+    best_other = std::max(best_other, s);
+    if (s > chosen_score) {
+      chosen = scale;
+      chosen_score = s;
+    }
+  }
+  stats.odometry_check_ratio = measured > 0.0 ? best_other / measured : 0.0;
+  return chosen;
+}
+
 void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   UpdateStats stats;
-  const Pose2 odometry_step = relative(odometry_at_update_, odometry);
-  const Pose2 step_std = motion_noise_std(odometry_step, options_.motion);
   const std::size_t n = particles_.size();
   const ScanPoints match_points = subsample(points, options_.matcher.beam_step);
+  Pose2 odometry_step = relative(odometry_at_update_, odometry);
+  stats.odometry_scale = check_odometry_step(match_points, odometry_step, stats);
+  if (stats.odometry_scale != 1.0) {
+    // Every particle keeps its own motion noise, moved onto the corrected step.
+    const Pose2 corrected{stats.odometry_scale * odometry_step.x_m, stats.odometry_scale * odometry_step.y_m,
+                          odometry_step.theta_rad};
+    for (Particle& p : particles_) {
+      const Pose2 noise = relative(compose(p.pose_at_update, odometry_step), p.pose);
+      p.pose = compose(compose(p.pose_at_update, corrected), noise);
+    }
+    odometry_step = corrected;
+    ++corrected_odometry_steps_;
+  }
+  const Pose2 step_std = motion_noise_std(odometry_step, options_.motion);
   std::vector<int> evaluations(n, 0);
   std::vector<char> failed(n, 0);
   const std::uint64_t generation_seed = mix(options_.seed ^ mix(static_cast<std::uint64_t>(generation_ + 1)));
@@ -223,6 +263,14 @@ Pose2 ParticleFilter::best_pose(const Pose2& odometry) const {
   return compose(best.pose_at_update, relative(odometry_at_update_, odometry));
 }
 
+std::optional<double> ParticleFilter::best_turn_at_last_update() const {
+  if (particles_.empty()) return std::nullopt;
+  const TrajectoryNode* node = particles_[best_index()].trajectory.get();
+  if (!node || !node->parent || node->generation != generation_ || node->parent->generation != generation_ - 1)
+    return std::nullopt;
+  return normalize_angle(node->pose.theta_rad - node->parent->pose.theta_rad);
+}
+
 std::vector<Pose2> ParticleFilter::best_trajectory() const {
   if (particles_.empty()) return {};
   std::vector<Pose2> poses(static_cast<std::size_t>(generation_ + 1));
@@ -235,7 +283,7 @@ std::vector<Pose2> ParticleFilter::best_trajectory() const {
 
 namespace {
 constexpr std::string_view kCheckpointMagic = "PEXSLAMF";
-constexpr std::uint32_t kCheckpointVersion = 1;
+constexpr std::uint32_t kCheckpointVersion = 2;  // 2: corrected odometry steps, check statistics
 }  // namespace
 
 std::string ParticleFilter::checkpoint() const {
@@ -260,6 +308,9 @@ std::string ParticleFilter::checkpoint() const {
   out.put<double>(last_update_.effective_sample_size);
   out.put<std::int32_t>(last_update_.matcher_evaluations);
   out.put<std::int32_t>(last_update_.failed_matches);
+  out.put<double>(last_update_.odometry_scale);
+  out.put<double>(last_update_.odometry_check_ratio);
+  out.put<std::int64_t>(corrected_odometry_steps_);
 
   // The trajectory tree: every node a particle reaches, once, parents before
   // their children (a particle's chain is walked up to the first node already
@@ -332,6 +383,9 @@ std::string ParticleFilter::restore(std::string_view checkpoint) {
     restored.last_update_.effective_sample_size = in.get<double>();
     restored.last_update_.matcher_evaluations = in.get<std::int32_t>();
     restored.last_update_.failed_matches = in.get<std::int32_t>();
+    restored.last_update_.odometry_scale = in.get<double>();
+    restored.last_update_.odometry_check_ratio = in.get<double>();
+    restored.corrected_odometry_steps_ = in.get<std::int64_t>();
 
     constexpr std::size_t kNodeBytes = 3 * sizeof(double) + 2 * sizeof(std::int64_t);
     const std::uint64_t node_count = in.get_count(kNodeBytes);

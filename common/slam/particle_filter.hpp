@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <string_view>
@@ -24,6 +25,23 @@
 #include "slam/scan_matcher.hpp"
 
 namespace pex::slam {
+
+// Odometry that integrates the wheels' speed without its sign (FR079's: it
+// reports driving backwards as driving forwards, with the correct signed
+// velocity beside it, docs/slam.md) or whose wheels slip puts the prediction
+// of an update up to twice the step off, far beyond the hill climb's reach, and
+// the particles then all match into the wrong place at once. So each update
+// first matches the best particle from the odometry step's translation scaled
+// by each of `translation_scales` (heading change kept) and takes the scale
+// whose match scores best, by more than `margin` over the measured step; every
+// particle is then predicted from that step. One match per scale for one
+// particle: a few percent of an update's cost.
+struct OdometryCheckOptions {
+  bool enabled = true;
+  std::vector<double> translation_scales = {0.0, -1.0};  // tried beside the measured 1.0
+  double min_translation_m = 0.1;  // shorter steps are not checked (too little to tell apart)
+  double margin = 0.6;             // another scale must score this fraction better than the measured step (docs/slam.md)
+};
 
 struct ParticleFilterOptions {
   int particle_count = 30;
@@ -47,6 +65,7 @@ struct ParticleFilterOptions {
   ProposalOptions proposal;
   ScanConversionOptions scan;
   CowGridMapOptions grid;
+  OdometryCheckOptions odometry_check;
 };
 
 // Low-variance (systematic) resampling: parent index of each of the
@@ -85,6 +104,8 @@ struct UpdateStats {
   double effective_sample_size = 0.0;
   int matcher_evaluations = 0;
   int failed_matches = 0;
+  double odometry_scale = 1.0;  // the translation scale the odometry check chose (1: as measured)
+  double odometry_check_ratio = 0.0;  // best other scale's match score / the measured step's (0: not checked)
 };
 
 class ParticleFilter {
@@ -110,6 +131,10 @@ class ParticleFilter {
   const Pose2& odometry_at_update() const { return odometry_at_update_; }
   // The current best estimate for a robot whose odometry reads `odometry`.
   Pose2 best_pose(const Pose2& odometry) const;
+  // How far the best particle's lineage turned between the last two updates
+  // (nullopt before two updates): the matcher's view of the robot's turn, which
+  // the odometry pairing uses to estimate its clock offset (OdometryLagEstimator).
+  std::optional<double> best_turn_at_last_update() const;
   // The best particle's pose at every update generation so far (index = generation).
   std::vector<Pose2> best_trajectory() const;
 
@@ -134,6 +159,9 @@ class ParticleFilter {
   void initialize(const ScanPoints& points, const Pose2& odometry);
   void update(const ScanPoints& points, const Pose2& odometry);
   void resample(const std::vector<double>& weights);
+  // The odometry check (OdometryCheckOptions): the translation scale of this
+  // update's odometry step, 1.0 when the measured step matches best.
+  double check_odometry_step(const ScanPoints& match_points, const Pose2& odometry_step, UpdateStats& stats) const;
 
   ParticleFilterOptions options_;
   ParticleMapFactory map_factory_;
@@ -147,6 +175,11 @@ class ParticleFilter {
   double linear_since_update_m_ = 0.0;
   double angular_since_update_rad_ = 0.0;
   UpdateStats last_update_;
+  std::int64_t corrected_odometry_steps_ = 0;
+
+ public:
+  // Updates whose odometry step the check replaced (OdometryCheckOptions).
+  std::int64_t corrected_odometry_steps() const { return corrected_odometry_steps_; }
 };
 
 }  // namespace pex::slam

@@ -544,8 +544,9 @@ TEST(FilterCheckpoint, BrokenInputIsRefusedWithAReasonAndChangesNothing) {
     flipped[at] = static_cast<char>(flipped[at] ^ 0x10);
     refused(flipped, at == 9 ? "version" : "checksum");
   }
-  const std::string payload = archive::unseal("PEXSLAMF", 1, good);
-  refused(archive::seal("PEXSLAMF", 2, payload), "format version 2");
+  const std::string payload = archive::unseal("PEXSLAMF", 2, good);
+  refused(archive::seal("PEXSLAMF", 1, payload), "format version 1");  // before the odometry check
+  refused(archive::seal("PEXSLAMF", 3, payload), "format version 3");
   refused(OdometrySync().checkpoint(), "not a PEXSLAMF archive");
   // Well formed, but not this filter's: another particle count or cell size.
   ParticleFilterOptions more = small_filter(5);
@@ -571,11 +572,14 @@ TEST(FilterCheckpoint, BrokenInputIsRefusedWithAReasonAndChangesNothing) {
   lying.put<double>(5.0);
   lying.put<std::int32_t>(0);
   lying.put<std::int32_t>(0);
+  lying.put<double>(1.0);        // the odometry check's scale and ratio, steps corrected
+  lying.put<double>(0.0);
+  lying.put<std::int64_t>(0);
   lying.put<std::uint64_t>(1);  // one trajectory node ...
   for (int i = 0; i < 3; ++i) lying.put<double>(0.0);
   lying.put<std::int64_t>(0);
   lying.put<std::int64_t>(3);  // ... whose parent is node 3
-  refused(archive::seal("PEXSLAMF", 1, lying.bytes()), "trajectory node 0 has parent 3");
+  refused(archive::seal("PEXSLAMF", 2, lying.bytes()), "trajectory node 0 has parent 3");
   // And the good one is taken up.
   EXPECT_EQ(filter.restore(good), "");
   EXPECT_TRUE(filter.checkpoint() == good);
@@ -616,6 +620,96 @@ TEST(OdometrySyncCheckpoint, ARestoredPairingKeepsTheResetFrameAndTheWaitingScan
   const std::string good = sync.checkpoint();
   EXPECT_NE(restored.restore(good.substr(0, good.size() - 3)), "");
   EXPECT_TRUE(restored.checkpoint() == before);
+}
+
+// FR079's odometry integrates the wheels' speed without its sign: driving
+// backwards shows as driving forwards. Forward 1.2 m, back 1.2 m: the
+// odometry says 2.4 m forward; the check must bring the robot back to its start.
+TEST(ParticleFilter, OdometryThatCountsReversingAsForwardIsCorrectedByTheCheck) {
+  auto run = [](bool check) {
+    ParticleFilterOptions options = small_filter(7);
+    options.odometry_check.enabled = check;
+    ParticleFilter filter(options);
+    TrajectoryRecorder recorder;
+    // Diagonal to every wall, so that the scan pins the position along the
+    // motion (along a corridor no match can tell forward from back).
+    Pose2 truth{-3.5, -2.0, 0.7};
+    Pose2 odometry = truth;
+    std::int64_t t = 0;
+    auto feed = [&] {
+      filter.process(scan_from(truth, t), odometry);
+      recorder.record(t, filter, odometry);
+      t += 100'000;
+    };
+    feed();
+    for (int i = 0; i < 24; ++i) {
+      const double v = i < 12 ? 0.1 : -0.1;
+      truth = compose(truth, {v, 0.0, 0.0});
+      odometry = compose(odometry, {std::abs(v), 0.0, 0.0});
+      feed();
+    }
+    const Pose2 estimate = recorder.resolve(filter).back().pose;
+    return std::make_pair(std::hypot(estimate.x_m - truth.x_m, estimate.y_m - truth.y_m),
+                          filter.corrected_odometry_steps());
+  };
+  const auto [error_checked, corrected] = run(true);
+  const auto [error_unchecked, none] = run(false);
+  std::cout << "reversing: error " << error_checked << " m with the check (" << corrected
+            << " steps corrected), " << error_unchecked << " m without\n";
+  EXPECT_GT(corrected, 0);
+  EXPECT_EQ(none, 0);
+  EXPECT_LT(error_checked, 0.1);
+  EXPECT_GT(error_unchecked, 0.5);
+}
+
+// The odometry's stamps lead the truth by 0.1 s; the matched turns (here the
+// true ones) against the odometry's give the lead back.
+TEST(OdometryLag, EstimatesTheLeadOfTheOdometryFromMatchedTurns) {
+  auto heading = [](double t_s) { return 0.8 * std::sin(0.9 * t_s) + 0.3 * std::sin(2.3 * t_s); };
+  auto estimate = [&](double true_lead_s) {
+    OdometrySyncOptions options;
+    options.estimate_lead = true;
+    options.limits.enabled = false;
+    OdometrySync sync(options);
+    const std::int64_t step_us = 50'000;  // 20 Hz odometry
+    std::int64_t odometry_until = 0;
+    for (int update = 0; update < 120; ++update) {
+      const std::int64_t scan_us = 1'000'000 + update * 400'000;
+      // The odometry stamped t reports where the robot is at t + lead.
+      for (; odometry_until <= scan_us + 500'000; odometry_until += step_us)
+        sync.add_odometry(odometry_until, {0.0, 0.0, heading(odometry_until * 1e-6 + true_lead_s)});
+      const double previous_s = (scan_us - 400'000) * 1e-6;
+      sync.observe_update(scan_us, normalize_angle(heading(scan_us * 1e-6) - heading(previous_s)));
+    }
+    return std::make_pair(sync.lead_us(), sync.lag_estimator().updates());
+  };
+  const auto [lead_us, updates] = estimate(0.1);
+  std::cout << "estimated lead " << lead_us << " us from " << updates << " updates (true 100000)\n";
+  EXPECT_GT(updates, 100);
+  EXPECT_NEAR(static_cast<double>(lead_us), 100'000.0, 5'000.0);
+  EXPECT_NEAR(static_cast<double>(estimate(-0.05).first), -50'000.0, 5'000.0);
+  EXPECT_EQ(estimate(0.0).first, 0);  // below min_lead_s: exactly 0
+}
+
+TEST(OdometryLag, TheEstimateSurvivesACheckpoint) {
+  OdometrySyncOptions options;
+  options.estimate_lead = true;
+  options.limits.enabled = false;
+  options.lag.min_updates = 5;
+  OdometrySync sync(options);
+  for (int i = 0; i < 200; ++i) sync.add_odometry(i * 50'000, {0.0, 0.0, 0.5 * std::sin(i * 0.05 + 0.2)});
+  for (int u = 1; u < 20; ++u) sync.observe_update(u * 400'000, 0.5 * std::sin(u * 0.4) - 0.5 * std::sin((u - 1) * 0.4));
+  ASSERT_TRUE(sync.lag_estimator().ready());
+  OdometrySync restored(options);
+  ASSERT_EQ(restored.restore(sync.checkpoint()), "");
+  EXPECT_EQ(restored.lead_us(), sync.lead_us());
+  EXPECT_EQ(restored.lag_estimator().updates(), sync.lag_estimator().updates());
+  EXPECT_TRUE(restored.checkpoint() == sync.checkpoint());
+  // Another candidate grid cannot take it up.
+  OdometrySyncOptions other = options;
+  other.lag.max_lead_s = 0.5;
+  OdometrySync wider(other);
+  EXPECT_NE(wider.restore(sync.checkpoint()), "");
 }
 
 }  // namespace

@@ -56,6 +56,7 @@ void SlamNode::flush() { process(sync_.flush()); }
 void SlamNode::process(std::vector<slam::PairedScan> ready) {
   for (const slam::PairedScan& paired : ready) {
     const bool updated = filter_.process(paired.scan, paired.odometry);
+    if (updated) sync_.observe_update(paired.scan.utime, filter_.best_turn_at_last_update());
     recorder_.record(paired.scan.utime, filter_, paired.odometry);
     ++scans_processed_;
     if (!outputs_.publish_update || !filter_.initialized()) continue;

@@ -1,5 +1,6 @@
 #include "slam_options.hpp"
 
+#include <cmath>
 #include <cstdint>
 
 namespace pex::slam_daemon {
@@ -69,6 +70,20 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   l.enabled = sync.get<bool>("check_odometry_steps", l.enabled);
   l.max_speed_mps = sync.get<double>("odometry_max_speed_mps", l.max_speed_mps, positive<double>());
   l.max_omega_radps = sync.get<double>("odometry_max_omega_radps", l.max_omega_radps, positive<double>());
+  o.sync.odometry_lead_us = 1000 * sync.get<std::int64_t>("odometry_lead_ms", o.sync.odometry_lead_us / 1000,
+                                                          in_range<std::int64_t>(0, 1000));
+  o.sync.estimate_lead = sync.get<bool>("estimate_odometry_lead", o.sync.estimate_lead);
+  o.sync.lag.max_lead_s =
+      1e-3 * static_cast<double>(sync.get<std::int64_t>(
+                 "odometry_lead_max_ms", std::llround(o.sync.lag.max_lead_s * 1e3), in_range<std::int64_t>(10, 1000)));
+  o.sync.lag.min_updates =
+      sync.get<int>("odometry_lead_min_updates", o.sync.lag.min_updates, in_range(1, 100000));
+
+  auto check = config.section("odometry_check");
+  f.odometry_check.enabled = check.get<bool>("enabled", f.odometry_check.enabled);
+  f.odometry_check.min_translation_m =
+      check.get<double>("min_translation_m", f.odometry_check.min_translation_m, non_negative<double>());
+  f.odometry_check.margin = check.get<double>("margin", f.odometry_check.margin, non_negative<double>());
   o.republish_period_s = config.get<double>("republish_period_s", o.republish_period_s, non_negative<double>());
   o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, positive<double>());
   o.checkpoint_file = config.get_path("checkpoint_file", o.checkpoint_file, /*must_exist=*/false);

@@ -24,6 +24,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-time-difference-s", options.max_time_difference_s,
                  "a relation counts when both times have an estimated pose this close")
       ->capture_default_str();
+  app.add_option("--split-gap-s", options.split_gap_s,
+                 "also summarise relations less than this many s apart (near: local accuracy) and the "
+                 "others (far: loops) apart; 0: no split")
+      ->capture_default_str();
   app.set_version_flag("--version", std::string("pex-eval-slam ") + PEX_VERSION);
   try {
     app.parse(argc, argv);
