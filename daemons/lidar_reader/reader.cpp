@@ -38,6 +38,7 @@ ReaderOptions load_options(runtime::ConfigReader& config) {
   o.sensor_theta_rad = config.get<double>("sensor_theta_rad", o.sensor_theta_rad, in_range(-4.0, 4.0));
   o.max_telegram_bytes = static_cast<std::size_t>(
       config.get<int>("max_telegram_bytes", static_cast<int>(o.max_telegram_bytes), in_range(1024, 1 << 24)));
+  o.max_scan_age_ms = config.get<int>("max_scan_age_ms", o.max_scan_age_ms, in_range(10, 60'000));
   return o;
 }
 
@@ -106,7 +107,8 @@ void Reader::show_counters() {
                                     {"scans_published", c.scans_published},
                                     {"malformed_telegrams", c.malformed_telegrams},
                                     {"unexpected_replies", c.unexpected_replies},
-                                    {"unexpected_scans", c.unexpected_scans}}) {
+                                    {"unexpected_scans", c.unexpected_scans},
+                                    {"implausible_scans", c.implausible_scans}}) {
     if (value != 0) node_.counter(name) = value;
   }
   node_.counter("skipped_bytes") = c.skipped_bytes;

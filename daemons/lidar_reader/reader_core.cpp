@@ -18,6 +18,31 @@ cola::ScanConfig ReaderOptions::scan_config() const {
   return c;
 }
 
+std::string implausible_scan(const cola::ScanData& scan, const cola::Channel& dist, const ReaderOptions& options) {
+  const auto n = static_cast<std::int64_t>(dist.data.size());
+  const std::int64_t step = dist.angular_step_1e4deg;
+  const std::int64_t first = dist.start_angle_1e4deg;
+  const std::int64_t last = first + (n - 1) * step;
+  auto deg = [](std::int64_t a) { return std::to_string(static_cast<double>(a) * 1e-4) + " deg"; };
+  if (n < 1 || n > 2000) return std::to_string(n) + " beams";
+  if (step < 1667 || step > 10000) return "angular step " + deg(step);
+  if (first < -450000 || last > 2250000) return "beams from " + deg(first) + " to " + deg(last);
+  if (scan.scan_frequency_centihz < 1000 || scan.scan_frequency_centihz > 10000)
+    return "scan frequency " + std::to_string(scan.scan_frequency_centihz * 0.01) + " Hz";
+  if (!options.configure_scan) return "";
+  const cola::ScanConfig want = options.scan_config();
+  const std::int64_t want_step = want.angular_step_1e4deg;
+  const std::int64_t want_beams = (want.stop_angle_1e4deg - want.start_angle_1e4deg) / want_step + 1;
+  if (step != want_step) return "angular step " + deg(step) + ", configured " + deg(want_step);
+  if (std::abs(first - want.start_angle_1e4deg) > want_step)
+    return "first beam at " + deg(first) + ", configured " + deg(want.start_angle_1e4deg);
+  if (std::abs(n - want_beams) > 1) return std::to_string(n) + " beams, configured " + std::to_string(want_beams);
+  if (std::abs(static_cast<double>(scan.scan_frequency_centihz) - want.frequency_centihz) > 0.05 * want.frequency_centihz)
+    return "scan frequency " + std::to_string(scan.scan_frequency_centihz * 0.01) + " Hz, configured " +
+           std::to_string(want.frequency_centihz * 0.01) + " Hz";
+  return "";
+}
+
 ReaderCore::ReaderCore(const ReaderOptions& options, ReaderOutputs outputs)
     : options_(options),
       outputs_(std::move(outputs)),
@@ -76,6 +101,7 @@ void ReaderCore::connect(std::int64_t now_us) {
   }
   parser_.reset();
   clock_.reset();
+  have_device_us_ = false;  // a restarted device starts its clock again
   phase_ = Phase::kConfiguring;
   step_ = 0;
   const std::string address = options_.host + ":" + std::to_string(options_.port);
@@ -168,31 +194,60 @@ void ReaderCore::on_scan(const cola::ScanData& scan, std::int64_t now_us, std::i
     outputs_.reject("scan", "scan telegram without a usable DIST1 channel");
     return;
   }
+  std::string why = implausible_scan(scan, *dist, options_);
+  if (why.empty() && have_device_us_) {
+    // Against the last scan taken (device time wraps every 71.6 min): sooner
+    // than half a period, or back in time, is a repeated or injected scan;
+    // further ahead than the host's time since then allows, a clock that
+    // jumped. Either would also reset the device clock's offset window.
+    const auto since_us = static_cast<std::int32_t>(scan.time_since_startup_us - last_device_us_);
+    const std::int64_t half_period_us = 50'000'000 / std::max<std::int64_t>(scan.scan_frequency_centihz, 1);
+    const std::int64_t host_since_us = now_us - last_scan_us_;
+    if (since_us < half_period_us)
+      why = "device time " + std::to_string(since_us) + " us after the last scan's";
+    else if (since_us > host_since_us + static_cast<std::int64_t>(options_.max_scan_age_ms) * 1000)
+      why = "device time " + std::to_string(since_us / 1000) + " ms after the last scan's, " +
+            std::to_string(host_since_us / 1000) + " ms on the host";
+  }
+  if (!why.empty()) {
+    // Refused, and not taken as a sign of life: a stream of them ends in the
+    // stale timeout, a reconnect and a new configuration.
+    ++counters_.implausible_scans;
+    outputs_.reject("implausible scan", "implausible scan: " + why);
+    return;
+  }
   last_scan_us_ = now_us;
+  last_device_us_ = scan.time_since_startup_us;
+  have_device_us_ = true;
   // Device times map to host time through the offset observed at reception.
   const auto mapped = clock_.map(scan.time_since_startup_us, scan.time_of_transmission_us, now_utime);
+  outputs_.publish_scan(laser_scan(scan, *dist, mapped));
+  ++counters_.scans_published;
+  report(pex::daemon_status_t::STATE_OK, "");
+}
+
+pex::laser_scan_t ReaderCore::laser_scan(const cola::ScanData& scan, const cola::Channel& dist,
+                                         const cola::DeviceClock::Mapped& mapped) const {
   constexpr double kDegToRad = std::numbers::pi / 180.0;
   pex::laser_scan_t msg{};
   msg.utime = mapped.host_us;
   msg.device_utime = mapped.device_us;
   msg.scan_counter = scan.scan_counter;
-  msg.angle_min = static_cast<float>((dist->start_angle_1e4deg * 1e-4 - 90.0) * kDegToRad);
-  msg.angle_increment = static_cast<float>(dist->angular_step_1e4deg * 1e-4 * kDegToRad);
+  msg.angle_min = static_cast<float>((dist.start_angle_1e4deg * 1e-4 - 90.0) * kDegToRad);
+  msg.angle_increment = static_cast<float>(dist.angular_step_1e4deg * 1e-4 * kDegToRad);
   msg.range_min = static_cast<float>(options_.range_min_m);
   msg.range_max = static_cast<float>(options_.range_max_m);
   msg.scan_time = scan.scan_frequency_centihz > 0 ? 100.0f / static_cast<float>(scan.scan_frequency_centihz) : 0.0f;
   msg.sensor_x = static_cast<float>(options_.sensor_x_m);
   msg.sensor_y = static_cast<float>(options_.sensor_y_m);
   msg.sensor_theta = static_cast<float>(options_.sensor_theta_rad);
-  msg.ranges = cola::distances_m(*dist);
+  msg.ranges = cola::distances_m(dist);
   msg.nranges = static_cast<std::int32_t>(msg.ranges.size());
-  if (const cola::Channel* rssi = scan.find_channel("RSSI1"); rssi && rssi->data.size() == dist->data.size()) {
+  if (const cola::Channel* rssi = scan.find_channel("RSSI1"); rssi && rssi->data.size() == dist.data.size()) {
     msg.intensities.assign(rssi->data.begin(), rssi->data.end());
   }
   msg.nintensities = static_cast<std::int32_t>(msg.intensities.size());
-  outputs_.publish_scan(msg);
-  ++counters_.scans_published;
-  report(pex::daemon_status_t::STATE_OK, "");
+  return msg;
 }
 
 void ReaderCore::report(std::int8_t state, std::string reason) {

@@ -38,9 +38,21 @@ struct ReaderOptions {
   double range_max_m = 20.0;
   double sensor_x_m = 0.0, sensor_y_m = 0.0, sensor_theta_rad = 0.0;  // in the base frame
   std::size_t max_telegram_bytes = 65536;
+  // A scan whose device time runs this much further ahead of the last
+  // scan's than the host's time since it is refused (a device clock that
+  // jumped); one whose device time is less than half a period after it, or
+  // before it, too (a repeated or injected scan).
+  int max_scan_age_ms = 500;
 
   cola::ScanConfig scan_config() const;
 };
+
+// Why a scan telegram is not one the configured sensor can send, "" if it is.
+// Always: an LMS1xx's envelope (start -45 deg or later, end 225 deg or before
+// in device angles, a step of 1/6 to 1 deg, 1 to 2000 beams, 10 to 100 Hz).
+// With configure_scan, also what we configured: the step, the first beam, the
+// beam count (each within one step) and the frequency (within 5 %).
+std::string implausible_scan(const cola::ScanData& scan, const cola::Channel& dist, const ReaderOptions& options);
 
 // What DAEMON_STATUS counts under these names (docs/cola.md).
 struct ReaderCounters {
@@ -51,6 +63,7 @@ struct ReaderCounters {
   std::int64_t malformed_telegrams = 0;  // framed, but not a telegram we can parse
   std::int64_t unexpected_replies = 0;   // not the answer awaited (late, or while streaming)
   std::int64_t unexpected_scans = 0;     // scan data before the configuration was done
+  std::int64_t implausible_scans = 0;    // not what the configured sensor sends, too fast, or too old
   // The framer's totals, as of the last poll.
   std::int64_t skipped_bytes = 0;        // outside any telegram
   std::int64_t truncated_telegrams = 0;  // cut off by a new STX
@@ -113,6 +126,8 @@ class ReaderCore {
   void disconnect(const std::string& why, std::int64_t now_us);
   void on_reply(const cola::Telegram& telegram, std::int64_t now_us);
   void on_scan(const cola::ScanData& scan, std::int64_t now_us, std::int64_t now_utime);
+  pex::laser_scan_t laser_scan(const cola::ScanData& scan, const cola::Channel& dist,
+                               const cola::DeviceClock::Mapped& mapped) const;
   void send_next_step(std::int64_t now_us);
   void report(std::int8_t state, std::string reason);
 
@@ -126,6 +141,8 @@ class ReaderCore {
   std::size_t step_ = 0;
   std::int64_t step_sent_us_ = 0;
   std::int64_t last_scan_us_ = 0;
+  std::uint32_t last_device_us_ = 0;  // device time of the last scan published
+  bool have_device_us_ = false;
   std::int64_t next_attempt_us_ = 0;
   int backoff_ms_ = 0;
   cola::Framer::Counters reported_framer_{};

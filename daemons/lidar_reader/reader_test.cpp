@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <string>
@@ -419,10 +420,14 @@ TEST(ReaderCore, MalformedTelegramIsCountedAndTheStreamGoesOn) {
   rig.run(200);
   ASSERT_TRUE(rig.ok());
   const std::size_t scans = rig.scans.size();
-  std::string cut = cola::encode_scan_data(scan_data(100, rig.device_us()));
+  // Device times a period apart, after the last scan's (a repeated one is
+  // refused), and the rig's clock as far on.
+  const std::uint32_t t = rig.device_us();
+  std::string cut = cola::encode_scan_data(scan_data(100, t + 80'000));
   cut.erase(cut.size() / 2, cut.size() / 4);  // fields missing, still framed
-  rig.receive({cola::encode_scan_data(scan_data(99, rig.device_us())), cut,
-               cola::frame("sSN LMDscandata 1 1 ZZZ"), cola::encode_scan_data(scan_data(101, rig.device_us()))});
+  rig.now_us += 120'000;
+  rig.receive({cola::encode_scan_data(scan_data(99, t + 40'000)), cut,
+               cola::frame("sSN LMDscandata 1 1 ZZZ"), cola::encode_scan_data(scan_data(101, t + 120'000))});
   EXPECT_EQ(rig.core.counters().malformed_telegrams, 2);
   ASSERT_EQ(rig.rejects.size(), 2u);
   EXPECT_EQ(rig.rejects[0].first, "telegram");
@@ -454,12 +459,14 @@ TEST(ReaderCore, TelegramsSplitAcrossReadsAreJoinedAndFramingProblemsCounted) {
   Rig rig;
   rig.run(200);
   const std::size_t scans = rig.scans.size();
+  rig.now_us += 40'000;  // a period after the last scan
   const std::string scan = cola::encode_scan_data(scan_data(60, rig.device_us()));
   std::vector<std::string> reads;
   for (std::size_t at = 0; at < scan.size(); at += 100) reads.push_back(scan.substr(at, 100));
   rig.receive(reads);
   EXPECT_EQ(rig.scans.size(), scans + 1);
   // Garbage between telegrams, and a telegram cut off by the next one's STX.
+  rig.now_us += 40'000;
   const std::string next = cola::encode_scan_data(scan_data(61, rig.device_us()));
   rig.receive({"noise", next.substr(0, 50), next});
   EXPECT_EQ(rig.scans.size(), scans + 2);
@@ -484,6 +491,101 @@ TEST(ReaderCore, OversizeTelegramIsDroppedAndCounted) {
   EXPECT_GE(rig.core.counters().oversize_telegrams, 1);
   ASSERT_FALSE(rig.rejects.empty());
   EXPECT_EQ(rig.rejects[0].second, "truncated or oversize telegram dropped");
+}
+
+// Scans the configured sensor cannot send (issue 12's examples: a start angle
+// of thousands of degrees, a 62 rad sweep, 10 000 beams over 1 deg, stamps
+// minutes old, hundreds of scans a second) are refused and counted, and the
+// stream goes on.
+TEST(ReaderCore, ScansTheConfiguredSensorCannotSendAreRefusedAndCounted) {
+  Rig rig;
+  rig.run(200);
+  ASSERT_TRUE(rig.streaming());
+  const std::size_t published = rig.scans.size();
+  ASSERT_GT(published, 0u);
+  // Each one is a scan as the device would send it now, changed in one way.
+  auto send = [&](const std::function<void(cola::ScanData&)>& change) {
+    rig.now_us += 20'000;
+    cola::ScanData s = scan_data(++rig.device.scan_counter, rig.device_us());
+    change(s);
+    rig.receive({cola::encode_scan_data(s)});
+  };
+  auto dist = [](cola::ScanData& s) -> cola::Channel& { return s.channels16[0]; };
+  const std::vector<std::pair<std::string, std::function<void(cola::ScanData&)>>> cases = {
+      {"start angle far out", [&](cola::ScanData& s) { dist(s).start_angle_1e4deg = 2'146'000'000; }},
+      {"a 61 rad sweep", [&](cola::ScanData& s) { dist(s).angular_step_1e4deg = 65'000; }},
+      {"10000 beams over 1 deg",
+       [&](cola::ScanData& s) {
+         dist(s).angular_step_1e4deg = 1;
+         dist(s).data.assign(10'000, 1500);
+         s.channels8.clear();
+       }},
+      {"another step than configured",
+       [&](cola::ScanData& s) {
+         dist(s).angular_step_1e4deg = 2500;
+         dist(s).data.assign(1081, 1500);
+         s.channels8.clear();
+       }},
+      {"another field of view",
+       [&](cola::ScanData& s) {
+         dist(s).start_angle_1e4deg = 0;
+         dist(s).data.resize(361);
+         s.channels8.clear();
+       }},
+      {"another frequency", [&](cola::ScanData& s) { s.scan_frequency_centihz = 5000; }},
+      {"the last scan's device time again",
+       [&](cola::ScanData& s) {
+         s.time_since_startup_us = static_cast<std::uint32_t>(rig.scans.back().device_utime);
+         s.time_of_transmission_us = s.time_since_startup_us + kTransmissionDelayUs;
+       }},
+      {"a minute old",
+       [&](cola::ScanData& s) {
+         s.time_since_startup_us -= 60'000'000;
+         s.time_of_transmission_us -= 60'000'000;
+       }},
+      {"71 minutes old (the device clock's wrap)",
+       [&](cola::ScanData& s) {
+         s.time_since_startup_us -= 4'260'000'000u;
+         s.time_of_transmission_us -= 4'260'000'000u;
+       }},
+      {"a minute ahead",
+       [&](cola::ScanData& s) {
+         s.time_since_startup_us += 60'000'000;
+         s.time_of_transmission_us += 60'000'000;
+       }},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const std::size_t rejects = rig.rejects.size();
+    send(cases[i].second);
+    EXPECT_EQ(rig.scans.size(), published) << cases[i].first << ": published";
+    EXPECT_EQ(rig.core.counters().implausible_scans, static_cast<std::int64_t>(i + 1)) << cases[i].first;
+    ASSERT_EQ(rig.rejects.size(), rejects + 1) << cases[i].first;
+    EXPECT_EQ(rig.rejects.back().first, "implausible scan") << cases[i].first;
+  }
+  // The unchanged scan is taken, and the stream goes on.
+  send([](cola::ScanData&) {});
+  EXPECT_EQ(rig.scans.size(), published + 1);
+  rig.run(200);
+  EXPECT_GT(rig.scans.size(), published + 3);
+  EXPECT_TRUE(rig.ok());
+}
+
+TEST(ReaderCore, WithoutConfiguringTheDeviceAnyLms1xxSetupIsTaken) {
+  ReaderOptions options;
+  options.configure_scan = false;
+  Rig rig(options);
+  rig.run(200);
+  ASSERT_TRUE(rig.streaming());
+  const std::size_t published = rig.scans.size();
+  rig.now_us += 80'000;
+  cola::ScanData s = scan_data(++rig.device.scan_counter, rig.device_us());
+  s.channels16[0].angular_step_1e4deg = 2500;  // 0.25 deg over 270 deg
+  s.channels16[0].data.assign(1081, 1500);
+  s.channels8.clear();
+  s.scan_frequency_centihz = 1500;
+  rig.receive({cola::encode_scan_data(s)});
+  EXPECT_EQ(rig.scans.size(), published + 1);
+  EXPECT_EQ(rig.core.counters().implausible_scans, 0);
 }
 
 }  // namespace
