@@ -2,6 +2,12 @@
 # Generates C++ headers with lcm-gen at build time (never committed) into an
 # INTERFACE target, and — when a JDK and lcm.jar are present — a jar of Java
 # classes so lcm-spy can decode our channels.
+#
+# The C++ decoders are patched right after lcm-gen writes them
+# (PexLcmBoundedDecode.cmake): every array count is checked against the bytes
+# left before anything is allocated, so no message can make a daemon allocate
+# more than a small multiple of its size (issue 12; docs/channels.md).
+set(PEX_LCM_BOUNDED_DECODE ${CMAKE_CURRENT_LIST_DIR}/PexLcmBoundedDecode.cmake)
 find_program(LCM_GEN lcm-gen REQUIRED)
 find_package(Java COMPONENTS Development QUIET)
 find_file(LCM_JAR lcm.jar PATHS /usr/share/java /usr/local/share/java)
@@ -23,11 +29,15 @@ function(pex_lcm_types target)
   foreach(f ${ARG_LCM_FILES})
     list(APPEND abs_files ${CMAKE_CURRENT_SOURCE_DIR}/${f})
   endforeach()
+  # lcm-gen leaves a header alone when it is newer than its .lcm file: removed
+  # first, every header is fresh lcm-gen output when the patch runs on it.
   add_custom_command(OUTPUT ${headers}
+    COMMAND ${CMAKE_COMMAND} -E rm -rf ${cpp_dir}/${ARG_PACKAGE}
     COMMAND ${CMAKE_COMMAND} -E make_directory ${cpp_dir}
     COMMAND ${LCM_GEN} --cpp --cpp-hpath ${cpp_dir} ${abs_files}
-    DEPENDS ${abs_files}
-    COMMENT "lcm-gen C++ for ${ARG_PACKAGE}" VERBATIM)
+    COMMAND ${CMAKE_COMMAND} -DDIR=${cpp_dir}/${ARG_PACKAGE} -P ${PEX_LCM_BOUNDED_DECODE}
+    DEPENDS ${abs_files} ${PEX_LCM_BOUNDED_DECODE}
+    COMMENT "lcm-gen C++ for ${ARG_PACKAGE}, array counts bounded by the bytes left" VERBATIM)
   add_custom_target(${target}_gen DEPENDS ${headers})
   add_library(${target} INTERFACE)
   add_dependencies(${target} ${target}_gen)

@@ -44,6 +44,10 @@ class BadInput : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Why `size` bytes are not one whole message of type `type_name` (fingerprint
+// `hash`), whose decode() returned `used`: for the rejection's log line.
+std::string decode_failure(const void* data, int size, int used, int64_t hash, const char* type_name);
+
 // Logs at most one line per `period` for each key, and says how many it held back.
 class RateLimitedLog {
  public:
@@ -97,15 +101,13 @@ class Node {
   // Decodes each message on `channel` as Msg and calls `handler(msg)`.
   template <class Msg, class Handler>
   void subscribe(std::string_view channel, Handler handler) {
-    subscribe_raw(channel, [this, ch = std::string(channel), handler](
-                               const void* data, int size, int64_t) {
+    subscribe_raw(channel, [handler](const void* data, int size, int64_t) {
       Msg msg{};  // value-initialised: lcm-gen types have no member initialisers
+      // The decoders check every count against the bytes left before they
+      // allocate (cmake/PexLcmBoundedDecode.cmake), so hostile bytes end here
+      // as rejected input, through dispatch like any other BadInput.
       const int used = msg.decode(data, 0, size);
-      if (used < 0 || used != size) {
-        reject(ch, "cannot decode " + std::to_string(size) + " bytes as " +
-                       std::string(Msg::getTypeName()));
-        return;
-      }
+      if (used != size) throw BadInput(decode_failure(data, size, used, Msg::getHash(), Msg::getTypeName()));
       handler(msg);
     });
   }
