@@ -502,10 +502,14 @@ BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->R
 class MedianCollector : public benchmark::ConsoleReporter {
  public:
   std::map<std::string, double> median_ms;
+  std::map<std::string, double> median_counter;  // "name/args/counter"
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const auto& run : runs)
-      if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median")
-        median_ms[run.run_name.function_name + "/" + run.run_name.args] = run.GetAdjustedCPUTime();
+      if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {
+        const std::string name = run.run_name.function_name + "/" + run.run_name.args;
+        median_ms[name] = run.GetAdjustedCPUTime();
+        for (const auto& [counter, value] : run.counters) median_counter[name + "/" + counter] = value.value;
+      }
     ConsoleReporter::ReportRuns(runs);
   }
 };
@@ -534,6 +538,18 @@ int main(int argc, char** argv) {
       sep = ",";
     }
     std::printf(",\"%s_cspace_ms\":%.3f", name, get("BM_CSpace/map:" + std::to_string(map)));
+    // Whole plans on the emulated mission's maps (the target: p99).
+    for (const int tour : {0, 1}) {
+      const std::string args = "world:" + std::to_string(map) + "/tour:" + std::to_string(tour);
+      const char* strategy = tour == 0 ? "greedy" : "tour";
+      const auto counter = [&](const std::string& key) {
+        const auto it = reporter.median_counter.find("BM_PlanMission/" + args + "/" + key);
+        return it == reporter.median_counter.end() ? -1.0 : it->second;
+      };
+      std::printf(",\"%s_plan_%s_ms\":%.3f,\"%s_mission_%s_p50_ms\":%.3f,\"%s_mission_%s_p99_ms\":%.3f", name,
+                  strategy, get("BM_Plan/" + args), name, strategy, counter("p50_ms"), name, strategy,
+                  counter("p99_ms"));
+    }
   }
   std::printf("}\n");
   return 0;
