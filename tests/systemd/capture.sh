@@ -69,7 +69,7 @@ echo "2. SIGHUP: new pex.lcm.0, the earlier one now pex.lcm.1"
 # 3. split and rotation, with small settings
 rm -f "$tmp"/logs/*
 export PEX_CAPTURE_SPLIT_MB=0.02 PEX_CAPTURE_FILES=3
-run_logger 4
+run_logger 6   # ~120 KB/s published: several splits of 0.02 MB
 ls -l "$tmp/logs"
 n=$(find "$tmp/logs" -type f | wc -l)
 [ "$n" = 3 ] || fail "$n files with PEX_CAPTURE_FILES=3 (expected 3: did it split and rotate?)"
