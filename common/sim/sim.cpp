@@ -63,17 +63,24 @@ bool add_edges(const Range& points, std::vector<Wall>& walls) {
   return true;
 }
 
-template <class PolygonT>
-bool add_polygon(const PolygonT& polygon, std::vector<Wall>& walls) {
-  if (!add_edges(polygon.outer(), walls)) return false;
+// A solid obstacle: its rings must be closed (a ring that is not would leave
+// an edge out, a gap in the obstacle nobody meant), and it is kept to tell
+// whether START is inside it.
+std::string add_polygon(const Polygon& polygon, std::vector<Wall>& walls, std::vector<Polygon>& solids) {
+  auto closed = [](const auto& ring) { return ring.size() >= 4 && bg::equals(ring.front(), ring.back()); };
+  if (!closed(polygon.outer())) return "POLYGON ring not closed (its last point must be its first, 4 points at least)";
+  for (const auto& inner : polygon.inners())
+    if (!closed(inner)) return "POLYGON hole not closed (its last point must be its first, 4 points at least)";
+  if (!add_edges(polygon.outer(), walls)) return "coordinate not finite or beyond 1e5 m";
   for (const auto& inner : polygon.inners()) {
-    if (!add_edges(inner, walls)) return false;
+    if (!add_edges(inner, walls)) return "coordinate not finite or beyond 1e5 m";
   }
-  return true;
+  solids.push_back(polygon);
+  return "";
 }
 
-// Parses one WKT geometry into walls; returns an error text or "".
-std::string add_geometry(const std::string& wkt, std::vector<Wall>& walls) {
+// Parses one WKT geometry into walls (and solids); returns an error text or "".
+std::string add_geometry(const std::string& wkt, std::vector<Wall>& walls, std::vector<Polygon>& solids) {
   const std::string keyword = upper_keyword(wkt);
   try {
     bool ok = true;
@@ -88,11 +95,12 @@ std::string add_geometry(const std::string& wkt, std::vector<Wall>& walls) {
     } else if (keyword == "POLYGON") {
       Polygon g;
       bg::read_wkt(wkt, g);
-      ok = add_polygon(g, walls);
+      return add_polygon(g, walls, solids);
     } else if (keyword == "MULTIPOLYGON") {
       MultiPolygon g;
       bg::read_wkt(wkt, g);
-      for (const auto& p : g) ok = ok && add_polygon(p, walls);
+      for (const auto& p : g)
+        if (std::string error = add_polygon(p, walls, solids); !error.empty()) return error;
     } else {
       return "unsupported geometry '" + keyword.substr(0, 24) +
              "' (use LINESTRING, MULTILINESTRING, POLYGON, MULTIPOLYGON or START)";
@@ -110,6 +118,8 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
   World world;
   world.origin = origin;
   bool have_start = false;
+  int start_line = 0;
+  std::vector<Polygon> solids;
   std::string pending;       // a geometry spread over several lines
   int pending_line = 0;
   int depth = 0;
@@ -139,6 +149,7 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
       }
       world.start = Pose2{x, y, kinematics::normalize_angle(theta)};
       have_start = true;
+      start_line = line_number;
       continue;
     }
     if (pending.empty()) pending_line = line_number;
@@ -152,7 +163,7 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
       if (end == text.size()) break;
       continue;
     }
-    const std::string error = add_geometry(pending, world.walls);
+    const std::string error = add_geometry(pending, world.walls, solids);
     if (!error.empty()) return fail(pending_line, error);
     pending.clear();
     if (end == text.size()) break;
@@ -167,7 +178,27 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
     world.max_x = std::max({world.max_x, w.x0, w.x1});
     world.max_y = std::max({world.max_y, w.y0, w.y1});
   }
+  // The robot must start on the floor: within the walls' extent, and not
+  // inside a solid obstacle. (How close to a wall it may be is the robot's
+  // size: the simulator checks that.)
+  const Point start(world.start.x_m, world.start.y_m);
+  const std::string where = "START (" + std::to_string(start.x()) + ", " + std::to_string(start.y()) + ")" +
+                            (have_start ? "" : " (no START line: the origin)");
+  if (start.x() < world.min_x || start.x() > world.max_x || start.y() < world.min_y || start.y() > world.max_y)
+    return fail(start_line, where + " is outside the world: its walls span x " + std::to_string(world.min_x) + " .. " +
+                                std::to_string(world.max_x) + ", y " + std::to_string(world.min_y) + " .. " +
+                                std::to_string(world.max_y));
+  for (const Polygon& solid : solids)
+    if (bg::within(start, solid)) return fail(start_line, where + " is inside a solid obstacle (a POLYGON)");
   return world;
+}
+
+std::string check_start_clearance(const World& world, const RayCaster& walls, double robot_radius_m) {
+  const double clearance = walls.clearance(world.start.x_m, world.start.y_m, robot_radius_m + 1.0);
+  if (clearance >= robot_radius_m) return "";
+  return world.origin + ": START (" + std::to_string(world.start.x_m) + ", " + std::to_string(world.start.y_m) +
+         ") is " + std::to_string(clearance) + " m from a wall, less than the robot's radius " +
+         std::to_string(robot_radius_m) + " m: the robot would start in a wall";
 }
 
 // ---------------------------------------------------------------- ray caster --

@@ -35,8 +35,9 @@ struct WorldError {
 // optional "START x y theta" line, and WKT geometries (LINESTRING,
 // MULTILINESTRING, POLYGON, MULTIPOLYGON), each possibly over several lines.
 // Every edge becomes a wall. Errors name the line; non-finite or absurd
-// coordinates (|c| > 1e5 m) and a world without walls are errors;
-// zero-length edges are dropped.
+// coordinates (|c| > 1e5 m), a POLYGON ring that is not closed, a world
+// without walls, and a START outside the walls' extent or inside a solid
+// POLYGON are errors; zero-length edges are dropped.
 std::variant<World, WorldError> parse_world(std::string_view text, const std::string& origin);
 
 // Casts rays against the walls through an R-tree over the wall segments.
@@ -58,6 +59,10 @@ class RayCaster {
   struct Index;
   std::unique_ptr<Index> index_;
 };
+
+// "" if a robot of radius robot_radius_m at world.start touches no wall, else
+// why not (naming the world file): the simulator refuses such a start.
+std::string check_start_clearance(const World& world, const RayCaster& walls, double robot_radius_m);
 
 // The LMS111 by default: 270 deg in 0.5 deg steps = 541 beams, 20 m, 25 Hz.
 struct LaserOptions {

@@ -56,6 +56,27 @@ TEST(World, ErrorsNameTheLine) {
   EXPECT_NE(parse_error("START 1 2 nan\nLINESTRING(0 0, 1 1)\n").find("START"), std::string::npos);
   EXPECT_NE(parse_error("LINESTRING(0 0, 1e9 1)\n").find("beyond"), std::string::npos);
   EXPECT_NE(parse_error("LINESTRING(0 0, inf 1)\n"), "");
+  // A solid whose ring is not closed: an edge would be missing.
+  EXPECT_NE(parse_error("LINESTRING(0 0, 9 0)\nPOLYGON((1 1, 2 1, 2 2))\n").find("test.wkt:2: POLYGON ring not closed"),
+            std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 9 0)\nPOLYGON((1 1, 2 1, 2 2, 1 1), (1.2 1.1, 1.8 1.1, 1.8 1.5))\n")
+                .find("hole not closed"),
+            std::string::npos);
+}
+
+TEST(World, StartMustBeOnTheFloor) {
+  const char* room = "LINESTRING(0 0, 10 0, 10 8, 0 8, 0 0)\nPOLYGON((4 4, 5 4, 5 5, 4 5, 4 4))\n";
+  EXPECT_NE(parse_error(std::string("START 4.5 4.5 0\n") + room).find("test.wkt:1: START (4.5"), std::string::npos);
+  EXPECT_NE(parse_error(std::string("START 4.5 4.5 0\n") + room).find("inside a solid obstacle"), std::string::npos);
+  EXPECT_NE(parse_error(std::string("START 12 3 0\n") + room).find("outside the world"), std::string::npos);
+  EXPECT_NE(parse_error(std::string("START 3 -1 0\n") + room).find("outside the world"), std::string::npos);
+  // In a solid's hole is floor (a courtyard).
+  parse_ok("START 5 5 0\nPOLYGON((0 0, 10 0, 10 10, 0 10, 0 0), (3 3, 7 3, 7 7, 3 7, 3 3))\n");
+  // On the floor, but closer to a wall than the robot's radius: the simulator refuses it.
+  const World near_wall = parse_ok(std::string("START 4.5 3.9 0\n") + room);
+  const RayCaster walls(near_wall);
+  EXPECT_NE(check_start_clearance(near_wall, walls, 0.25).find("0.1"), std::string::npos);
+  EXPECT_EQ(check_start_clearance(near_wall, walls, 0.05), "");
 }
 
 TEST(RayCaster, HitsTheRightWallAtTheRightDistance) {
@@ -102,8 +123,9 @@ TEST(Laser, Lms111DefaultsNoiseAndDeterminism) {
   const double mean = sum / n, sigma = std::sqrt(sum2 / n - mean * mean);
   EXPECT_NEAR(mean, 0.0, 0.002);
   EXPECT_NEAR(sigma, 0.012, 0.001);
-  // A world with no wall behind: beams there read max range exactly.
-  World open = parse_ok("LINESTRING(5 -100, 5 100)\n");
+  // A world with no wall behind: beams there read max range exactly. (A short
+  // wall far off gives the world an extent the start is in.)
+  World open = parse_ok("LINESTRING(5 -100, 5 100)\nLINESTRING(-50 -100, -49 -100)\n");
   RayCaster open_caster(open);
   auto r = a.scan(open_caster, Pose2{0, 0, 0});
   EXPECT_FLOAT_EQ(r.front(), 20.0f);  // -135 deg: nothing

@@ -145,6 +145,7 @@ void Driver::show_counters() {
   const DriverCounters& c = core_.counters();
   // Event counters show once they have counted (as the node's own do).
   for (const auto& [name, value] : {std::pair<const char*, std::int64_t>{"commands", c.commands},
+                                    {"commands_clipped", c.commands_clipped},
                                     {"cmd_timeouts", c.cmd_timeouts},
                                     {"can_error_frames", c.can_error_frames},
                                     {"can_send_errors", c.can_send_errors},

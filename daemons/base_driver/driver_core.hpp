@@ -51,6 +51,7 @@ struct DriverOptions {
 struct DriverCounters {
   // Events, counted as they happen.
   std::int64_t commands = 0;           // BASE_CMD taken
+  std::int64_t commands_clipped = 0;   // taken, but over max_speed_mps / max_omega_radps (the limiter clips them)
   std::int64_t cmd_timeouts = 0;       // times the command went stale
   std::int64_t can_error_frames = 0;
   std::int64_t can_send_errors = 0;
@@ -90,6 +91,8 @@ struct DriverOutputs {
 // or a CAN error frame came within error_frame_hold_ms.
 class DriverCore {
  public:
+  // A command beyond this many times max_speed_mps or max_omega_radps is refused.
+  static constexpr double kAbsurdFactor = 10.0;
   // The options must be valid (load_options, geometry.validate()).
   DriverCore(const DriverOptions& options, DriverOutputs outputs);
 

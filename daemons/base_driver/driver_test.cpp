@@ -241,6 +241,31 @@ TEST(DriverCore, StaleCommandBringsTheWheelsToZeroAfterTheTimeout) {
   EXPECT_GT(rig.target(1), 0);
 }
 
+TEST(DriverCore, CommandsOverTheLimitsAreClippedAndCountedAbsurdOnesRefused) {
+  Rig rig;
+  bring_up(rig);
+  rig.run(1000, Velocity{0.2, 0.0});
+  const DriverOptions& o = rig.core.options();
+  pex::velocity_cmd_t cmd{};
+  cmd.source = "test";
+  cmd.v = 1.5 * o.limits.max_speed_mps;  // "as fast as allowed": taken, clipped
+  EXPECT_EQ(rig.core.on_command(cmd, rig.now_us), "");
+  EXPECT_EQ(rig.core.counters().commands_clipped, 1);
+  cmd.v = 1e9;  // no sane sender's
+  const std::string why = rig.core.on_command(cmd, rig.now_us);
+  EXPECT_NE(why.find("more than 10 x the limits"), std::string::npos) << why;
+  cmd.v = 0.0;
+  cmd.omega = -1e9;
+  EXPECT_NE(rig.core.on_command(cmd, rig.now_us), "");
+  EXPECT_EQ(rig.core.counters().commands_clipped, 1);
+  // Commanded over the limit (a command every 10 ms for 2 s): each counted,
+  // the wheels at the limit, never more.
+  rig.run(2000, Velocity{1.5 * o.limits.max_speed_mps, 0.0});
+  EXPECT_EQ(rig.core.counters().commands_clipped, 1 + 200);
+  EXPECT_LE(rig.target(1), o.limits.max_speed_mps * rig.counts_per_m() + 1.0);
+  EXPECT_GT(rig.target(1), 0.9 * o.limits.max_speed_mps * rig.counts_per_m());
+}
+
 TEST(DriverCore, NonFiniteCommandIsRefusedAndTheCommandInForceKept) {
   Rig rig;
   bring_up(rig);

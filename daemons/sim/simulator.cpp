@@ -265,6 +265,11 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
       protocol_(options_),
       pacer_(options_.pacing) {
   caster_ = std::make_unique<sim::RayCaster>(world_);
+  // The world file's START must leave the robot clear of the walls; a start
+  // given in the config is taken as given (tests park the robot at a wall).
+  if (!options_.start_override)
+    if (const std::string why = sim::check_start_clearance(world_, *caster_, options_.plant.robot_radius_m); !why.empty())
+      throw runtime::ConfigError("world_file: " + why);
   // Independent streams for the laser noise and the wheel slip, both from the seed.
   laser_ = std::make_unique<sim::Laser>(options_.laser, options_.seed * 2 + 1);
   plant_ = std::make_unique<sim::DiffDrivePlant>(options_.plant, options_.start_override ? options_.start : world_.start,
