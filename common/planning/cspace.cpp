@@ -295,8 +295,8 @@ double ConfigurationSpace::distance_to_boundary(const Point& p) const {
   return best;
 }
 
-// Cells of about the edges' mean spacing (as many cells as edges, at most
-// 4x), each listing the edges whose boxes (grown by kGridSlack) meet it.
+// Cells of about the edges' mean spacing (about as many cells as edges),
+// each listing the edges that pass through it (for_cells_along).
 void ConfigurationSpace::build_grid() {
   grid_start_.clear();
   grid_edges_.clear();
@@ -320,17 +320,45 @@ void ConfigurationSpace::build_grid() {
   grid_ny_ = static_cast<int>(std::floor((h + 2.0 * kGridSlack) / cell)) + 1;
   const std::size_t cells = static_cast<std::size_t>(grid_nx_) * static_cast<std::size_t>(grid_ny_);
   grid_start_.assign(cells + 1, 0);
-  auto for_cells = [&](const Edge& e, auto&& fn) {
-    const int cx0 = cell_x(std::min(e.a.x(), e.b.x()) - kGridSlack), cx1 = cell_x(std::max(e.a.x(), e.b.x()) + kGridSlack);
-    const int cy0 = cell_y(std::min(e.a.y(), e.b.y()) - kGridSlack), cy1 = cell_y(std::max(e.a.y(), e.b.y()) + kGridSlack);
-    for (int cy = cy0; cy <= cy1; ++cy)
-      for (int cx = cx0; cx <= cx1; ++cx) fn(static_cast<std::size_t>(cy) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(cx));
-  };
-  for (const Edge& e : edges_) for_cells(e, [&](std::size_t c) { ++grid_start_[c + 1]; });
+  for (const Edge& e : edges_)
+    for_cells_along(e.a, e.b, [&](std::size_t c) {
+      ++grid_start_[c + 1];
+      return true;
+    });
   for (std::size_t c = 0; c < cells; ++c) grid_start_[c + 1] += grid_start_[c];
   grid_edges_.resize(grid_start_[cells]);
   std::vector<std::uint32_t> fill(grid_start_.begin(), grid_start_.end() - 1);
-  for (std::uint32_t i = 0; i < edges_.size(); ++i) for_cells(edges_[i], [&](std::size_t c) { grid_edges_[fill[c]++] = i; });
+  for (std::uint32_t i = 0; i < edges_.size(); ++i)
+    for_cells_along(edges_[i].a, edges_[i].b, [&](std::size_t c) {
+      grid_edges_[fill[c]++] = i;
+      return true;
+    });
+}
+
+// Column by column, the rows the segment's stretch in that column spans,
+// each grown by kGridSlack: a superset of the cells the segment touches. An
+// edge is listed in the cells along it and a segment test looks at the cells
+// along the segment, so where they meet both see the cell of the meeting
+// point. False as soon as fn(cell) is false.
+template <class Fn>
+bool ConfigurationSpace::for_cells_along(const Point& a, const Point& b, Fn&& fn) const {
+  const double min_x = std::min(a.x(), b.x()), max_x = std::max(a.x(), b.x());
+  const double dx = b.x() - a.x(), dy = b.y() - a.y();
+  const int cx0 = cell_x(min_x - kGridSlack), cx1 = cell_x(max_x + kGridSlack);
+  for (int cx = cx0; cx <= cx1; ++cx) {
+    double ya = a.y(), yb = b.y();
+    if (dx != 0.0) {
+      const double xl = std::max(min_x, grid_x0_ + cx * grid_cell_);
+      const double xr = std::min(max_x, grid_x0_ + (cx + 1) * grid_cell_);
+      ya = a.y() + (xl - a.x()) / dx * dy;
+      yb = a.y() + (xr - a.x()) / dx * dy;
+    }
+    const int cy0 = cell_y(std::min(ya, yb) - kGridSlack), cy1 = cell_y(std::max(ya, yb) + kGridSlack);
+    for (int cy = cy0; cy <= cy1; ++cy)
+      if (!fn(static_cast<std::size_t>(cy) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(cx)))
+        return false;
+  }
+  return true;
 }
 
 int ConfigurationSpace::cell_x(double x) const {
@@ -343,34 +371,16 @@ int ConfigurationSpace::cell_y(double y) const {
 bool ConfigurationSpace::segment_free(const Point& a, const Point& b) const {
   ++segment_tests_;
   if (grid_nx_ == 0) return true;
-  // Column by column, the rows the segment's stretch in that column spans,
-  // each grown by kGridSlack: a superset of the cells it touches, so every
-  // edge it could meet is tested (some twice; the answer is the same). The
-  // grid walks only the cells along the segment, where the rtree's segment
-  // query was most of the path matrix's time.
-  const double min_x = std::min(a.x(), b.x()), max_x = std::max(a.x(), b.x());
-  const double dx = b.x() - a.x(), dy = b.y() - a.y();
-  const int cx0 = cell_x(min_x - kGridSlack), cx1 = cell_x(max_x + kGridSlack);
-  for (int cx = cx0; cx <= cx1; ++cx) {
-    double ya, yb;
-    if (dx == 0.0) {
-      ya = a.y();
-      yb = b.y();
-    } else {
-      const double xl = std::max(min_x, grid_x0_ + cx * grid_cell_), xr = std::min(max_x, grid_x0_ + (cx + 1) * grid_cell_);
-      ya = a.y() + (xl - a.x()) / dx * dy;
-      yb = a.y() + (xr - a.x()) / dx * dy;
+  // Only the edges listed in the cells along the segment (some twice; the
+  // answer is the same): the rtree's segment query was most of the path
+  // matrix's time.
+  return for_cells_along(a, b, [&](std::size_t c) {
+    for (std::uint32_t k = grid_start_[c]; k < grid_start_[c + 1]; ++k) {
+      const Edge& e = edges_[grid_edges_[k]];
+      if (segments_intersect(a, b, e.a, e.b)) return false;
     }
-    const int cy0 = cell_y(std::min(ya, yb) - kGridSlack), cy1 = cell_y(std::max(ya, yb) + kGridSlack);
-    for (int cy = cy0; cy <= cy1; ++cy) {
-      const std::size_t c = static_cast<std::size_t>(cy) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(cx);
-      for (std::uint32_t k = grid_start_[c]; k < grid_start_[c + 1]; ++k) {
-        const Edge& e = edges_[grid_edges_[k]];
-        if (segments_intersect(a, b, e.a, e.b)) return false;
-      }
-    }
-  }
-  return true;
+    return true;
+  });
 }
 
 std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t edge, bool at_vertex_b) const {

@@ -45,7 +45,8 @@ struct CSpaceOptions {
 };
 
 // The free space shrunk by distance_m (> 0): Minkowski offset with round
-// joins of `points_per_circle` vertices per full circle, computed by Clipper
+// joins of at least `points_per_circle` vertices per full circle and chords
+// within 1 mm of the arc (a chord cuts into the clearance), computed by Clipper
 // (ClipperLib::ClipperOffset, on a 10 um integer grid), each output edge
 // typed as the map edge it was offset from (mapping::assign_types). The same
 // set as mapping::typed_offset(free_space, -distance_m, points_per_circle)
@@ -117,6 +118,8 @@ class ConfigurationSpace {
 
   std::optional<Point> inward(const Point& q, std::uint32_t edge, bool at_vertex_b) const;
   void build_grid();
+  template <class Fn>
+  bool for_cells_along(const Point& a, const Point& b, Fn&& fn) const;
   int cell_x(double x) const;  // clamped to the grid
   int cell_y(double y) const;
   // Cells are looked at this much beyond where a segment or an edge box
