@@ -4,6 +4,9 @@
 #include <sys/signalfd.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <string>
+
 #include <spdlog/sinks/stdout_color_sinks.h>
 
 #include "runtime/log_file_error.hpp"
@@ -38,7 +41,11 @@ RuntimeOptions load_runtime_options(ConfigReader& config, bool is_clock_source) 
 }
 
 int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup& setup) {
-  CLI::App app{info.description, "pex-" + info.name};
+  // The program's name as installed: "polygon_mapper" -> "pex-polygon-mapper".
+  std::string program = "pex-" + info.name;
+  std::replace(program.begin(), program.end(), '_', '-');
+  CLI::App app{info.description, program};
+  app.set_version_flag("--version", program + " " + PEX_VERSION);
   app.add_option("--config", g_args.config_path, "TOML configuration file (default: built-in defaults)")
       ->check(CLI::ExistingFile);
   app.add_option("--lcm-url", g_args.lcm_url,
@@ -59,8 +66,8 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return exit_code::kUsage;
+    // --help and --version end here too, with CLI11's exit 0.
+    return app.exit(e) == 0 ? exit_code::kOk : exit_code::kUsage;
   }
 
   auto logger = spdlog::stderr_color_mt(info.name);

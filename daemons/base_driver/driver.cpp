@@ -27,7 +27,7 @@ DriverOptions load_options(runtime::ConfigReader& config) {
   o.left_node_id = static_cast<std::uint8_t>(config.get<int>("left_node_id", o.left_node_id, in_range(1, 127)));
   o.right_node_id = static_cast<std::uint8_t>(config.get<int>("right_node_id", o.right_node_id, in_range(1, 127)));
   if (o.left_node_id == o.right_node_id) throw runtime::ConfigError(config.origin() + ": node ids must differ");
-  o.geometry.counts_per_rev = config.get<double>("counts_per_rev", o.geometry.counts_per_rev, positive<double>());
+  o.geometry.counts_per_rev = config.get<double>("counts_per_rev", o.geometry.counts_per_rev, in_range(1.0, 1e8));
   o.geometry.gear_ratio = config.get<double>("gear_ratio", o.geometry.gear_ratio, positive<double>());
   o.geometry.wheel_radius_m = config.get<double>("wheel_radius_m", o.geometry.wheel_radius_m, in_range(0.01, 2.0));
   o.geometry.wheel_base_m = config.get<double>("wheel_base_m", o.geometry.wheel_base_m, in_range(0.05, 5.0));

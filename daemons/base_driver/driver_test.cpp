@@ -38,7 +38,8 @@ TEST(BaseDriverOptions, ShippedConfigLoadsCompletely) {
 
 TEST(BaseDriverOptions, BadValuesAreRefused) {
   for (const char* text : {"can_transport = \"usb\"\n", "left_node_id = 0\n", "left_node_id = 5\nright_node_id = 5\n",
-                           "wheel_radius_m = -0.1\n", "cmd_timeout_ms = 0\n", "max_wheel_accel_mps2 = \"fast\"\n"}) {
+                           "wheel_radius_m = -0.1\n", "cmd_timeout_ms = 0\n", "max_wheel_accel_mps2 = \"fast\"\n",
+                           "counts_per_rev = 1e-300\n"}) {
     auto config = runtime::ConfigReader::from_string(text, "bad.toml");
     EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
   }

@@ -1,6 +1,8 @@
 #include "reader.hpp"
 
 #include <chrono>
+#include <optional>
+#include <string>
 #include <utility>
 
 #include <pex/daemon_status_t.hpp>
@@ -16,7 +18,11 @@ using runtime::in_range;
 
 ReaderOptions load_options(runtime::ConfigReader& config) {
   ReaderOptions o;
-  o.host = config.get<std::string>("host", o.host);
+  o.host = config.get<std::string>("host", o.host, [](const std::string& h) -> std::optional<std::string> {
+    // An empty host would be retried for ever as a connection failure.
+    if (h.empty() || h.find_first_of(" \t\n") != std::string::npos) return "must be a host name or an IP address";
+    return std::nullopt;
+  });
   o.port = config.get<int>("port", o.port, in_range(1, 65535));
   o.connect_timeout_ms = config.get<int>("connect_timeout_ms", o.connect_timeout_ms, in_range(10, 60'000));
   o.reply_timeout_ms = config.get<int>("reply_timeout_ms", o.reply_timeout_ms, in_range(10, 60'000));

@@ -55,7 +55,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.scan.max_beams = scan.get<int>("max_beams", o.scan.max_beams, runtime::in_range(2, 1000000));
   auto map = config.section("map");
   o.map.tile_size_m = map.get<double>("tile_size_m", o.map.tile_size_m, runtime::in_range(1.0, 1000.0));
-  o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m);
+  o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m, runtime::in_range(-1e5, 1e5));
   o.map.obstacle_inner_m = map.get<double>("obstacle_inner_m", o.map.obstacle_inner_m, non_negative<double>());
   o.map.obstacle_outer_m = map.get<double>("obstacle_outer_m", o.map.obstacle_outer_m, positive<double>());
   o.map.simplify_epsilon_m = map.get<double>("simplify_epsilon_m", o.map.simplify_epsilon_m, non_negative<double>());

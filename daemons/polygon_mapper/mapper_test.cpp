@@ -111,8 +111,10 @@ TEST(MapperOptions, ShippedConfigLoadsAndNamesTheSlamSource) {
   runtime::load_runtime_options(config);  // heartbeat_period_ms and clock: read by run_daemon
   EXPECT_NO_THROW(config.finish());
   EXPECT_EQ(options.pose_source, "slam");
-  auto bogus = runtime::ConfigReader::from_string("pose_source = \"gps\"\n", "test");
-  EXPECT_THROW(load_options(bogus), runtime::ConfigError);
+  for (const char* text : {"pose_source = \"gps\"\n", "[map]\ntile_origin_m = 1e300\n"}) {
+    auto bogus = runtime::ConfigReader::from_string(text, "test");
+    EXPECT_THROW(load_options(bogus), runtime::ConfigError) << text;
+  }
 }
 
 // --- pose_source = "slam": one map per particle, best particle's map published.

@@ -16,6 +16,7 @@
 using namespace pex::testing;
 using namespace std::chrono_literals;
 using testing::HasSubstr;
+using testing::Not;
 
 namespace {
 
@@ -138,6 +139,22 @@ TEST_P(BadConfig, UnknownKeyExits78NamingFileAndKey) {
   EXPECT_EQ(r.exit_code, kExitConfig) << r.output;
   EXPECT_THAT(r.output, HasSubstr(path));
   EXPECT_THAT(r.output, HasSubstr("max_sped_mps"));
+}
+
+// Every daemon names itself as installed (pex-polygon-mapper, not
+// pex-polygon_mapper) and says its version.
+TEST_P(BadConfig, VersionAndHelpNameTheProgramAsInstalled) {
+  const std::string program = program_of(GetParam());
+  const auto version = run_to_completion({bin_path(program), "--version"});
+  EXPECT_EQ(version.exit_code, 0) << version.output;
+  EXPECT_THAT(version.output, HasSubstr(program + " " + PEX_VERSION));
+  const auto help = run_to_completion({bin_path(program), "--help"});
+  EXPECT_EQ(help.exit_code, 0) << help.output;
+  EXPECT_THAT(help.output, HasSubstr(program));
+  if (GetParam().find('_') != std::string::npos)
+    EXPECT_THAT(help.output, Not(HasSubstr("pex-" + GetParam())));
+  const auto bad_flag = run_to_completion({bin_path(program), "--no-such-flag"});
+  EXPECT_EQ(bad_flag.exit_code, 64) << bad_flag.output;
 }
 
 TEST_P(BadConfig, NegativeHeartbeatPeriodExits78) {
