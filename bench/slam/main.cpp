@@ -2,7 +2,10 @@
 // log) — accuracy by the relations metric, real-time factor, and micro
 // benchmarks of the matcher. Figures are reported in docs/slam.md, never asserted.
 //
-//   pex-bench-slam                        Google Benchmark run (full log once + micro)
+//   pex-bench-slam [--logs DIR]           per CARMEN log with relations in DIR (default
+//                                         ../shared/data): pex-carmen2lcm, then pex-slam --log
+//                                         with config/slam.toml, one JSON line each
+//   pex-bench-slam --gbench [gbench args] Google Benchmark run (full log once + micro)
 //   pex-bench-slam --run CLF RELATIONS [POSES_OUT] [PARTICLES] [SEED]
 //                                         one run, one JSON line
 #include <benchmark/benchmark.h>
@@ -15,6 +18,11 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <filesystem>
+#include <sstream>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "carmen_run.hpp"
 
@@ -211,7 +219,98 @@ BENCHMARK(BM_CowGridMapCloneAndInsert);
 
 }  // namespace
 
+// Runs argv, waits; its exit status and peak resident memory (MB) and wall time.
+struct ChildRun {
+  int status = -1;
+  double peak_mb = 0.0;
+  double wall_s = 0.0;
+};
+ChildRun run_child(const std::vector<std::string>& args, const std::string& stdout_path) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (!stdout_path.empty() && !std::freopen(stdout_path.c_str(), "w", stdout)) _exit(127);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  ChildRun r;
+  struct rusage usage {};
+  int status = 0;
+  if (pid > 0 && wait4(pid, &status, 0, &usage) == pid) {
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KB on Linux
+  }
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+// scripts/bench.sh slam: every log of the data folder through the shipped
+// pipeline (pex-carmen2lcm, pex-slam --log with config/slam.toml), scored by
+// the relations metric; one JSON line per log (issue 13's fields).
+int run_logs(const std::string& dir) {
+  namespace fs = std::filesystem;
+  const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
+  const fs::path work = fs::temp_directory_path() / ("pex-bench-slam-" + std::to_string(getpid()));
+  fs::create_directories(work);
+  std::vector<fs::path> logs;
+  for (const auto& entry : fs::directory_iterator(dir))
+    if (entry.path().extension() == ".clf" && fs::exists(fs::path(entry.path()).replace_extension(".relations")))
+      logs.push_back(entry.path());
+  std::sort(logs.begin(), logs.end());
+  int failures = 0;
+  for (const fs::path& clf : logs) {
+    const std::string name = clf.stem().string();
+    const fs::path lcm = work / (name + ".lcm"), poses = work / (name + ".poses");
+    const fs::path relations_path = fs::path(clf).replace_extension(".relations");
+    if (run_child({(bin / "pex-carmen2lcm").string(), clf.string(), lcm.string()}, "/dev/null").status != 0) {
+      std::fprintf(stderr, "pex-bench-slam: pex-carmen2lcm failed on %s\n", clf.c_str());
+      ++failures;
+      continue;
+    }
+    const ChildRun slam = run_child({(bin / "pex-slam").string(), "--config",
+                                     std::string(PEX_SOURCE_DIR) + "/config/slam.toml", "--log", lcm.string(),
+                                     "--poses", poses.string(), "--log-level", "warn"},
+                                    "/dev/null");
+    if (slam.status != 0) {
+      std::fprintf(stderr, "pex-bench-slam: pex-slam failed on %s\n", clf.c_str());
+      ++failures;
+      continue;
+    }
+    std::ifstream poses_in(poses);
+    const auto estimated = pex::evaluation::read_poses(poses_in);
+    const auto metric = pex::evaluation::evaluate_relations(estimated.poses, load_relations(relations_path.string()));
+    const auto log = load_log(clf.string());
+    const double log_s = log.lasers.empty() ? 0.0 : log.lasers.back().timestamp_s - log.lasers.front().timestamp_s;
+    std::printf("{\"log\":\"%s\",\"relations\":%zu,\"trans_mean_m\":%.6f,\"trans_std_m\":%.6f,"
+                "\"rot_mean_deg\":%.6f,\"rot_std_deg\":%.6f,\"wall_s\":%.2f,\"log_s\":%.1f,\"rtf\":%.1f,"
+                "\"peak_mb\":%.1f}\n",
+                name.c_str(), metric.relations, metric.trans_mean_m, metric.trans_std_m, metric.rot_mean_deg,
+                metric.rot_std_deg, slam.wall_s, log_s, slam.wall_s > 0 ? log_s / slam.wall_s : 0.0, slam.peak_mb);
+    std::fflush(stdout);
+    fs::remove(lcm);
+    fs::remove(poses);
+  }
+  fs::remove_all(work);
+  return failures == 0 ? 0 : 1;
+}
+
 int main(int argc, char** argv) {
+  if (argc == 1 || (argc == 3 && std::strcmp(argv[1], "--logs") == 0)) {
+    try {
+      return run_logs(argc == 3 ? argv[2] : std::string(PEX_SHARED_DIR) + "/data");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "pex-bench-slam: %s\n", e.what());
+      return 2;
+    }
+  }
+  if (argc >= 2 && std::strcmp(argv[1], "--gbench") == 0) {
+    argv[1] = argv[0];
+    ++argv;
+    --argc;
+  }
   if (argc >= 4 && std::strcmp(argv[1], "--run") == 0) {
     try {
       return run_once(argc, argv);

@@ -108,10 +108,12 @@ std::optional<Pose2> OdometrySync::odometry_at(std::int64_t utime) const {
 
 Pose2 OdometrySync::pose_at(std::int64_t utime) const {
   if (const std::optional<Pose2> pose = odometry_at(utime)) return *pose;
-  // Before everything kept (a lead reaching back before the first reading):
-  // the oldest reading; else the newest.
-  if (utime < odometry_.front().first) return odometry_.front().second;
-  return odometry_.back().second;
+  // Before every kept reading (a lead reaching back before the first one):
+  // the oldest; else (a time after all, or stamps that ran backwards) the
+  // newest, as always.
+  const bool before_all = std::all_of(odometry_.begin(), odometry_.end(),
+                                      [utime](const auto& reading) { return utime < reading.first; });
+  return before_all ? odometry_.front().second : odometry_.back().second;
 }
 
 std::int64_t OdometrySync::lead_us() const {

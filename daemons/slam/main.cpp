@@ -76,12 +76,16 @@ int main(int argc, char** argv) {
       node.counter("scans_processed") = slam->scans_processed();
       node.counter("filter_updates") = slam->filter().generation() + 1;
       node.counter("updates_republished") = slam->republished();
+      node.counter("corrected_odometry_steps") = slam->filter().corrected_odometry_steps();
     });
     node.on_shutdown([slam, &node, &poses_path, &checkpoint_out] {
       slam->flush();
       node.counter("scans_processed") = slam->scans_processed();
       node.counter("filter_updates") = slam->filter().generation() + 1;
       node.counter("updates_republished") = slam->republished();
+      node.counter("corrected_odometry_steps") = slam->filter().corrected_odometry_steps();
+      spdlog::info("{} filter updates, {} odometry steps replaced by the odometry check", slam->filter().generation() + 1,
+                   slam->filter().corrected_odometry_steps());
       if (!checkpoint_out.empty()) {
         const std::string bytes = slam->checkpoint();
         if (const auto why = pex::runtime::write_file_atomically(checkpoint_out, bytes); !why.empty())
