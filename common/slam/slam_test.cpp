@@ -713,4 +713,24 @@ TEST(OdometryLag, TheEstimateSurvivesACheckpoint) {
 }
 
 }  // namespace
+TEST(TrajectoryText, EveryPoseAWholeLineWhateverItsMagnitude) {
+  const std::vector<TimedPose> poses = {{1'500'000, Pose2{1.25, -2.5, 0.125}},
+                                        {-1'000'000'000'000'000'000, Pose2{1e300, -1e300, 3.0}}};
+  const std::string text = trajectory_text(poses);
+  std::istringstream in(text);
+  std::string line;
+  std::vector<std::string> lines;
+  while (std::getline(in, line)) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 2u) << text;
+  EXPECT_EQ(lines[0], "1.500000 1.250000 -2.500000 0.125000");
+  // 1e300 written out in full: 301 digits, 6 decimals.
+  std::istringstream big(lines[1]);
+  double t = 0, x = 0, y = 0, theta = 0;
+  ASSERT_TRUE(big >> t >> x >> y >> theta) << lines[1];
+  EXPECT_DOUBLE_EQ(t, -1e12);
+  EXPECT_DOUBLE_EQ(x, 1e300);
+  EXPECT_DOUBLE_EQ(y, -1e300);
+  EXPECT_DOUBLE_EQ(theta, 3.0);
+}
+
 }  // namespace pex::slam

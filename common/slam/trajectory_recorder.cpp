@@ -1,5 +1,8 @@
 #include "slam/trajectory_recorder.hpp"
 
+#include <iomanip>
+#include <sstream>
+
 namespace pex::slam {
 
 void TrajectoryRecorder::record(std::int64_t scan_utime, const ParticleFilter& filter,
@@ -17,6 +20,15 @@ std::vector<TimedPose> TrajectoryRecorder::resolve(const ParticleFilter& filter)
     poses.push_back({e.utime, compose(updates[static_cast<std::size_t>(e.generation)], e.odometry_from_update)});
   }
   return poses;
+}
+
+std::string trajectory_text(const std::vector<TimedPose>& poses) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << std::fixed << std::setprecision(6);
+  for (const TimedPose& p : poses)
+    out << static_cast<double>(p.utime) * 1e-6 << ' ' << p.pose.x_m << ' ' << p.pose.y_m << ' ' << p.pose.theta_rad << '\n';
+  return out.str();
 }
 
 }  // namespace pex::slam

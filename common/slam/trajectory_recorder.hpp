@@ -4,6 +4,7 @@
 // follows and the odometry since that update (scans between updates get the
 // update's pose carried forward by odometry).
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "slam/particle_filter.hpp"
@@ -31,5 +32,9 @@ class TrajectoryRecorder {
   };
   std::vector<Entry> entries_;
 };
+
+// `t x y theta` per pose, one a line (seconds, metres, radians; 6 decimals),
+// whatever the magnitudes: the offline pose file pex-eval-slam reads.
+std::string trajectory_text(const std::vector<TimedPose>& poses);
 
 }  // namespace pex::slam

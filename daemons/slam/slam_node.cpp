@@ -1,7 +1,6 @@
 #include "slam_node.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 #include "archive/byte_archive.hpp"
@@ -105,16 +104,7 @@ slam_update_t SlamNode::update_message(std::int64_t scan_utime) const {
   return msg;
 }
 
-std::string SlamNode::trajectory_text() const {
-  std::string text;
-  char line[128];
-  for (const slam::TimedPose& p : recorder_.resolve(filter_)) {
-    const int n = std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f\n", static_cast<double>(p.utime) * 1e-6,
-                                p.pose.x_m, p.pose.y_m, p.pose.theta_rad);
-    text.append(line, static_cast<std::size_t>(n));
-  }
-  return text;
-}
+std::string SlamNode::trajectory_text() const { return slam::trajectory_text(recorder_.resolve(filter_)); }
 
 namespace {
 constexpr std::string_view kCheckpointMagic = "PEXSLAMN";
