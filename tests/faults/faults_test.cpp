@@ -74,6 +74,26 @@ namespace {
 
 pex::velocity_cmd_t command(double v) { return velocity_command(v, 0.0, "faults_test"); }
 
+// Drives as an explorer would, a BASE_CMD of v every 50 ms, until `done`
+// (false after 60 s of wall time: only a hung set gets there).
+bool drive_until(Bus& bus, double v, const std::function<bool()>& done) {
+  return bus.spin_until(
+      [&] {
+        bus.publish(std::string(ch::kBaseCmd), command(v));
+        bus.spin_for(50ms);
+        return done();
+      },
+      60s);
+}
+
+// pex-sim's config on two_rooms (4 m of free floor ahead of the start pose), in `dir`.
+std::string two_rooms_sim_config(const std::string& dir) {
+  const std::string path = dir + "/sim.toml";
+  write_file(path, with_key(read_file(sim_config_of("sim")), "world_file",
+                            "\"" + source_path("worlds/two_rooms.wkt") + "\""));
+  return path;
+}
+
 // What the bus carries of the truth and the clock.
 struct Truth {
   std::vector<pex::pose_t> poses;
@@ -145,34 +165,21 @@ TEST(Faults, KilledBaseDriverStopsTheWheelsWithin300msAndARestartedOneDrivesAgai
   Bus bus;
   Truth truth(bus);
   const std::string dir = make_temp_dir("faults-driver");
-  // two_rooms: 4 m of free floor ahead of the start pose.
-  const std::string sim_config = dir + "/sim.toml";
-  write_file(sim_config, with_key(read_file(sim_config_of("sim")), "world_file",
-                                  "\"" + source_path("worlds/two_rooms.wkt") + "\""));
+  const std::string sim_config = two_rooms_sim_config(dir);
   auto sim = start_daemon("sim", dir, {}, sim_config);
   auto driver = start_daemon("base_driver", dir);
   std::vector<Process*> set = {sim.get(), driver.get()};
   ASSERT_TRUE(bus.spin_until([&] { return bus.all_ok({"base_driver"}) && truth.poses.size() > 5; }, 30s))
       << logs_of(set);
 
-  // Drive as an explorer would: a command every 50 ms.
-  auto drive_until = [&](double v, const std::function<bool()>& done) {
-    return bus.spin_until(
-        [&] {
-          bus.publish(std::string(ch::kBaseCmd), command(v));
-          bus.spin_for(50ms);
-          return done();
-        },
-        60s);
-  };
-  ASSERT_TRUE(drive_until(0.3, [&] { return truth.speed() > 0.25; })) << logs_of(set);
+  ASSERT_TRUE(drive_until(bus, 0.3, [&] { return truth.speed() > 0.25; })) << logs_of(set);
 
   // kill -9: no zero command, no NMT stop, nothing more from the driver.
   const std::int64_t kill_utime = truth.clock_utime;  // the test's newest clock: at or before the kill
   driver->kill_hard();
   const std::size_t first_after_kill = truth.poses.size();
   // The commands go on (the explorer does not know); 1.5 s of simulated time.
-  ASSERT_TRUE(drive_until(0.3, [&] { return truth.clock_utime > kill_utime + 1'500'000; })) << logs_of(set);
+  ASSERT_TRUE(drive_until(bus, 0.3, [&] { return truth.clock_utime > kill_utime + 1'500'000; })) << logs_of(set);
 
   // When did the robot stand?
   const std::int64_t stop_utime = truth.stood_from(first_after_kill);
@@ -184,7 +191,7 @@ TEST(Faults, KilledBaseDriverStopsTheWheelsWithin300msAndARestartedOneDrivesAgai
   // A restarted driver configures the drives again and drives.
   driver = start_daemon("base_driver", dir);
   set = {sim.get(), driver.get()};
-  EXPECT_TRUE(drive_until(0.3, [&] { return bus.all_ok({"base_driver"}) && truth.speed() > 0.25; }))
+  EXPECT_TRUE(drive_until(bus, 0.3, [&] { return bus.all_ok({"base_driver"}) && truth.speed() > 0.25; }))
       << "no driving after the restart\n" << logs_of(set);
   for (Process* p : set) EXPECT_EQ(p->stop(5s), 0) << p->name() << "\n" << p->output();
   std::filesystem::remove_all(dir);
@@ -219,9 +226,7 @@ TEST(Faults, RestartedBaseDriverResetsOdometryAndSlamDoesNotJump) {
   std::vector<pex::pose_t> slam_poses;
   bus.on<pex::pose_t>(std::string(ch::kSlamPose), [&](const pex::pose_t& p) { slam_poses.push_back(p); });
   const std::string dir = make_temp_dir("faults-odometry");
-  const std::string sim_config = dir + "/sim.toml";
-  write_file(sim_config, with_key(read_file(sim_config_of("sim")), "world_file",
-                                  "\"" + source_path("worlds/two_rooms.wkt") + "\""));
+  const std::string sim_config = two_rooms_sim_config(dir);
   auto sim = start_daemon("sim", dir, {}, sim_config);
   auto reader = start_daemon("lidar_reader", dir);
   auto driver = start_daemon("base_driver", dir);
@@ -231,23 +236,14 @@ TEST(Faults, RestartedBaseDriverResetsOdometryAndSlamDoesNotJump) {
       << logs_of(set);
   const pex::pose_t truth_start = truth.poses.back();
   const pex::pose_t slam_start = slam_poses.back();
-  auto drive_until = [&](const std::function<bool()>& done) {
-    return bus.spin_until(
-        [&] {
-          bus.publish(std::string(ch::kBaseCmd), command(0.3));
-          bus.spin_for(50ms);
-          return done();
-        },
-        60s);
-  };
   auto travelled = [&] { return std::hypot(truth.poses.back().x - truth_start.x, truth.poses.back().y - truth_start.y); };
-  ASSERT_TRUE(drive_until([&] { return travelled() > 1.0; })) << logs_of(set);
+  ASSERT_TRUE(drive_until(bus, 0.3, [&] { return travelled() > 1.0; })) << logs_of(set);
 
   driver->kill_hard();
   bus.spin_until([&] { return truth.speed() < 0.01; }, 10s);  // the drives stop on their own
   driver = start_daemon("base_driver", dir);
   set = {sim.get(), reader.get(), driver.get(), slam.get()};
-  ASSERT_TRUE(drive_until([&] { return bus.all_ok({"base_driver"}) && travelled() > 2.0; })) << logs_of(set);
+  ASSERT_TRUE(drive_until(bus, 0.3, [&] { return bus.all_ok({"base_driver"}) && travelled() > 2.0; })) << logs_of(set);
   bus.spin_until([&] { return false; }, 1500ms);  // statuses with the final counters
 
   // SLAM moved as far as the robot did, with no jump on the way.
@@ -538,9 +534,7 @@ TEST(Faults, WallClockSteppedBackAnHourTheDriverDrivesOnAndStopsOnAStaleCommand)
   Bus bus;
   Truth truth(bus);
   const std::string dir = make_temp_dir("faults-ntp");
-  const std::string sim_config = dir + "/sim.toml";
-  write_file(sim_config, with_key(read_file(sim_config_of("sim")), "world_file",
-                                  "\"" + source_path("worlds/two_rooms.wkt") + "\""));
+  const std::string sim_config = two_rooms_sim_config(dir);
   auto sim = start_daemon("sim", dir, {}, sim_config);
   const std::string offset_file = dir + "/wall_clock_offset";
   write_file(offset_file, "+0\n");
@@ -557,23 +551,14 @@ TEST(Faults, WallClockSteppedBackAnHourTheDriverDrivesOnAndStopsOnAStaleCommand)
   std::vector<Process*> set = {sim.get(), driver.get()};
   ASSERT_TRUE(bus.spin_until([&] { return bus.all_ok({"base_driver"}) && truth.poses.size() > 5; }, 30s))
       << logs_of(set);
-  auto drive_until = [&](double v, const std::function<bool()>& done) {
-    return bus.spin_until(
-        [&] {
-          bus.publish(std::string(ch::kBaseCmd), command(v));
-          bus.spin_for(50ms);
-          return done();
-        },
-        60s);
-  };
-  ASSERT_TRUE(drive_until(0.3, [&] { return truth.speed() > 0.25; })) << logs_of(set);
+  ASSERT_TRUE(drive_until(bus, 0.3, [&] { return truth.speed() > 0.25; })) << logs_of(set);
 
   // NTP steps the wall clock back an hour.
   write_file(offset_file, "-3600\n");
   const std::int64_t stepped_utime = truth.clock_utime;
   const std::size_t first_after_step = truth.poses.size();
   // Commanded for 1.5 simulated seconds more: the robot drives on all the time.
-  ASSERT_TRUE(drive_until(0.3, [&] { return truth.clock_utime > stepped_utime + 1'500'000; })) << logs_of(set);
+  ASSERT_TRUE(drive_until(bus, 0.3, [&] { return truth.clock_utime > stepped_utime + 1'500'000; })) << logs_of(set);
   double slowest = 1.0;
   for (std::size_t i = first_after_step; i < truth.poses.size(); ++i)
     if (truth.poses[i].utime - truth.poses[first_after_step].utime > 200'000)
