@@ -140,25 +140,38 @@ TEST(Node, OfflineOutputLogHoldsPublishedMessages) {
   std::filesystem::remove_all(dir);
 }
 
+namespace {
+
+// A log of pose events on channel P, one at each of `times` (utime and
+// event time), x = `tag`.
+std::string write_pose_log(const std::filesystem::path& path, const std::vector<int64_t>& times, double tag = 0.0) {
+  lcm::LogFile log(path.string(), "w");
+  for (int64_t t : times) {
+    const auto buf = encode(pose(t, tag));
+    lcm::LogEvent ev{};
+    ev.timestamp = t;
+    ev.channel = "P";
+    ev.datalen = static_cast<int32_t>(buf.size());
+    ev.data = const_cast<uint8_t*>(buf.data());
+    log.writeEvent(&ev);
+  }
+  return path.string();
+}
+
+// 0, 1, ..., n - 1.
+std::vector<int64_t> first_times(int n) {
+  std::vector<int64_t> times(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) times[static_cast<std::size_t>(i)] = i;
+  return times;
+}
+
+}  // namespace
+
 TEST(Node, ReplayOfSeveralLogsMergesThemByEventTime) {
   const auto dir = std::filesystem::temp_directory_path() / ("pex_node_merge_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  auto write_log = [&](const std::string& name, const std::vector<int64_t>& times, double tag) {
-    const std::string path = (dir / name).string();
-    lcm::LogFile log(path, "w");
-    for (int64_t t : times) {
-      const auto buf = encode(pose(t, tag));
-      lcm::LogEvent ev{};
-      ev.timestamp = t;
-      ev.channel = "P";
-      ev.datalen = static_cast<int32_t>(buf.size());
-      ev.data = const_cast<uint8_t*>(buf.data());
-      log.writeEvent(&ev);
-    }
-    return path;
-  };
-  const std::string a = write_log("a.lcm", {10, 30, 50}, 1.0);
-  const std::string b = write_log("b.lcm", {20, 30, 40, 60}, 2.0);
+  const std::string a = write_pose_log(dir / "a.lcm", {10, 30, 50}, 1.0);
+  const std::string b = write_pose_log(dir / "b.lcm", {20, 30, 40, 60}, 2.0);
   Node node(NodeOptions{"t", "", true, "", 1.0});
   std::vector<std::pair<int64_t, double>> seen;
   node.subscribe<pex::pose_t>("P", [&](const pex::pose_t& p) { seen.emplace_back(p.utime, p.x); });
@@ -168,29 +181,11 @@ TEST(Node, ReplayOfSeveralLogsMergesThemByEventTime) {
   std::filesystem::remove_all(dir);
 }
 
-namespace {
-
-// A log of `n` pose events on channel P, utime i.
-std::string write_pose_log(const std::filesystem::path& path, int n) {
-  lcm::LogFile log(path.string(), "w");
-  for (int i = 0; i < n; ++i) {
-    const auto buf = encode(pose(i, i));
-    lcm::LogEvent ev{};
-    ev.timestamp = i;
-    ev.channel = "P";
-    ev.datalen = static_cast<int32_t>(buf.size());
-    ev.data = const_cast<uint8_t*>(buf.data());
-    log.writeEvent(&ev);
-  }
-  return path.string();
-}
-
-}  // namespace
 
 TEST(Node, ReplayOfADamagedLogSaysWhereAndKeepsWhatCameBefore) {
   const auto dir = std::filesystem::temp_directory_path() / ("pex_node_damaged_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  const std::string path = write_pose_log(dir / "d.lcm", 100);
+  const std::string path = write_pose_log(dir / "d.lcm", first_times(100));
   const auto size = std::filesystem::file_size(path);
   {  // 16 bytes flipped in the middle of the file
     std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
@@ -211,13 +206,13 @@ TEST(Node, ReplayOfADamagedLogSaysWhereAndKeepsWhatCameBefore) {
   EXPECT_LT(seen, 100);
   EXPECT_TRUE(node.stopping());
   // A log cut short in its last event: the same.
-  const std::string cut = write_pose_log(dir / "c.lcm", 10);
+  const std::string cut = write_pose_log(dir / "c.lcm", first_times(10));
   std::filesystem::resize_file(cut, std::filesystem::file_size(cut) - 5);
   Node node2(NodeOptions{"t", "", true, "", 1.0});
   EXPECT_THROW(node2.replay_log(cut), LogFileError);
   // The complete log replays to its end.
   Node node3(NodeOptions{"t", "", true, "", 1.0});
-  EXPECT_EQ(node3.replay_log(write_pose_log(dir / "ok.lcm", 10)), 10);
+  EXPECT_EQ(node3.replay_log(write_pose_log(dir / "ok.lcm", first_times(10))), 10);
   std::filesystem::remove_all(dir);
 }
 
