@@ -44,7 +44,7 @@ ReaderOptions load_options(runtime::ConfigReader& config) {
   o.sensor_theta_rad = config.get<double>("sensor_theta_rad", o.sensor_theta_rad, in_range(-4.0, 4.0));
   o.max_telegram_bytes = static_cast<std::size_t>(
       config.get<int>("max_telegram_bytes", static_cast<int>(o.max_telegram_bytes), in_range(1024, 1 << 24)));
-  o.max_scan_age_ms = config.get<int>("max_scan_age_ms", o.max_scan_age_ms, in_range(10, 60'000));
+  o.max_device_time_jump_ms = config.get<int>("max_device_time_jump_ms", o.max_device_time_jump_ms, in_range(10, 60'000));
   return o;
 }
 

@@ -205,7 +205,7 @@ void ReaderCore::on_scan(const cola::ScanData& scan, std::int64_t now_us, std::i
     const std::int64_t host_since_us = now_us - last_scan_us_;
     if (since_us < half_period_us)
       why = "device time " + std::to_string(since_us) + " us after the last scan's";
-    else if (since_us > host_since_us + static_cast<std::int64_t>(options_.max_scan_age_ms) * 1000)
+    else if (since_us > host_since_us + static_cast<std::int64_t>(options_.max_device_time_jump_ms) * 1000)
       why = "device time " + std::to_string(since_us / 1000) + " ms after the last scan's, " +
             std::to_string(host_since_us / 1000) + " ms on the host";
   }

@@ -42,7 +42,7 @@ struct ReaderOptions {
   // scan's than the host's time since it is refused (a device clock that
   // jumped); one whose device time is less than half a period after it, or
   // before it, too (a repeated or injected scan).
-  int max_scan_age_ms = 500;
+  int max_device_time_jump_ms = 500;
 
   cola::ScanConfig scan_config() const;
 };

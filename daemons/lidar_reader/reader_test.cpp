@@ -36,7 +36,7 @@ TEST(LidarReaderOptions, ShippedConfigLoadsCompletelyAndGivesTheLms111Setup) {
 TEST(LidarReaderOptions, BadValuesAreRefused) {
   for (const char* text : {"port = 0\n", "reconnect_initial_ms = 5000\nreconnect_max_ms = 100\n",
                            "angular_step_deg = 0.0\n", "connect_timeout_ms = \"soon\"\n", "host = \"\"\n",
-                           "max_scan_age_ms = 0\n"}) {
+                           "max_device_time_jump_ms = 0\n"}) {
     auto config = runtime::ConfigReader::from_string(text, "bad.toml");
     EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
   }
