@@ -36,6 +36,18 @@ for t in $tools; do
       expect 66 "$t: no such log" "$bin/$t" --log "$tmp/none.clf" --poses "$tmp/none.txt" --out "$tmp/w.wkt" ;;
     pex-plan)
       expect 66 "$t: no such log" "$bin/$t" --log "$tmp/none.lcm" ;;
+    pex-map)
+      printf '%s' '{"type":"FeatureCollection","pex_map_format":1,"frame":"map","utime":0,"scan_utime":0,"particle":-1,
+        "generation":0,"scans_inserted":0,"vertex_count":3,"free_area_m2":0.5,"obstacle_length_m":3.4,"frontier_length_m":0,
+        "robot":{"x":0,"y":0,"theta":0},"features":[{"type":"Feature","properties":{"polygon":0,
+        "edge_types":[["obstacle","obstacle","obstacle"]]},"geometry":{"type":"Polygon",
+        "coordinates":[[[0,0],[1,0],[0,1],[0,0]]]}}]}' >"$tmp/map.geojson"
+      expect 0 "$t: export of a map file" "$bin/$t" export --map "$tmp/map.geojson" --pgm "$tmp/m.pgm"
+      expect 66 "$t: no such log" "$bin/$t" save "$tmp/x.geojson" --log "$tmp/none.lcm"
+      expect 66 "$t: no such map file" "$bin/$t" export --map "$tmp/none.geojson" --pgm "$tmp/x.pgm"
+      expect 65 "$t: a log without MAP" "$bin/$t" save "$tmp/x.geojson" --log "$tmp/empty.lcm"
+      expect 65 "$t: a map file that is not one" "$bin/$t" export --map "$tmp/tiny.clf" --pgm "$tmp/x.pgm"
+      expect 73 "$t: PGM into a missing folder" "$bin/$t" export --map "$tmp/map.geojson" --pgm /no/such/dir/x.pgm ;;
     pex-explore-report)
       expect 66 "$t: no such world" "$bin/$t" --world "$tmp/none.wkt" --log "$tmp/empty.lcm" ;;
   esac

@@ -1,0 +1,154 @@
+// pex-map: map files from the polygonal map (docs/map_files.md).
+//   pex-map save OUT.geojson [--log IN.lcm]             the current MAP (next on the bus, or a log's last) as GeoJSON
+//   pex-map export --pgm OUT.pgm [--resolution-m 0.05]  a ROS map_server grid (OUT.pgm + OUT.yaml)
+//                  [--map IN.geojson | --log IN.lcm]    ... of a saved map, a log's last MAP, or the bus's next
+// Exit codes: 0 written; 64 bad command line; 65 no MAP in the log or a bad map
+// file; 66 an input cannot be opened; 69 no MAP on the bus in time; 73 an output
+// cannot be written.
+#include <sysexits.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
+
+#include "map_files.hpp"
+#include "map_source.hpp"
+#include "runtime/channels.hpp"
+#include "runtime/files.hpp"
+
+namespace {
+
+struct Source {
+  std::string map_file, log, channel{pex::runtime::channels::kMap}, lcm_url;
+  double timeout_s = 10.0;
+};
+
+// Prints why and returns the exit code when the map cannot be had.
+int load(const Source& src, pex::polygon_map_t& out) {
+  if (!src.map_file.empty()) {
+    std::string why;
+    const auto text = pex::runtime::read_whole_file(src.map_file, &why);
+    if (!text) {
+      std::fprintf(stderr, "pex-map: cannot read %s: %s\n", src.map_file.c_str(), why.c_str());
+      return EX_NOINPUT;
+    }
+    try {
+      out = pex::map_files::from_geojson(*text);
+    } catch (const pex::map_files::MapFileError& e) {
+      std::fprintf(stderr, "pex-map: %s: %s\n", src.map_file.c_str(), e.what());
+      return EX_DATAERR;
+    }
+    return 0;
+  }
+  if (!src.log.empty()) {
+    pex::map_files::LogMaps maps;
+    try {
+      maps = pex::map_files::read_log_maps(src.log, src.channel);
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "pex-map: %s\n", e.what());
+      return EX_NOINPUT;
+    }
+    if (!maps.last) {
+      std::fprintf(stderr, "pex-map: no decodable %s message in %s (%ld rejected)\n", src.channel.c_str(),
+                   src.log.c_str(), maps.rejected);
+      return EX_DATAERR;
+    }
+    out = std::move(*maps.last);
+    return 0;
+  }
+  std::optional<pex::polygon_map_t> map;
+  try {
+    map = pex::map_files::next_bus_map(src.lcm_url, src.channel,
+                                       std::chrono::milliseconds(static_cast<long>(src.timeout_s * 1000)));
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "pex-map: %s\n", e.what());
+    return EX_UNAVAILABLE;
+  }
+  if (!map) {
+    std::fprintf(stderr, "pex-map: no %s on the bus within %.1f s: is pex-polygon-mapper running?\n",
+                 src.channel.c_str(), src.timeout_s);
+    return EX_UNAVAILABLE;
+  }
+  out = std::move(*map);
+  return 0;
+}
+
+int write(const std::string& path, const std::string& bytes) {
+  if (auto why = pex::runtime::write_file_atomically(path, bytes); !why.empty()) {
+    std::fprintf(stderr, "pex-map: cannot write %s: %s\n", path.c_str(), why.c_str());
+    return EX_CANTCREAT;
+  }
+  return 0;
+}
+
+void add_source_options(CLI::App& cmd, Source& src, bool with_map_file) {
+  auto* log = cmd.add_option("--log", src.log, "read the last MAP of this LCM log (default: the next MAP on the bus)");
+  if (with_map_file)
+    cmd.add_option("--map", src.map_file, "read a saved map file (GeoJSON, from pex-map save)")->excludes(log);
+  cmd.add_option("--channel", src.channel, "channel of the pex.polygon_map_t messages");
+  cmd.add_option("--lcm-url", src.lcm_url, "LCM URL for the bus (default: $LCM_DEFAULT_URL or LCM's)");
+  cmd.add_option("--timeout-s", src.timeout_s, "seconds to wait for a MAP on the bus")->check(CLI::PositiveNumber);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Save the polygonal map to a file (GeoJSON) or export it as a ROS occupancy grid (PGM + YAML)",
+               "pex-map"};
+  app.set_version_flag("--version", std::string("pex-map ") + PEX_VERSION);
+  app.require_subcommand(1);
+  Source save_src, export_src;
+  std::string save_out, pgm_out;
+  double resolution_m = 0.05, margin_m = 0.5;
+  auto* save = app.add_subcommand("save", "write the map as GeoJSON (docs/map_files.md)");
+  save->add_option("output", save_out, "the GeoJSON file to write")->required();
+  add_source_options(*save, save_src, false);
+  auto* exp = app.add_subcommand("export", "write the map as a ROS map_server occupancy grid");
+  exp->add_option("--pgm", pgm_out, "the PGM to write; the YAML goes beside it (.yaml)")->required();
+  exp->add_option("--resolution-m", resolution_m, "cell side, m")->check(CLI::Range(0.001, 10.0));
+  exp->add_option("--margin-m", margin_m, "unknown space around the map, m")->check(CLI::Range(0.0, 100.0));
+  add_source_options(*exp, export_src, true);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
+  }
+
+  pex::polygon_map_t map{};
+  if (save->parsed()) {
+    if (int rc = load(save_src, map); rc != 0) return rc;
+    std::string text;
+    try {
+      text = pex::map_files::to_geojson(map);
+    } catch (const pex::map_files::MapFileError& e) {
+      std::fprintf(stderr, "pex-map: %s\n", e.what());
+      return EX_DATAERR;
+    }
+    if (int rc = write(save_out, text); rc != 0) return rc;
+    std::printf("saved %d rings, %d vertices, %.1f m2 free to %s\n", map.nrings, map.vertex_count, map.free_area_m2,
+                save_out.c_str());
+    return 0;
+  }
+  if (int rc = load(export_src, map); rc != 0) return rc;
+  pex::map_files::OccupancyGrid grid;
+  try {
+    grid = pex::map_files::rasterise(map, resolution_m, margin_m);
+  } catch (const pex::map_files::MapFileError& e) {
+    std::fprintf(stderr, "pex-map: %s\n", e.what());
+    return EX_DATAERR;
+  }
+  const std::filesystem::path pgm(pgm_out);
+  const std::string yaml_out = std::filesystem::path(pgm).replace_extension(".yaml").string();
+  if (int rc = write(pgm_out, pex::map_files::to_pgm(grid)); rc != 0) return rc;
+  if (int rc = write(yaml_out, pex::map_files::to_yaml(grid, pgm.filename().string())); rc != 0) return rc;
+  std::printf("exported %d x %d cells of %.3f m to %s and %s\n", grid.width, grid.height, grid.resolution_m,
+              pgm_out.c_str(), yaml_out.c_str());
+  return 0;
+}

@@ -1,0 +1,50 @@
+#include "map_source.hpp"
+
+#include <stdexcept>
+
+#include <lcm/lcm-cpp.hpp>
+
+namespace pex::map_files {
+
+LogMaps read_log_maps(const std::string& path, const std::string& channel) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw std::runtime_error("cannot read " + path);
+  LogMaps out;
+  for (const lcm::LogEvent* event = log.readNextEvent(); event; event = log.readNextEvent()) {
+    if (event->channel != channel) continue;
+    pex::polygon_map_t msg{};
+    if (msg.decode(event->data, 0, event->datalen) != event->datalen) {
+      ++out.rejected;
+      continue;
+    }
+    if (out.robot_path.empty() || out.robot_path.back() != std::make_pair(msg.robot_x, msg.robot_y))
+      out.robot_path.emplace_back(msg.robot_x, msg.robot_y);
+    out.last = std::move(msg);
+  }
+  return out;
+}
+
+std::optional<pex::polygon_map_t> next_bus_map(const std::string& lcm_url, const std::string& channel,
+                                                std::chrono::milliseconds timeout) {
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) throw std::runtime_error("cannot open LCM at '" + lcm_url + "'");
+  std::optional<pex::polygon_map_t> got;
+  auto* sub = lcm.subscribeFunction(
+      channel,
+      +[](const lcm::ReceiveBuffer* rb, const std::string&, std::optional<pex::polygon_map_t>* out) {
+        pex::polygon_map_t msg{};
+        if (msg.decode(rb->data, 0, static_cast<int>(rb->data_size)) == static_cast<int>(rb->data_size))
+          *out = std::move(msg);
+      },
+      &got);
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (!got) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - std::chrono::steady_clock::now());
+    if (left.count() <= 0) break;
+    lcm.handleTimeout(static_cast<int>(std::min<long>(left.count(), 100)));
+  }
+  lcm.unsubscribe(sub);
+  return got;
+}
+
+}  // namespace pex::map_files

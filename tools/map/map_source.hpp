@@ -1,0 +1,30 @@
+#pragma once
+// Where a map comes from for the map tools (pex-map, pex-render-map): the MAP
+// messages of an LCM log, the next MAP on the bus, or a saved map file.
+#include <chrono>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <pex/polygon_map_t.hpp>
+
+namespace pex::map_files {
+
+struct LogMaps {
+  std::optional<pex::polygon_map_t> last;  // the last decodable MAP
+  std::vector<std::pair<double, double>> robot_path;  // each MAP's robot position, repeats dropped
+  long rejected = 0;                        // messages on the channel that did not decode
+};
+
+// Every message on `channel` of the LCM log at `path`. Throws std::runtime_error
+// if the log cannot be opened.
+LogMaps read_log_maps(const std::string& path, const std::string& channel);
+
+// The next message on `channel` of the bus at `lcm_url` ("" = LCM's default),
+// waiting at most `timeout`; nullopt if none came. Throws std::runtime_error if
+// LCM cannot be opened.
+std::optional<pex::polygon_map_t> next_bus_map(const std::string& lcm_url, const std::string& channel,
+                                                std::chrono::milliseconds timeout);
+
+}  // namespace pex::map_files
