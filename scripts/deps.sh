@@ -13,6 +13,9 @@ PEX_DEBS=(
   dpkg-dev file          # scripts/package.sh: cpack runs dpkg-shlibdeps (and file) for Depends
   strace                 # tests/systemd/sandbox_syscalls.sh: the units' syscall filters against the set
   systemd                # systemd-analyze: the units verified and scored in the tests
+  libcpp-httplib-dev nlohmann-json3-dev  # pex-viewer: its HTTP server (and the tests' client), JSON
+  chromium chromium-driver               # the viewer's browser tests: headless Chromium through WebDriver
+  socat                  # scripts/demo.sh: the viewer's page from the demo's network namespace to this computer's loopback
 )
 missing=()
 for p in "${PEX_DEBS[@]}"; do

@@ -212,6 +212,9 @@ TEST_P(BadConfig, HelpDescribesTheCommonOptions) {
 
 INSTANTIATE_TEST_SUITE_P(EveryDaemon, BadConfig, testing::ValuesIn(kAllDaemons),
                          [](const auto& info) { return info.param; });
+// pex-viewer is no daemon of the exploration set (nothing depends on it) but
+// reads its config the same way.
+INSTANTIATE_TEST_SUITE_P(Viewer, BadConfig, testing::Values("viewer"), [](const auto& info) { return info.param; });
 
 // The robot's base driver config names SocketCAN interface can0, which this
 // machine cannot have: the driver must refuse to start with EX_UNAVAILABLE (69)

@@ -1,0 +1,191 @@
+// pex-viewer in a real browser: the exploration set on two_rooms with the
+// viewer, the page opened in headless Chromium (chromedriver), and what the
+// page shows read from its DOM.
+//   - the map, the robot and the health table are there, and change as the
+//     mission goes on (the page is live, no reload);
+//   - "pause" pressed on the page stops the robot: EXPLORE_STATE says PAUSED
+//     and SIM_TRUTH stands still.
+// Every wait ends on a state (the page's DOM, the bus); the budgets are
+// simulated seconds. PEX_VIEWER_SCREENSHOT=FILE.png saves the page mid-mission.
+#include <cmath>
+#include <cstdlib>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <httplib.h>
+
+#include "exploration_set.hpp"
+#include "webdriver.hpp"
+
+namespace pex::testing {
+namespace {
+
+constexpr const char* kUrl = "http://127.0.0.1:8080/";
+
+// What the tests read from the page.
+constexpr const char* kPageFacts = R"(
+  const world = document.getElementById("world"), robot = document.getElementById("robot");
+  const rows = [...document.querySelectorAll("#health tbody tr")];
+  return {
+    map_version: Number(world.dataset.version), rings: Number(world.dataset.rings),
+    obstacles_d: document.getElementById("obstacles").getAttribute("d").length,
+    robot_visible: robot.getAttribute("visibility") === "visible",
+    robot_x: Number(robot.dataset.x), robot_y: Number(robot.dataset.y),
+    scan_d: document.getElementById("scan").getAttribute("d").length,
+    daemons: rows.map((r) => r.dataset.daemon), states: rows.map((r) => r.dataset.state),
+    phase: document.getElementById("phase").dataset.phase,
+    updates: Number(document.getElementById("updates").dataset.count)
+  };)";
+
+// The set with pex-viewer (on SIM_TRUTH, as the set's explorer) and a browser.
+class ViewerSet {
+ public:
+  explicit ViewerSet(const std::string& tag) : set_(tag, options()) {
+    const std::string config =
+        write_config(set_.dir(), "viewer", with_key(read_file(sim_config_of("viewer")), "pose_channel", "\"SIM_TRUTH\""));
+    viewer_ = start_daemon("viewer", set_.dir(), {}, config);
+    // The viewer is OK once it has a map and a pose; then the page has something to show.
+    ready_ = set_.spin_sim(
+        [&] {
+          const auto it = set_.bus().status().find("viewer");
+          return it != set_.bus().status().end() && it->second.state == pex::daemon_status_t::STATE_OK;
+        },
+        60.0);
+    if (ready_) {
+      browser_ = std::make_unique<Browser>(set_.dir());
+      browser_->open(kUrl);
+    }
+  }
+  ~ViewerSet() {
+    browser_.reset();
+    if (viewer_) viewer_->stop();
+  }
+
+  static SetOptions options() {
+    SetOptions o;
+    o.speed = 2.0;
+    return o;
+  }
+  ExplorationSet& set() { return set_; }
+  Browser& browser() { return *browser_; }
+  bool ready() const { return ready_; }
+  nlohmann::json page() { return browser_->run(kPageFacts); }
+  // Spins the bus until the page shows `done` or `sim_s` simulated seconds passed.
+  bool wait_page(const std::function<bool(const nlohmann::json&)>& done, double sim_s) {
+    nlohmann::json facts;
+    return set_.spin_sim(
+        [&] {
+          set_.bus().spin_for(std::chrono::milliseconds(100));
+          facts = page();
+          return done(facts);
+        },
+        sim_s);
+  }
+  std::string report() {
+    std::string r = set_.report_with_logs();
+    if (viewer_) r += "--- pex-viewer\n" + viewer_->output();
+    if (browser_) r += "--- page: " + page().dump() + "\n";
+    return r;
+  }
+
+ private:
+  ExplorationSet set_;
+  std::unique_ptr<Process> viewer_;
+  std::unique_ptr<Browser> browser_;
+  bool ready_ = false;
+};
+
+bool shows_every_daemon(const nlohmann::json& page) {
+  const std::set<std::string> names(page["daemons"].begin(), page["daemons"].end());
+  for (const char* d : {"sim", "lidar_reader", "base_driver", "polygon_mapper", "explorer", "viewer"})
+    if (!names.count(d)) return false;
+  return true;
+}
+
+TEST(Viewer, PageShowsTheMapTheRobotAndTheHealthTableLive) {
+  std::string why;
+  ASSERT_TRUE(in_private_netns(&why)) << why;
+  ViewerSet v("viewer-live");
+  ASSERT_TRUE(v.ready()) << v.report();
+
+  // The page fills in: map rings with obstacle edges, the robot, the scan, a row per daemon.
+  ASSERT_TRUE(v.wait_page(
+      [](const nlohmann::json& p) {
+        return p["rings"] > 0 && p["obstacles_d"] > 0 && p["robot_visible"] == true && p["scan_d"] > 0 &&
+               shows_every_daemon(p);
+      },
+      60.0))
+      << v.report();
+  const auto first = v.page();
+
+  // And follows the mission without a reload: the robot moves on the page, the map grows.
+  ASSERT_TRUE(v.wait_page(
+      [&](const nlohmann::json& p) {
+        return std::hypot(p["robot_x"].get<double>() - first["robot_x"].get<double>(),
+                          p["robot_y"].get<double>() - first["robot_y"].get<double>()) > 0.5 &&
+               p["map_version"] > first["map_version"];
+      },
+      60.0))
+      << v.report();
+  const auto later = v.page();
+  EXPECT_GT(later["updates"], first["updates"]);
+  // The robot on the page is where the simulator has it (the page lags by its update period).
+  ASSERT_TRUE(v.set().truth());
+  EXPECT_LT(std::hypot(later["robot_x"].get<double>() - v.set().truth()->x,
+                       later["robot_y"].get<double>() - v.set().truth()->y),
+            0.5)
+      << later.dump();
+  for (std::size_t i = 0; i < later["daemons"].size(); ++i)
+    EXPECT_EQ(later["states"][i], "OK") << later["daemons"][i] << "\n" << v.report();
+
+  // /api/state serves the same state as JSON.
+  httplib::Client http("127.0.0.1", 8080);
+  const auto res = http.Get("/api/state");
+  ASSERT_TRUE(res && res->status == 200);
+  const auto state = nlohmann::json::parse(res->body);
+  EXPECT_GT(state["map"]["rings"].size(), 0u);
+  EXPECT_FALSE(state["pose"].is_null());
+  EXPECT_GE(state["daemons"].size(), 6u);
+
+  if (const char* shot = std::getenv("PEX_VIEWER_SCREENSHOT")) write_file(shot, v.browser().screenshot_png());
+  v.set().stop_all();
+}
+
+TEST(Viewer, PauseOnThePageStopsTheRobot) {
+  std::string why;
+  ASSERT_TRUE(in_private_netns(&why)) << why;
+  ViewerSet v("viewer-pause");
+  ASSERT_TRUE(v.ready()) << v.report();
+  auto& m = v.set();
+
+  // Under way: the page is live and the robot has left its start.
+  ASSERT_TRUE(v.wait_page([](const nlohmann::json& p) { return p["phase"] == "MOVING" && p["robot_visible"] == true; },
+                          60.0))
+      << v.report();
+  ASSERT_TRUE(m.spin_sim(
+      [&] {
+        return m.truth() && m.first_truth() &&
+               std::hypot(m.truth()->x - m.first_truth()->x, m.truth()->y - m.first_truth()->y) > 0.3;
+      },
+      60.0))
+      << v.report();
+  ASSERT_NE(m.phase(), +pex::explore_state_t::PHASE_PAUSED);
+
+  v.browser().click("#btn-pause");
+  ASSERT_TRUE(m.spin_sim([&] { return m.phase() == pex::explore_state_t::PHASE_PAUSED; }, 20.0)) << v.report();
+  m.spin_sim([] { return false; }, 2.0);  // the base comes to rest
+  ASSERT_TRUE(m.truth());
+  const pex::pose_t paused_at = *m.truth();
+  m.spin_sim([] { return false; }, 5.0);
+  EXPECT_EQ(m.phase(), +pex::explore_state_t::PHASE_PAUSED);
+  EXPECT_LT(std::hypot(m.truth()->x - paused_at.x, m.truth()->y - paused_at.y), 0.02) << m.report();
+  EXPECT_LT(std::abs(m.truth()->theta - paused_at.theta), 0.01) << m.report();
+  // The page says so too.
+  EXPECT_TRUE(v.wait_page([](const nlohmann::json& p) { return p["phase"] == "PAUSED"; }, 10.0)) << v.report();
+  const auto viewer = m.bus().status().at("viewer");
+  EXPECT_EQ(counter_of(viewer, "mission_commands_sent"), 1);
+  m.stop_all();
+}
+
+}  // namespace
+}  // namespace pex::testing
