@@ -40,6 +40,16 @@ for d in lidar_reader base_driver slam polygon_mapper; do
   "$BIN/pex-${d//_/-}" --config "config/$d.toml" 2>"$OUT/$d.log" & pids+=($!)
 done
 "$BIN/pex-explorer" --config "$explorer_config" 2>"$OUT/explorer.log" & pids+=($!)
+# The live view: pex-viewer on this namespace's loopback, and its page handed
+# to demo.sh's relay on this computer's loopback through a Unix socket in $OUT
+# (a file, so it crosses the namespace; no network does).
+"$BIN/pex-viewer" --config config/viewer.toml 2>"$OUT/viewer.log" & pids+=($!)
+viewer_port=$(sed -n 's/^port *= *\([0-9]*\).*/\1/p' config/viewer.toml)
+if command -v socat >/dev/null; then
+  socat "UNIX-LISTEN:$OUT/viewer.sock,fork,unlink-early" "TCP:127.0.0.1:${viewer_port:-8080}" 2>/dev/null & pids+=($!)
+fi
+url=${VIEWER_URL:-"http://127.0.0.1:${viewer_port:-8080}/ (in this network namespace)"}
+echo "demo: live view at $url"
 echo "demo: exploring worlds/$WORLD.wkt with the whole set (sim x$SPEED, lidar_reader, base_driver, slam,"
 echo "      polygon_mapper, explorer) for at most ${MISSION_S} s of mission time; logs in $OUT/, record in $OUT/demo.lcm"
 result=0

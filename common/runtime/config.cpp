@@ -1,5 +1,7 @@
 #include "runtime/config.hpp"
 
+#include "runtime/channels.hpp"
+
 #include <toml++/toml.h>
 
 #include <cmath>
@@ -24,6 +26,14 @@ Constraint<std::string> one_of(std::vector<std::string> allowed) {
     std::string text = "must be one of";
     for (const auto& a : allowed) text += " \"" + a + "\"";
     return text;
+  };
+}
+
+Constraint<std::string> registered_channel_of_type(std::string type, std::string names) {
+  return [type, names](const std::string& name) -> std::optional<std::string> {
+    const auto* info = channels::find(name);
+    if (info && info->type == type) return std::nullopt;
+    return "must be a registered channel of type " + type + " (" + names + ")";
   };
 }
 

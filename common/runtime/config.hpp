@@ -47,6 +47,9 @@ Constraint<T> in_range(T lo, T hi) {
   };
 }
 Constraint<std::string> one_of(std::vector<std::string> allowed);
+// The name of a channel in the registry (runtime/channels.hpp) whose type is
+// `type` ("pex.pose_t"); `names` (e.g. "SLAM_POSE or SIM_TRUTH") go into the error text.
+Constraint<std::string> registered_channel_of_type(std::string type, std::string names);
 
 class ConfigReader {
  public:

@@ -83,6 +83,15 @@ TEST(ConfigReader, ConstraintViolationNamesKeyAndValue) {
               AllOf(HasSubstr("'a.x_m'"), HasSubstr("3")));
 }
 
+TEST(ConfigReader, RegisteredChannelOfTypeTakesOnlyChannelsOfThatType) {
+  ConfigReader c = ConfigReader::from_string("a = \"SIM_TRUTH\"\nb = \"MAP\"\nc = \"NO_SUCH\"\n", "p.toml");
+  const auto pose = pex::runtime::registered_channel_of_type("pex.pose_t", "SLAM_POSE or SIM_TRUTH");
+  EXPECT_EQ(c.get<std::string>("a", "SLAM_POSE", pose), "SIM_TRUTH");
+  EXPECT_THAT(error_of([&] { c.get<std::string>("b", "SLAM_POSE", pose); }),
+              AllOf(HasSubstr("'b'"), HasSubstr("\"MAP\""), HasSubstr("pex.pose_t (SLAM_POSE or SIM_TRUTH)")));
+  EXPECT_THAT(error_of([&] { c.get<std::string>("c", "SLAM_POSE", pose); }), HasSubstr("\"NO_SUCH\""));
+}
+
 TEST(ConfigReader, RejectsNonFiniteNumbers) {
   ConfigReader c = ConfigReader::from_string("x_m = nan\n", "n.toml");
   EXPECT_THAT(error_of([&] { c.get<double>("x_m", 0.0); }), HasSubstr("finite"));

@@ -3,7 +3,6 @@
 #include <cstdint>
 #include <optional>
 
-#include "runtime/channels.hpp"
 #include "runtime/config.hpp"
 
 namespace pex::explorer {
@@ -26,11 +25,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   auto& follower = m.follower;
 
   o.pose_channel = config.get<std::string>(
-      "pose_channel", o.pose_channel, [](const std::string& name) -> std::optional<std::string> {
-        const auto* info = runtime::channels::find(name);
-        if (info && info->type == "pex.pose_t") return std::nullopt;
-        return "must be a registered channel of type pex.pose_t (SLAM_POSE or SIM_TRUTH)";
-      });
+      "pose_channel", o.pose_channel, runtime::registered_channel_of_type("pex.pose_t", "SLAM_POSE or SIM_TRUTH"));
   o.cmd_rate_hz = config.get<double>("cmd_rate_hz", o.cmd_rate_hz, in_range(1.0, 100.0));
   o.state_rate_hz = config.get<double>("state_rate_hz", o.state_rate_hz, in_range(0.1, 100.0));
   o.checkpoint_file = config.get_path("checkpoint_file", o.checkpoint_file, /*must_exist=*/false);

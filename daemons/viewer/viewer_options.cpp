@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <optional>
 
-#include "runtime/channels.hpp"
 #include "runtime/config.hpp"
 
 namespace pex::viewer {
@@ -24,11 +23,7 @@ ViewerOptions load_options(runtime::ConfigReader& config) {
   o.port = config.get<int>("port", o.port, in_range(1, 65535));
   o.update_rate_hz = config.get<double>("update_rate_hz", o.update_rate_hz, in_range(5.0, 50.0));
   o.pose_channel = config.get<std::string>(
-      "pose_channel", o.pose_channel, [](const std::string& name) -> std::optional<std::string> {
-        const auto* info = runtime::channels::find(name);
-        if (info && info->type == "pex.pose_t") return std::nullopt;
-        return "must be a registered channel of type pex.pose_t (SLAM_POSE or SIM_TRUTH)";
-      });
+      "pose_channel", o.pose_channel, runtime::registered_channel_of_type("pex.pose_t", "SLAM_POSE or SIM_TRUTH"));
   o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, in_range(0.1, 600.0));
   o.max_clients = config.get<int>("max_clients", o.max_clients, in_range(1, 64));
   auto& s = o.state;

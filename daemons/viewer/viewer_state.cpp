@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "map_files.hpp"
+
 namespace pex::viewer {
 
 namespace {
@@ -38,27 +40,14 @@ const char* daemon_state_name(int state) {
 ViewerState::ViewerState(ViewerStateOptions options) : options_(options) {}
 
 std::string ViewerState::on_map(const pex::polygon_map_t& map) {
-  if (map.nrings < 0 || static_cast<std::size_t>(map.nrings) != map.rings.size())
-    return "MAP: nrings " + std::to_string(map.nrings) + " but " + std::to_string(map.rings.size()) + " rings";
+  if (auto why = map_files::check_map(map); !why.empty()) return why;
   std::int64_t vertices = 0;
-  for (std::size_t r = 0; r < map.rings.size(); ++r) {
-    const auto& ring = map.rings[r];
-    const auto n = static_cast<std::size_t>(std::max(ring.nvertices, 0));
-    if (ring.nvertices < 3 || ring.x.size() != n || ring.y.size() != n || ring.edge_type.size() != n)
-      return "MAP: ring " + std::to_string(r) + ": nvertices " + std::to_string(ring.nvertices) +
-             " disagrees with its arrays or is below 3";
-    if (ring.polygon < 0) return "MAP: ring " + std::to_string(r) + ": negative polygon index";
-    vertices += ring.nvertices;
-    if (vertices > options_.max_map_vertices)
-      return "MAP: more than " + std::to_string(options_.max_map_vertices) + " vertices";
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!plausible(ring.x[i]) || !plausible(ring.y[i]))
-        return "MAP: ring " + std::to_string(r) + ": non-finite or absurd vertex " + std::to_string(i);
-      if (ring.edge_type[i] != pex::polygon_ring_t::EDGE_OBSTACLE &&
-          ring.edge_type[i] != pex::polygon_ring_t::EDGE_FRONTIER)
-        return "MAP: ring " + std::to_string(r) + ": unknown edge type " + std::to_string(ring.edge_type[i]);
-    }
-  }
+  for (const auto& ring : map.rings) vertices += ring.nvertices;
+  if (vertices > options_.max_map_vertices)
+    return std::to_string(vertices) + " vertices, more than " + std::to_string(options_.max_map_vertices);
+  for (const auto& ring : map.rings)
+    for (std::size_t i = 0; i < ring.x.size(); ++i)
+      if (!plausible(ring.x[i]) || !plausible(ring.y[i])) return "a vertex 1000 km or more away";
   map_ = map;
   ++map_version_;
   ++maps_;
@@ -66,7 +55,7 @@ std::string ViewerState::on_map(const pex::polygon_map_t& map) {
 }
 
 std::string ViewerState::on_pose(const pex::pose_t& pose) {
-  if (!plausible(pose.x) || !plausible(pose.y) || !finite(pose.theta)) return "pose: non-finite or absurd";
+  if (!plausible(pose.x) || !plausible(pose.y) || !finite(pose.theta)) return "non-finite or absurd";
   pose_ = pose;
   ++poses_;
   if (trajectory_.empty() || std::hypot(pose.x - trajectory_.back().first, pose.y - trajectory_.back().second) >=
@@ -85,12 +74,12 @@ std::string ViewerState::on_pose(const pex::pose_t& pose) {
 
 std::string ViewerState::on_scan(const pex::laser_scan_t& scan) {
   if (scan.nranges < 0 || static_cast<std::size_t>(scan.nranges) != scan.ranges.size())
-    return "LIDAR_SCAN: nranges " + std::to_string(scan.nranges) + " but " + std::to_string(scan.ranges.size()) +
+    return "nranges " + std::to_string(scan.nranges) + " but " + std::to_string(scan.ranges.size()) +
            " ranges";
   if (!finite(scan.angle_min) || !finite(scan.angle_increment) || !finite(scan.range_min) ||
       !finite(scan.range_max) || !finite(scan.sensor_x) || !finite(scan.sensor_y) || !finite(scan.sensor_theta))
-    return "LIDAR_SCAN: non-finite angles, limits or sensor pose";
-  if (!pose_) return "LIDAR_SCAN: no pose yet to draw it from";
+    return "non-finite angles, limits or sensor pose";
+  if (!pose_) return {};  // nothing to draw it from yet: not the scan's fault
   const double c = std::cos(pose_->theta), s = std::sin(pose_->theta);
   const double sx = pose_->x + c * scan.sensor_x - s * scan.sensor_y;
   const double sy = pose_->y + s * scan.sensor_x + c * scan.sensor_y;
@@ -113,17 +102,17 @@ std::string ViewerState::on_explore_state(const pex::explore_state_t& state) {
   const auto npath = static_cast<std::size_t>(std::max(state.npath, 0));
   const auto nfrontiers = static_cast<std::size_t>(std::max(state.nfrontiers, 0));
   if (state.npath < 0 || state.path_x.size() != npath || state.path_y.size() != npath)
-    return "EXPLORE_STATE: npath disagrees with its arrays";
+    return "npath disagrees with its arrays";
   if (state.nfrontiers < 0 || state.frontier_x.size() != nfrontiers || state.frontier_y.size() != nfrontiers ||
       state.frontier_reason.size() != nfrontiers)
-    return "EXPLORE_STATE: nfrontiers disagrees with its arrays";
+    return "nfrontiers disagrees with its arrays";
   for (std::size_t i = 0; i < npath; ++i)
-    if (!plausible(state.path_x[i]) || !plausible(state.path_y[i])) return "EXPLORE_STATE: non-finite path";
+    if (!plausible(state.path_x[i]) || !plausible(state.path_y[i])) return "non-finite path";
   for (std::size_t i = 0; i < nfrontiers; ++i)
     if (!plausible(state.frontier_x[i]) || !plausible(state.frontier_y[i]))
-      return "EXPLORE_STATE: non-finite frontier";
+      return "non-finite frontier";
   if (state.has_goal && (!plausible(state.goal_x) || !plausible(state.goal_y)))
-    return "EXPLORE_STATE: non-finite goal";
+    return "non-finite goal";
   mission_ = state;
   ++states_;
   return {};
@@ -132,8 +121,8 @@ std::string ViewerState::on_explore_state(const pex::explore_state_t& state) {
 std::string ViewerState::on_status(const pex::daemon_status_t& status, std::int64_t received_utime) {
   const auto n = static_cast<std::size_t>(std::max(status.ncounters, 0));
   if (status.ncounters < 0 || status.counter_names.size() != n || status.counter_values.size() != n)
-    return "DAEMON_STATUS: ncounters disagrees with its arrays";
-  if (status.name.empty() || status.name.size() > 64) return "DAEMON_STATUS: empty or overlong name";
+    return "ncounters disagrees with its arrays";
+  if (status.name.empty() || status.name.size() > 64) return "empty or overlong name";
   statuses_[status.name] = {status, received_utime};
   ++statuses_heard_;
   return {};

@@ -40,10 +40,11 @@ class ViewerState {
  public:
   explicit ViewerState(ViewerStateOptions options = {});
 
-  // "" when taken, else why the message is refused (nothing changed).
+  // "" when taken, else why the message is refused (nothing changed); the
+  // daemon's log line names the channel.
   std::string on_map(const pex::polygon_map_t& map);
   std::string on_pose(const pex::pose_t& pose);
-  // The scan is drawn from the newest pose (refused before the first).
+  // The scan is drawn from the newest pose (ignored before the first).
   std::string on_scan(const pex::laser_scan_t& scan);
   std::string on_explore_state(const pex::explore_state_t& state);
   // `received_utime`: when the viewer heard it, on the clock later passed to live_json().

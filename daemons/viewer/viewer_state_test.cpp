@@ -102,7 +102,8 @@ TEST(ViewerState, ScanPointsAreInTheMapFrameFromTheNewestPose) {
   scan.sensor_x = 0.1f;
   scan.ranges = {1.0f, 2.0f, 50.0f};  // ahead, left, no return
   scan.nranges = 3;
-  EXPECT_NE(s.on_scan(scan), "");  // no pose yet
+  EXPECT_EQ(s.on_scan(scan), "");  // no pose yet: nothing to draw, nothing wrong
+  EXPECT_TRUE(s.live_json(0)["scan"].is_null());
   ASSERT_EQ(s.on_pose(pose(1.0, 2.0, M_PI / 2)), "");
   ASSERT_EQ(s.on_scan(scan), "");
   const auto points = s.live_json(0)["scan"]["points"];
