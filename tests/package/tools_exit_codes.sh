@@ -26,7 +26,10 @@ for t in $tools; do
     pex-render-map)
       expect 66 "$t: no such log" "$bin/$t" --log "$tmp/none.lcm" --png "$tmp/x.png"
       expect 73 "$t: PNG into a missing folder" "$bin/$t" --log "$tmp/empty.lcm" --png /no/such/dir/x.png
-      expect 73 "$t: SVG into a missing folder" "$bin/$t" --log "$tmp/empty.lcm" --svg /no/such/dir/x.svg ;;
+      expect 73 "$t: SVG into a missing folder" "$bin/$t" --log "$tmp/empty.lcm" --svg /no/such/dir/x.svg
+      expect 66 "$t: no such map file" "$bin/$t" --map "$tmp/none.geojson" --png "$tmp/x.png"
+      expect 65 "$t: a map file that is not one" "$bin/$t" --map "$tmp/tiny.clf" --png "$tmp/x.png"
+      expect 64 "$t: a log and a map file" "$bin/$t" --log "$tmp/empty.lcm" --map "$tmp/tiny.clf" --png "$tmp/x.png" ;;
     pex-carmen2lcm)
       expect 66 "$t: no such log" "$bin/$t" "$tmp/none.clf" "$tmp/out.lcm"
       expect 73 "$t: output into a missing folder" "$bin/$t" "$tmp/tiny.clf" /no/such/dir/x.lcm ;;

@@ -33,17 +33,14 @@ struct Source {
 // Prints why and returns the exit code when the map cannot be had.
 int load(const Source& src, pex::polygon_map_t& out) {
   if (!src.map_file.empty()) {
-    std::string why;
-    const auto text = pex::runtime::read_whole_file(src.map_file, &why);
-    if (!text) {
-      std::fprintf(stderr, "pex-map: cannot read %s: %s\n", src.map_file.c_str(), why.c_str());
-      return EX_NOINPUT;
-    }
     try {
-      out = pex::map_files::from_geojson(*text);
+      out = pex::map_files::read_map_file(src.map_file);
     } catch (const pex::map_files::MapFileError& e) {
-      std::fprintf(stderr, "pex-map: %s: %s\n", src.map_file.c_str(), e.what());
+      std::fprintf(stderr, "pex-map: %s\n", e.what());
       return EX_DATAERR;
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "pex-map: %s\n", e.what());
+      return EX_NOINPUT;
     }
     return 0;
   }

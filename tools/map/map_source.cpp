@@ -4,6 +4,9 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "map_files.hpp"
+#include "runtime/files.hpp"
+
 namespace pex::map_files {
 
 LogMaps read_log_maps(const std::string& path, const std::string& channel) {
@@ -45,6 +48,17 @@ std::optional<pex::polygon_map_t> next_bus_map(const std::string& lcm_url, const
   }
   lcm.unsubscribe(sub);
   return got;
+}
+
+pex::polygon_map_t read_map_file(const std::string& path) {
+  std::string why;
+  const auto text = runtime::read_whole_file(path, &why);
+  if (!text) throw std::runtime_error("cannot read " + path + ": " + why);
+  try {
+    return from_geojson(*text);
+  } catch (const MapFileError& e) {
+    throw MapFileError(path + ": " + e.what());
+  }
 }
 
 }  // namespace pex::map_files

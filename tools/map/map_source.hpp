@@ -27,4 +27,9 @@ LogMaps read_log_maps(const std::string& path, const std::string& channel);
 std::optional<pex::polygon_map_t> next_bus_map(const std::string& lcm_url, const std::string& channel,
                                                 std::chrono::milliseconds timeout);
 
+// A saved map file (GeoJSON, map_files.hpp). Throws MapFileError for bad
+// content (exit 65 in the tools), std::runtime_error naming the file and why
+// if it cannot be read (exit 66).
+pex::polygon_map_t read_map_file(const std::string& path);
+
 }  // namespace pex::map_files

@@ -1,6 +1,8 @@
 // pex-render-map --log IN.lcm [--channel MAP] --svg OUT.svg --png OUT.png
-// Draws the last MAP message of an LCM log (free space filled, obstacle edges
-// black, frontier edges orange) with the robot path from every MAP's pose.
+// pex-render-map --map IN.geojson --svg OUT.svg --png OUT.png
+// Draws the last MAP message of an LCM log, or a saved map file (pex-map save),
+// free space filled, obstacle edges black, frontier edges orange, with the
+// robot path from every MAP's pose (a map file: its one pose).
 #include <unistd.h>
 
 #include <cstdio>
@@ -14,17 +16,19 @@
 #endif
 
 #include <CLI/CLI.hpp>
-#include <lcm/lcm-cpp.hpp>
 #include <pex/polygon_map_t.hpp>
 
+#include "map_files.hpp"
+#include "map_source.hpp"
 #include "render.hpp"
 #include "runtime/channels.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"Render the last MAP of an LCM log to SVG and/or PNG"};
-  std::string log_path, channel{pex::runtime::channels::kMap}, svg_path, png_path;
+  CLI::App app{"Render the last MAP of an LCM log, or a saved map file, to SVG and/or PNG"};
+  std::string log_path, map_path, channel{pex::runtime::channels::kMap}, svg_path, png_path;
   pex::render_map::RenderOptions options;
-  app.add_option("--log", log_path, "LCM log to read")->required();
+  auto* log_option = app.add_option("--log", log_path, "LCM log to read");
+  app.add_option("--map", map_path, "saved map file to read (GeoJSON, from pex-map save)")->excludes(log_option);
   app.add_option("--channel", channel, "channel of the pex.polygon_map_t messages");
   app.add_option("--svg", svg_path, "SVG output");
   app.add_option("--png", png_path, "PNG output");
@@ -39,10 +43,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-render-map: give --svg and/or --png\n");
     return EX_USAGE;
   }
-  lcm::LogFile log(log_path, "r");
-  if (!log.good()) {
-    std::fprintf(stderr, "pex-render-map: cannot read %s\n", log_path.c_str());
-    return EX_NOINPUT;
+  if (log_path.empty() == map_path.empty()) {
+    std::fprintf(stderr, "pex-render-map: give --log or --map\n");
+    return EX_USAGE;
   }
   // An output that cannot be written (no such folder, full disk) is exit 73, never "rendered";
   // a folder that is not there or not writable is found before the log is read.
@@ -56,25 +59,35 @@ int main(int argc, char** argv) {
     if (::access(folder.empty() ? "." : folder.c_str(), W_OK) != 0) return cannot_write(out);
   }
   pex::polygon_map_t last{};
-  bool found = false;
-  long rejected = 0;
   pex::render_map::Path path;
-  for (const lcm::LogEvent* event = log.readNextEvent(); event; event = log.readNextEvent()) {
-    if (event->channel != channel) continue;
-    pex::polygon_map_t msg;
-    if (msg.decode(event->data, 0, event->datalen) != event->datalen) {
-      ++rejected;
-      continue;
+  long rejected = 0;
+  if (!map_path.empty()) {
+    try {
+      last = pex::map_files::read_map_file(map_path);
+    } catch (const pex::map_files::MapFileError& e) {
+      std::fprintf(stderr, "pex-render-map: %s\n", e.what());
+      return EX_DATAERR;
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "pex-render-map: %s\n", e.what());
+      return EX_NOINPUT;
     }
-    if (path.empty() || path.back() != std::make_pair(msg.robot_x, msg.robot_y))
-      path.emplace_back(msg.robot_x, msg.robot_y);
-    last = std::move(msg);
-    found = true;
-  }
-  if (!found) {
-    std::fprintf(stderr, "pex-render-map: no decodable %s message in %s (%ld rejected)\n", channel.c_str(),
-                 log_path.c_str(), rejected);
-    return EX_DATAERR;
+    path.emplace_back(last.robot_x, last.robot_y);
+  } else {
+    pex::map_files::LogMaps maps;
+    try {
+      maps = pex::map_files::read_log_maps(log_path, channel);
+    } catch (const std::runtime_error&) {
+      std::fprintf(stderr, "pex-render-map: cannot read %s\n", log_path.c_str());
+      return EX_NOINPUT;
+    }
+    rejected = maps.rejected;
+    if (!maps.last) {
+      std::fprintf(stderr, "pex-render-map: no decodable %s message in %s (%ld rejected)\n", channel.c_str(),
+                   log_path.c_str(), rejected);
+      return EX_DATAERR;
+    }
+    last = std::move(*maps.last);
+    path = std::move(maps.robot_path);
   }
   if (!svg_path.empty()) {
     std::ofstream svg(svg_path);

@@ -1,0 +1,78 @@
+// pex-map and pex-render-map as programs, on a real LCM bus in a private
+// network namespace: the map saved from the bus and from a log reads back
+// into the identical map, its PGM export is the grid of the same map, and
+// pex-render-map draws a saved map file.
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include "harness.hpp"
+#include "map_files.hpp"
+#include "test_maps.hpp"
+
+namespace pex::map_files {
+namespace {
+
+using namespace std::chrono_literals;
+using pex::testing::bin_path;
+using pex::testing::kTestLcmUrl;
+using pex::testing::read_file;
+using pex::testing::run_to_completion;
+
+TEST(MapTool, SaveFromTheBusReadsBackIntoTheIdenticalMap) {
+  std::string why;
+  ASSERT_TRUE(pex::testing::in_private_netns(&why)) << why;
+  const std::string dir = pex::testing::make_temp_dir("map-tool-bus");
+  pex::testing::Process save({bin_path("pex-map"), "save", dir + "/bus.geojson", "--lcm-url", kTestLcmUrl,
+                              "--timeout-s", "30"},
+                             dir + "/save.log");
+  // The mapper's part: MAP again and again until pex-map has taken one.
+  lcm::LCM lcm(kTestLcmUrl);
+  ASSERT_TRUE(lcm.good());
+  const auto map = two_rooms_map();
+  int exit_code = -2;
+  for (int i = 0; i < 600 && exit_code == -2; ++i) {
+    lcm.publish("MAP", &map);
+    if (const int rc = save.wait(50ms); rc != -1) exit_code = rc;
+  }
+  ASSERT_EQ(exit_code, 0) << save.output();
+  EXPECT_EQ(encoded(from_geojson(read_file(dir + "/bus.geojson"))), encoded(map));
+
+  // The saved file exported and drawn.
+  auto r = run_to_completion({bin_path("pex-map"), "export", "--map", dir + "/bus.geojson", "--pgm",
+                              dir + "/bus.pgm", "--resolution-m", "0.1", "--margin-m", "0.5"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto grid = from_pgm(read_file(dir + "/bus.pgm"));
+  EXPECT_EQ(grid.cells, rasterise(map, 0.1, 0.5).cells);
+  EXPECT_NE(read_file(dir + "/bus.yaml").find("image: bus.pgm"), std::string::npos);
+  r = run_to_completion({bin_path("pex-render-map"), "--map", dir + "/bus.geojson", "--png", dir + "/bus.png"});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("rendered 4 rings, 23 vertices"), std::string::npos) << r.output;
+}
+
+TEST(MapTool, SaveFromALogTakesItsLastMap) {
+  const std::string dir = pex::testing::make_temp_dir("map-tool-log");
+  auto older = two_rooms_map();  // one ring fewer
+  older.rings.pop_back();
+  older.nrings = 3;
+  auto last = two_rooms_map();
+  {
+    lcm::LogFile log(dir + "/run.lcm", "w");
+    ASSERT_TRUE(log.good());
+    std::int64_t t = 1'000'000;
+    for (const pex::polygon_map_t* m : {&older, &last}) {
+      std::vector<std::uint8_t> bytes = encoded(*m);
+      lcm::LogEvent event{};
+      event.timestamp = t += 1'000'000;
+      event.channel = "MAP";
+      event.datalen = static_cast<int32_t>(bytes.size());
+      event.data = bytes.data();
+      ASSERT_EQ(log.writeEvent(&event), 0);
+    }
+  }
+  const auto r = run_to_completion({bin_path("pex-map"), "save", dir + "/log.geojson", "--log", dir + "/run.lcm"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(encoded(from_geojson(read_file(dir + "/log.geojson"))), encoded(last));
+}
+
+}  // namespace
+}  // namespace pex::map_files
