@@ -27,7 +27,13 @@ WebServer::WebServer(WebServerOptions options, std::string page)
   if (!server_->bind_to_port(options_.bind_address, options_.port))
     throw std::runtime_error("cannot listen on " + options_.bind_address + ":" + std::to_string(options_.port) +
                              " (in use, or not an address of this computer)");
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  thread_ = std::thread([this] {
+    server_->listen_after_bind();
+    loop_ended_ = true;
+  });
+  // stop() before the loop runs would be lost (httplib stops only a running
+  // server) and the destructor would wait for ever: wait until it runs.
+  while (!server_->is_running() && !loop_ended_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
 }
 
 WebServer::~WebServer() {

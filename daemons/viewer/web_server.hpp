@@ -8,6 +8,7 @@
 // only copy strings out under a lock and queue commands, which the daemon's
 // thread takes from command_fd() (a pipe it polls), so every LCM call stays on
 // the daemon's thread.
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -66,6 +67,7 @@ class WebServer {
   std::string page_;
   std::unique_ptr<httplib::Server> server_;
   std::thread thread_;
+  std::atomic<bool> loop_ended_{false};  // the server's loop has returned
   int pipe_[2] = {-1, -1};
   mutable std::mutex mutex_;
   std::condition_variable changed_;

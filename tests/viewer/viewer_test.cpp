@@ -4,12 +4,19 @@
 //   - the map, the robot and the health table are there, and change as the
 //     mission goes on (the page is live, no reload);
 //   - "pause" pressed on the page stops the robot: EXPLORE_STATE says PAUSED
-//     and SIM_TRUTH stands still.
+//     and SIM_TRUTH stands still;
+//   - and without a browser or a simulator: /api/state, /events, the mission
+//     commands, bad input refused and counted with the last good map kept,
+//     pages beyond max_clients refused.
 // Every wait ends on a state (the page's DOM, the bus); the budgets are
 // simulated seconds. PEX_VIEWER_SCREENSHOT=FILE.png saves the page mid-mission.
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <set>
+#include <thread>
+
+#include <pex/mission_cmd_t.hpp>
 
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -185,6 +192,99 @@ TEST(Viewer, PauseOnThePageStopsTheRobot) {
   const auto viewer = m.bus().status().at("viewer");
   EXPECT_EQ(counter_of(viewer, "mission_commands_sent"), 1);
   m.stop_all();
+}
+
+pex::polygon_map_t square_map(double side_m) {
+  pex::polygon_map_t m{};
+  pex::polygon_ring_t r{};
+  r.x = {0.0, side_m, side_m, 0.0};
+  r.y = {0.0, 0.0, side_m, side_m};
+  r.edge_type = {0, 1, 0, 0};
+  r.nvertices = 4;
+  m.rings = {r};
+  m.nrings = 1;
+  m.vertex_count = 4;
+  return m;
+}
+
+TEST(ViewerHttp, StateEventsCommandsAndBadInput) {
+  std::string why;
+  ASSERT_TRUE(in_private_netns(&why)) << why;
+  const std::string dir = make_temp_dir("viewer-http");
+  std::string text = with_key(read_file(sim_config_of("viewer")), "pose_channel", "\"SIM_TRUTH\"");
+  text = with_key(text, "max_clients", "1");
+  auto viewer = start_daemon("viewer", dir, {}, write_config(dir, "viewer", text));
+  Bus bus;
+  std::vector<pex::mission_cmd_t> commands;
+  bus.on<pex::mission_cmd_t>("MISSION_CMD", [&](const pex::mission_cmd_t& c) { commands.push_back(c); });
+  const auto viewer_status = [&]() -> const pex::daemon_status_t* {
+    const auto it = bus.status().find("viewer");
+    return it == bus.status().end() ? nullptr : &it->second;
+  };
+  ASSERT_TRUE(bus.spin_until([&] { return viewer_status() != nullptr; }, 20s)) << viewer->output();
+  httplib::Client http("127.0.0.1", 8080);
+  const auto state = [&] {
+    const auto res = http.Get("/api/state");
+    return res && res->status == 200 ? nlohmann::json::parse(res->body) : nlohmann::json();
+  };
+
+  // A map: /api/state has it.
+  const auto good = square_map(3.0);
+  ASSERT_TRUE(bus.spin_until(
+      [&] {
+        bus.publish("MAP", good);
+        bus.spin_for(100ms);
+        return state()["map"]["rings"].size() == 1u;
+      },
+      20s))
+      << viewer->output();
+  // Bad input: bytes that are no message, a map with a NaN. Both refused and counted, the map kept.
+  const std::int64_t rejected_before = viewer_status()->msgs_rejected;
+  const char junk[] = "not a polygon_map_t";
+  bus.lcm().publish("MAP", junk, sizeof junk);
+  auto bad = square_map(5.0);
+  bad.rings[0].x[2] = std::nan("");
+  bus.publish("MAP", bad);
+  ASSERT_TRUE(bus.spin_until([&] { return viewer_status()->msgs_rejected >= rejected_before + 2; }, 20s))
+      << viewer->output();
+  const auto kept = state();
+  EXPECT_EQ(kept["map"]["rings"][0]["x"], nlohmann::json({0.0, 3.0, 3.0, 0.0})) << kept["map"].dump();
+  EXPECT_EQ(kept["map"]["rings"][0]["edge_type"], nlohmann::json({0, 1, 0, 0}));
+  EXPECT_TRUE(viewer->running());
+
+  // The page's buttons: MISSION_CMD as pex-mission sends it; unknown commands refused.
+  auto res = http.Post("/api/mission/pause");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 202);
+  ASSERT_TRUE(bus.spin_until([&] { return !commands.empty(); }, 20s)) << viewer->output();
+  EXPECT_EQ(commands[0].command, +pex::mission_cmd_t::CMD_PAUSE);
+  EXPECT_EQ(commands[0].source, "pex-viewer");
+  res = http.Post("/api/mission/launch");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 404);
+  bus.spin_for(300ms);
+  EXPECT_EQ(commands.size(), 1u);
+
+  // Server-sent events: the map, then the live state; a second page beyond max_clients = 1 is refused.
+  std::atomic<bool> got_events{false}, release{false};
+  std::string first_chunk;
+  std::thread page([&] {
+    httplib::Client events("127.0.0.1", 8080);
+    events.Get("/events", [&](const char* data, std::size_t n) {
+      if (!got_events) first_chunk.assign(data, n);
+      got_events = true;
+      return !release.load();
+    });
+  });
+  ASSERT_TRUE(bus.spin_until([&] { return got_events.load(); }, 20s));
+  res = http.Get("/events");
+  release = true;
+  page.join();
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 503);
+  EXPECT_NE(first_chunk.find("event: map\ndata: {"), std::string::npos) << first_chunk.substr(0, 200);
+  EXPECT_NE(first_chunk.find("event: live\ndata: {"), std::string::npos) << first_chunk.substr(0, 200);
+  EXPECT_EQ(viewer->stop(), 0) << viewer->output();
 }
 
 }  // namespace
