@@ -16,6 +16,7 @@ PEX_DEBS=(
   libcpp-httplib-dev nlohmann-json3-dev  # pex-viewer: its HTTP server (and the tests' client), JSON
   chromium chromium-driver               # the viewer's browser tests: headless Chromium through WebDriver
   socat                  # scripts/demo.sh: the viewer's page from the demo's network namespace to this computer's loopback
+  curl                   # tests/systemd/sandbox_syscalls.sh: pex-viewer's page fetched under strace
 )
 missing=()
 for p in "${PEX_DEBS[@]}"; do

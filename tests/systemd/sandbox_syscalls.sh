@@ -2,7 +2,7 @@
 # sandbox_syscalls.sh SRC_DIR BIN_DIR: the units' SystemCallFilter= and
 # RestrictAddressFamilies= against what the programs really do. Runs the simulated
 # set (pex-sim, -lidar-reader, -base-driver, -slam, -polygon-mapper, -explorer with
-# checkpoints on) and lcm-logger, each under strace -f, in a private network
+# checkpoints on, -viewer with its page, state, events and a button fetched) and lcm-logger, each under strace -f, in a private network
 # namespace: start, pex-mission start, a few seconds of mission, SIGTERM (checkpoints
 # written on stop); and pex-lcm-route's ip command. Every system call each made must
 # be allowed by its unit's SystemCallFilter= lines (groups expanded with
@@ -36,7 +36,13 @@ traced pex-base-driver "$bin/pex-base-driver" --config "$src/config/base_driver.
 traced pex-slam "$bin/pex-slam" --config "$tmp/slam.toml"
 traced pex-polygon-mapper "$bin/pex-polygon-mapper" --config "$tmp/polygon_mapper.toml"
 traced pex-explorer "$bin/pex-explorer" --config "$tmp/explorer.toml"
+traced pex-viewer "$bin/pex-viewer" --config "$src/config/viewer.toml"
 "$bin/pex-mission" start --timeout 60 || { echo "FAIL: the mission did not start"; tail -n 3 "$tmp"/*.log; exit 1; }
+# The viewer's page, its state, a stream of events and a button, as a browser would.
+for path in / /api/state; do curl -sf --max-time 5 "http://127.0.0.1:8080$path" >/dev/null \
+  || { echo "FAIL: pex-viewer did not serve $path"; tail -n 3 "$tmp/pex-viewer.log"; exit 1; }; done
+curl -s --max-time 2 "http://127.0.0.1:8080/events" >/dev/null
+curl -sf --max-time 5 -X POST "http://127.0.0.1:8080/api/mission/resume" >/dev/null
 "$bin/pex-status" --seconds 8 >/dev/null 2>&1   # the robot explores meanwhile
 # stop as systemd does: SIGTERM to the program (strace then ends with it)
 for u in "${!tracer[@]}"; do pkill -TERM -P "${tracer[$u]}"; done
@@ -57,7 +63,7 @@ expand() { # syscall names of the groups and names given
   done
 }
 fails=0
-for unit in pex-capture pex-sim pex-lidar-reader pex-base-driver pex-slam pex-polygon-mapper pex-explorer pex-lcm-route; do
+for unit in pex-capture pex-sim pex-lidar-reader pex-base-driver pex-slam pex-polygon-mapper pex-explorer pex-viewer pex-lcm-route; do
   u=$src/systemd/$unit.service
   allow=$(sed -n 's/^SystemCallFilter=\([^~].*\)/\1/p' "$u")
   deny=$(sed -n 's/^SystemCallFilter=~\(.*\)/\1/p' "$u")
