@@ -32,31 +32,9 @@ struct Source {
 
 // Prints why and returns the exit code when the map cannot be had.
 int load(const Source& src, pex::polygon_map_t& out) {
-  if (!src.map_file.empty()) {
-    try {
-      out = pex::map_files::read_map_file(src.map_file);
-    } catch (const pex::map_files::MapFileError& e) {
-      std::fprintf(stderr, "pex-map: %s\n", e.what());
-      return EX_DATAERR;
-    } catch (const std::runtime_error& e) {
-      std::fprintf(stderr, "pex-map: %s\n", e.what());
-      return EX_NOINPUT;
-    }
-    return 0;
-  }
-  if (!src.log.empty()) {
+  if (!src.map_file.empty() || !src.log.empty()) {
     pex::map_files::LogMaps maps;
-    try {
-      maps = pex::map_files::read_log_maps(src.log, src.channel);
-    } catch (const std::runtime_error& e) {
-      std::fprintf(stderr, "pex-map: %s\n", e.what());
-      return EX_NOINPUT;
-    }
-    if (!maps.last) {
-      std::fprintf(stderr, "pex-map: no decodable %s message in %s (%ld rejected)\n", src.channel.c_str(),
-                   src.log.c_str(), maps.rejected);
-      return EX_DATAERR;
-    }
+    if (int rc = pex::map_files::load_map("pex-map", src.map_file, src.log, src.channel, maps); rc != 0) return rc;
     out = std::move(*maps.last);
     return 0;
   }

@@ -1,5 +1,8 @@
 #include "map_source.hpp"
 
+#include <sysexits.h>
+
+#include <cstdio>
 #include <stdexcept>
 
 #include <lcm/lcm-cpp.hpp>
@@ -59,6 +62,30 @@ pex::polygon_map_t read_map_file(const std::string& path) {
   } catch (const MapFileError& e) {
     throw MapFileError(path + ": " + e.what());
   }
+}
+
+int load_map(const std::string& program, const std::string& map_file, const std::string& log,
+             const std::string& channel, LogMaps& out) {
+  try {
+    if (!map_file.empty()) {
+      out.last = read_map_file(map_file);
+      out.robot_path = {{out.last->robot_x, out.last->robot_y}};
+      return 0;
+    }
+    out = read_log_maps(log, channel);
+  } catch (const MapFileError& e) {
+    std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+    return EX_DATAERR;
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+    return EX_NOINPUT;
+  }
+  if (!out.last) {
+    std::fprintf(stderr, "%s: no decodable %s message in %s (%ld rejected)\n", program.c_str(), channel.c_str(),
+                 log.c_str(), out.rejected);
+    return EX_DATAERR;
+  }
+  return 0;
 }
 
 }  // namespace pex::map_files

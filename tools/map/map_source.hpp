@@ -32,4 +32,12 @@ std::optional<pex::polygon_map_t> next_bus_map(const std::string& lcm_url, const
 // if it cannot be read (exit 66).
 pex::polygon_map_t read_map_file(const std::string& path);
 
+// For the tools: the map of `map_file` if given, else the last `channel`
+// message of the log `log`, with the robot's path. 0 on success; else prints
+// "<program>: why" to stderr and returns the exit code: 65 (EX_DATAERR) for a
+// bad map file or a log without the channel, 66 (EX_NOINPUT) for a file that
+// cannot be read.
+int load_map(const std::string& program, const std::string& map_file, const std::string& log,
+             const std::string& channel, LogMaps& out);
+
 }  // namespace pex::map_files

@@ -18,7 +18,6 @@
 #include <CLI/CLI.hpp>
 #include <pex/polygon_map_t.hpp>
 
-#include "map_files.hpp"
 #include "map_source.hpp"
 #include "render.hpp"
 #include "runtime/channels.hpp"
@@ -58,37 +57,11 @@ int main(int argc, char** argv) {
     const std::filesystem::path folder = std::filesystem::path(out).parent_path();
     if (::access(folder.empty() ? "." : folder.c_str(), W_OK) != 0) return cannot_write(out);
   }
-  pex::polygon_map_t last{};
-  pex::render_map::Path path;
-  long rejected = 0;
-  if (!map_path.empty()) {
-    try {
-      last = pex::map_files::read_map_file(map_path);
-    } catch (const pex::map_files::MapFileError& e) {
-      std::fprintf(stderr, "pex-render-map: %s\n", e.what());
-      return EX_DATAERR;
-    } catch (const std::runtime_error& e) {
-      std::fprintf(stderr, "pex-render-map: %s\n", e.what());
-      return EX_NOINPUT;
-    }
-    path.emplace_back(last.robot_x, last.robot_y);
-  } else {
-    pex::map_files::LogMaps maps;
-    try {
-      maps = pex::map_files::read_log_maps(log_path, channel);
-    } catch (const std::runtime_error&) {
-      std::fprintf(stderr, "pex-render-map: cannot read %s\n", log_path.c_str());
-      return EX_NOINPUT;
-    }
-    rejected = maps.rejected;
-    if (!maps.last) {
-      std::fprintf(stderr, "pex-render-map: no decodable %s message in %s (%ld rejected)\n", channel.c_str(),
-                   log_path.c_str(), rejected);
-      return EX_DATAERR;
-    }
-    last = std::move(*maps.last);
-    path = std::move(maps.robot_path);
-  }
+  pex::map_files::LogMaps maps;
+  if (int rc = pex::map_files::load_map("pex-render-map", map_path, log_path, channel, maps); rc != 0) return rc;
+  const pex::polygon_map_t& last = *maps.last;
+  const pex::render_map::Path& path = maps.robot_path;
+  const long rejected = maps.rejected;
   if (!svg_path.empty()) {
     std::ofstream svg(svg_path);
     svg << pex::render_map::to_svg(last, path, options);
