@@ -12,6 +12,7 @@
 #include <pex/slam_update_t.hpp>
 #include <spdlog/spdlog.h>
 
+#include "initial_map.hpp"
 #include "mapper.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/checkpoint.hpp"
@@ -28,9 +29,12 @@ int main(int argc, char** argv) {
     auto mapper = std::make_shared<Mapper>(pex::polygon_mapper::load_options(config));
     // The map survives a restart: published at once from the checkpoint, and
     // with pose_source "slam" continued when SLAM's updates come (same epoch).
-    pex::runtime::keep_checkpoint(node, {mapper->options().checkpoint_file, mapper->options().checkpoint_period_s, "map",
-                                         [mapper](const std::string& bytes) { return mapper->restore(bytes); },
-                                         [mapper] { return mapper->checkpoint(); }});
+    const bool restored = pex::runtime::keep_checkpoint(
+        node, {mapper->options().checkpoint_file, mapper->options().checkpoint_period_s, "map",
+               [mapper](const std::string& bytes) { return mapper->restore(bytes); },
+               [mapper] { return mapper->checkpoint(); }});
+    // Else from a saved map (initial_map_file), if one is configured.
+    if (!restored) pex::polygon_mapper::start_from_initial_map(*mapper);
     // Health: without scans or poses the map stands still (DEGRADED, says which).
     const std::string& source = mapper->options().pose_source;
     const std::string pose_channel(source == "slam"       ? ch::kSlamUpdate

@@ -39,6 +39,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.max_pending_scans = config.get<int>("max_pending_scans", o.max_pending_scans, runtime::in_range(1, 1000));
   o.checkpoint_file = config.get_path("checkpoint_file", o.checkpoint_file, /*must_exist=*/false);
   o.checkpoint_period_s = config.get<double>("checkpoint_period_s", o.checkpoint_period_s, runtime::in_range(0.1, 3600.0));
+  o.initial_map_file = config.get_path("initial_map_file", o.initial_map_file, /*must_exist=*/true);
   auto scan = config.section("scan");
   o.scan.range_min_m = scan.get<double>("range_min_m", o.scan.range_min_m, non_negative<double>());
   o.scan.range_max_m = scan.get<double>("range_max_m", o.scan.range_max_m, positive<double>());
@@ -105,6 +106,25 @@ const mapping::PolygonMap& Mapper::map() const {
   return restored_ ? *restored_ : map_;
 }
 
+std::string Mapper::start_from(const mapping::TypedMultiPolygon& polygons) {
+  if (counters_.scans_inserted > 0 || map_.scans_inserted() > 0 || restored_ || particle_maps_.size() > 0)
+    return "a map is held already (a checkpoint was taken up, or scans went in)";
+  mapping::PolygonMap map(options_.map);
+  for (const auto& polygon : polygons) {
+    const auto result = map.insert(polygon);
+    counters_.failed_tile_updates += result.tiles_failed;
+    counters_.boost_fallbacks += result.boost_fallbacks;
+  }
+  if (options_.pose_source == "slam") {
+    restored_ = std::move(map);
+    restored_any_epoch_ = true;
+  } else {
+    map_ = std::move(map);
+  }
+  dirty_ = true;
+  return "";
+}
+
 mapping::ScanPolygonOptions Mapper::scan_options_for(const pex::laser_scan_t& scan) const {
   mapping::ScanPolygonOptions o = options_.scan;
   o.range_min_m = std::max<double>(o.range_min_m, scan.range_min);
@@ -165,7 +185,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   const bool continues = particle_maps_.size() > 0 && update.epoch == epoch_ &&
                          update.generation == generation_ + (update.republished ? 0 : 1);
   if (held && !continues) {
-    if (update.epoch == epoch_) {
+    if (update.epoch == epoch_ || (restored_ && restored_any_epoch_)) {
       // The same lineage, but the parents cannot be followed: the best map held
       // stands in for every particle (the map goes on; the particles' maps
       // differ again from the next scan on).
@@ -184,6 +204,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   const auto result = particle_maps_.update(particles, sensor_scan, scan_options_for(*scan));
   if (!result.ok) throw std::invalid_argument("SLAM_UPDATE refused: " + result.error);
   restored_.reset();
+  restored_any_epoch_ = false;
   epoch_ = update.epoch;
   if (!result.scan_inserted) ++counters_.scan_polygon_errors;
   counters_.failed_tile_updates += result.insert_failures;

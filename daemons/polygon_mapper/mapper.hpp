@@ -44,6 +44,10 @@ struct MapperOptions {
   // written every checkpoint_period_s and on stop, read at start: "" = none.
   std::string checkpoint_file;
   double checkpoint_period_s = 2.0;
+  // A saved map (pex-map save: GeoJSON) to start from when no checkpoint was
+  // taken up, in the frame the poses will come in (the robot starts where that
+  // map's frame has its origin): "" = none.
+  std::string initial_map_file;
 };
 
 // Reads every key of config/polygon_mapper.toml; throws ConfigError on bad values.
@@ -132,6 +136,11 @@ class Mapper {
   // once an update of the same epoch arrives, and is dropped if SLAM's epoch
   // is another (its frame is not the map's).
   std::string restore(std::string_view checkpoint);
+  // Starts from a saved map (initial_map_file) before the first input: its
+  // polygons inserted as one scan each; with pose_source "slam" the map stands
+  // in for every particle at the first update, whatever SLAM's epoch (a saved
+  // map has none). "" or why refused (a map is already held); then nothing changed.
+  std::string start_from(const mapping::TypedMultiPolygon& polygons);
 
  private:
   void process_pending();
@@ -162,6 +171,7 @@ class Mapper {
   std::int64_t generation_ = 0;  // of the last update applied
   // A restored map waiting for the first update (slam): published meanwhile.
   std::optional<mapping::PolygonMap> restored_;
+  bool restored_any_epoch_ = false;  // restored_ is a saved map: taken up by any epoch
 };
 
 // The MAP message for a typed multipolygon (outer rings CCW, holes CW).
