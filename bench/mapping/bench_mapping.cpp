@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "evaluation/carmen_log.hpp"
+#include "carmen_scans.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "mapping/test_support.hpp"
@@ -91,24 +91,15 @@ Fixture& fixture(std::size_t vertices, bool typed) {
 // planning map has `target_vertices`; the next scans are kept for timing.
 std::unique_ptr<Fixture> build_intel(std::size_t target_vertices) {
   auto fixture = std::make_unique<Fixture>();
-  std::ifstream in(std::string(PEX_SHARED_DIR) + "/data/intel.clf");
-  if (!in) return fixture;  // no data: the benchmark reports an error
-  const auto log = pex::evaluation::parse_carmen_log(in);
   const ScanPolygonOptions options;
-  std::optional<Pose2> last;
-  for (const auto& laser : log.lasers) {
-    if (fixture->next_scans.size() >= 32) break;
-    const Pose2 pose{laser.laser_pose.x_m, laser.laser_pose.y_m, laser.laser_pose.theta_rad};
-    if (last && std::hypot(pose.x - last->x, pose.y - last->y) < 0.2 &&
-        std::abs(std::remainder(pose.theta - last->theta, 2 * M_PI)) < 0.25)
-      continue;
-    last = pose;
-    std::vector<float> ranges = laser.ranges_m;
-    for (auto& r : ranges)
-      if (r >= laser.max_range_m) r = std::numeric_limits<float>::infinity();  // no return
-    auto scan = scan_to_polygon(ranges, laser.angle_min_rad, laser.angle_increment_rad, pose, options);
-    if (scan.ok) fixture->take(std::move(scan.polygon), target_vertices);
-  }
+  // No data: the fixture stays empty and the benchmark reports an error.
+  pex::bench::for_each_moved_scan(std::string(PEX_SHARED_DIR) + "/data/intel.clf",
+                                  [&](const std::vector<float>& ranges, const auto& laser, const Pose2& pose) {
+                                    auto scan = scan_to_polygon(ranges, laser.angle_min_rad,
+                                                                laser.angle_increment_rad, pose, options);
+                                    if (scan.ok) fixture->take(std::move(scan.polygon), target_vertices);
+                                    return fixture->next_scans.size() < 32;
+                                  });
   return fixture;
 }
 

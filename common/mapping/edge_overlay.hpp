@@ -19,8 +19,9 @@
 // at the other side's vertices), so touching and overlapping edges, which
 // tiles and their pieces have along every tile border, become shared pieces.
 // The result is not checked here: callers check it (is_clearly_valid, then
-// bg::is_valid) and fall back to Boost.Geometry when it is not valid or
-// `ok` is false.
+// bg::is_valid, after RDP: simplify_and_check in tile.hpp) and count a
+// failure when it is not valid or `ok` is false. Boost.Geometry's overlay is
+// the oracle of the tests, not a fallback.
 #include <optional>
 #include <span>
 #include <string>

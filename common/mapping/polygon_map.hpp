@@ -17,12 +17,14 @@
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "mapping/obstacle_band.hpp"
+#include "mapping/tile.hpp"
+#include "mapping/tile_grid.hpp"
 #include "mapping/typed_ops.hpp"
 #include "mapping/typed_polygon.hpp"
 
@@ -43,59 +45,6 @@ struct PolygonMapOptions {
   bool assign_edge_types = true;
 };
 
-// One square of the map. An insert writes free and obstacles; the planning
-// layer (free minus obstacles) is derived from them on first use and kept.
-// Why lazily: only a map that is published or planned on needs it, and with
-// one map per SLAM particle most tile versions are never read before the next
-// insert replaces them (the difference was a third of an insert's cost).
-// Thread-safe: a tile shared by several particle maps may be asked for its
-// planning layer from several threads; it is computed once.
-class Tile {
- public:
-  struct PlanningOptions {
-    double simplify_epsilon_m = 0.0;
-    bool assign_edge_types = true;
-  };
-  // `last_good_planning`: the newest planning layer computed for an earlier
-  // version of this tile (null if none); planning() falls back to it if the
-  // difference fails, so a failure keeps the last good state.
-  Tile(Box box, TypedMultiPolygon free, TypedMultiPolygon obstacles,
-       std::shared_ptr<const TypedMultiPolygon> last_good_planning, PlanningOptions options);
-  Tile(const Tile&) = delete;
-  Tile& operator=(const Tile&) = delete;
-
-  Box box;
-  TypedMultiPolygon free;       // obstacle / frontier / border
-  TypedMultiPolygon obstacles;  // obstacle / border
-
-  // Free minus obstacles: frontier / obstacle / border. Computed on the first call.
-  const TypedMultiPolygon& planning() const;
-  // Computed already (planning() costs nothing), and whether that failed:
-  // then planning() is the last good layer (or empty) and planning_error() says why.
-  bool planning_computed() const;
-  bool planning_failed() const;
-  std::string planning_error() const;
-  // The planning layer came from Boost's difference (our edge overlay's
-  // result failed a check): counted by the merge.
-  bool planning_by_boost() const;
-  // For the next version of this tile: this tile's planning layer if it has
-  // been computed and is its own, else the one this tile would fall back to.
-  std::shared_ptr<const TypedMultiPolygon> last_good_planning() const;
-  // Heap bytes of the layers (the planning layer once computed, fallback included).
-  std::size_t memory_bytes() const;
-
- private:
-  // Caller holds mutex_.
-  void compute_planning() const;
-
-  PlanningOptions options_;
-  mutable std::mutex mutex_;  // guards the members below
-  mutable std::shared_ptr<const TypedMultiPolygon> fallback_;  // released once computed
-  mutable std::shared_ptr<const TypedMultiPolygon> planning_;  // null until computed
-  mutable std::string error_;  // empty unless the difference failed
-  mutable bool planning_by_boost_ = false;
-};
-
 struct InsertResult {
   bool ok = false;          // false: at least one tile kept its old state
   std::string error;        // the first failure's reason
@@ -106,8 +55,8 @@ struct InsertResult {
   double free_area_before_m2 = 0.0;
   double free_area_after_union_m2 = 0.0;
   ReassignStats reassign;
-  // Overlays redone with Boost.Geometry because our edge overlay failed or
-  // its result failed a check (typed_ops.hpp, edge_overlay.hpp).
+  // Always 0: no overlay is redone with Boost.Geometry any more (issue 16).
+  // Kept while the mapper's DAEMON_STATUS still reports the counter.
   int boost_fallbacks = 0;
 };
 
@@ -119,33 +68,11 @@ struct MergeResult {
   // Tiles whose planning layer could not be derived from their free and
   // obstacle layers: they took part with their last good planning layer.
   std::int64_t stale_planning_tiles = 0;
-  // Fallbacks to Boost.Geometry: the tiles were united by Boost's cascade
-  // (the edge overlay's result failed its check); tiles whose planning layer
-  // is Boost's difference.
+  // Always false / 0: the merge and the planning layers use the edge overlay
+  // only (issue 16). Kept while the mapper's DAEMON_STATUS still reports them.
   bool boost_cascade = false;
   std::int64_t boost_planning_tiles = 0;
 };
-
-// The obstacle band of a scan polygon: each maximal chain of obstacle edges
-// buffered `inner_m` to its left (free side of a counter-clockwise ring) and
-// `outer_m` to its right, with flat ends and round joins.
-// Built directly chain by chain (direct_obstacle_band), else by Boost's
-// buffer of the chains. Checked valid either way: an invalid band comes back
-// empty, with the reason in *why if given.
-MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m,
-                           std::string* why = nullptr);
-
-// The maximal chains of obstacle edges of a scan polygon (what the band covers).
-using Chain = bg::model::linestring<Point>;
-using Chains = bg::model::multi_linestring<Chain>;
-Chains obstacle_chains(const TypedPolygon& scan);
-
-// The band built chain by chain (right offset by outer_m, left by inner_m,
-// round outer joins, flat ends): nullopt unless every chain is open, every
-// join can be built by meeting offset lines and every chain's band is
-// clearly valid; bands that overlap are united (typed_union). obstacle_band
-// falls back to Boost's buffer otherwise.
-std::optional<MultiPolygon> direct_obstacle_band(const Chains& chains, double inner_m, double outer_m);
 
 // A scan polygon and its obstacle band, ready to insert. The band depends on
 // the scan alone and moves with it, so the per-particle maps of SLAM build it
@@ -163,15 +90,18 @@ class PolygonMap {
  public:
   explicit PolygonMap(PolygonMapOptions options = {});
 
-  // Inserts one scan polygon (map frame, valid, see scan_to_polygon). A tile
-  // whose update fails or yields an invalid polygon keeps its last good state;
-  // the failure is counted and the rest of the scan still goes in.
+  // Inserts one scan polygon (map frame, valid, see scan_to_polygon). Every
+  // stored layer is valid (checked with its neighbours after RDP). A tile
+  // whose update fails keeps its last good state; the failure is counted
+  // (failed_tile_updates) and the rest of the scan still goes in.
   InsertResult insert(const TypedPolygon& scan);
   // The same with the band already built (prepare_scan, moved rigidly).
   InsertResult insert(const PreparedScan& scan);
 
   // The merged maps (cost grows with the whole map: call at publication rate),
   // simplified with options().simplify_epsilon_m unless another is given.
+  // ok: the polygons are valid (the simplified ones checked with every
+  // polygon near them); else an error and no polygons.
   MergeResult free_space(std::optional<double> simplify_epsilon_m = std::nullopt) const;
   MergeResult planning_map(std::optional<double> simplify_epsilon_m = std::nullopt) const;
 
@@ -185,11 +115,12 @@ class PolygonMap {
   std::size_t memory_bytes() const;
   std::int64_t scans_inserted() const { return scans_inserted_; }
   std::int64_t failed_tile_updates() const { return failed_tile_updates_; }
-  // Overlays of inserts that fell back to Boost.Geometry (InsertResult).
+  // Always 0 since issue 16 (InsertResult::boost_fallbacks); restored from
+  // older checkpoints as saved.
   std::int64_t boost_fallbacks() const { return boost_fallbacks_; }
   const PolygonMapOptions& options() const { return options_; }
 
-  using TileKey = std::pair<std::int32_t, std::int32_t>;
+  using TileKey = mapping::TileKey;
   // Read access for tests, memory accounting and checkpoints (ordered: deterministic).
   const std::map<TileKey, std::shared_ptr<const Tile>>& tiles() const { return tiles_; }
 
@@ -200,22 +131,15 @@ class PolygonMap {
   void restore_counters(std::int64_t scans_inserted, std::int64_t failed_tile_updates, std::int64_t boost_fallbacks);
 
  private:
-  Box tile_box(const TileKey& key) const;
   enum class Layer { kFree, kPlanning };
   MergeResult merge(Layer layer, double simplify_epsilon_m) const;
 
   PolygonMapOptions options_;
+  TileGrid grid_;
   std::map<TileKey, std::shared_ptr<const Tile>> tiles_;
   std::int64_t scans_inserted_ = 0;
   std::int64_t failed_tile_updates_ = 0;
   std::int64_t boost_fallbacks_ = 0;
 };
-
-// Splits every edge where it crosses a grid line x = origin_m + k * cell_m or
-// y = origin_m + k * cell_m, with crossing points computed from the edge alone (the same
-// bits in both neighbouring tiles), so clipping to tiles adds no new rounding.
-void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m = 0.0);
-// The same for a typed polygon: the pieces of an edge keep its type.
-void split_at_grid(TypedPolygon& polygon, double cell_m, double origin_m = 0.0);
 
 }  // namespace pex::mapping

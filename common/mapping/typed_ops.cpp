@@ -52,21 +52,22 @@ TypedOpResult failed(std::string why) {
   return result;
 }
 
-// Our edge overlay (edge_overlay.hpp) unless the caller asked for Boost's:
-// true with `result` filled when it succeeded (and, if options.validate, its
-// output is valid); false, with result.boost_fallbacks counted when it was
-// tried, tells the caller to use Boost.Geometry.
-bool edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
+// Our edge overlay (edge_overlay.hpp): `result` filled (ok, or the error),
+// its output retyped as assign_types would type it when the options ask for
+// uniform or plain types, and checked if options.validate.
+void edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
                   const TypedOpOptions& options, TypedOpResult& result,
                   const std::optional<EdgeType> (&side_types)[2] = {}) {
-  if (options.boost_overlay) return false;
   OverlayResult r = overlay(a, b, op, options.border_box, side_types);
   std::string why;
-  if (r.ok && options.validate && !is_clearly_valid(r.polygons) && !bg::is_valid(geometry_of(r.polygons), why))
+  if (r.ok && options.validate && !is_clearly_valid(r.polygons) && !bg::is_valid(geometry_of(r.polygons), why)) {
     r.ok = false;
+    r.error = "invalid result: " + why;
+  }
   if (!r.ok) {
-    ++result.boost_fallbacks;
-    return false;
+    result.ok = false;
+    result.error = std::move(r.error);
+    return;
   }
   if (!options.assign_edge_types || options.uniform_type) {  // as assign_types types them
     const EdgeType plain = options.uniform_type.value_or(EdgeType::kFrontier);
@@ -84,7 +85,6 @@ bool edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, Overla
   }
   result.polygons = std::move(r.polygons);
   result.ok = true;
-  return true;
 }
 
 }  // namespace
@@ -235,9 +235,9 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
         aside.push_back({hole, polygon.edge_types[1 + k]});
     }
   }
-  TypedOpResult result{true, {}, {}, {}, 0, 0};
+  TypedOpResult result{true, {}, {}, {}, 0};
   if (!a_rings.empty()) {
-    if (!edge_overlay(a_rings, b_rings, OverlayOp::kUnion, options, result)) {
+    if (options.boost_overlay) {
       const TypedMultiPolygon a_part = copy_polygons(a_rings, a_starts), b_part = copy_polygons(b_rings, b_starts);
       MultiPolygon geometry;
       try {
@@ -251,11 +251,11 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
         index.add(b_part);
         index.build();
       }
-      const int fallbacks = result.boost_fallbacks;
       result = finish(std::move(geometry), index, kClipSearchRadius, options);
-      result.boost_fallbacks = fallbacks;
-      if (!result.ok) return result;
+    } else {
+      edge_overlay(a_rings, b_rings, OverlayOp::kUnion, options, result);
     }
+    if (!result.ok) return result;
     if (!put_back_holes(result.polygons, std::move(aside)))
       return failed("union: a hole set aside has no polygon to return to");
   }
@@ -297,11 +297,9 @@ TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolyg
   std::vector<RingRef> a_rings, b_rings;
   add_rings(a, a_rings);
   add_rings(b, b_rings);
+  if (options.boost_overlay) return boost_difference(a, b, a_type, b_type, options);
   TypedOpResult result;
-  if (edge_overlay(a_rings, b_rings, OverlayOp::kDifference, options, result, {a_type, b_type})) return result;
-  const int fallbacks = result.boost_fallbacks;
-  result = boost_difference(a, b, a_type, b_type, options);
-  result.boost_fallbacks = fallbacks;
+  edge_overlay(a_rings, b_rings, OverlayOp::kDifference, options, result, {a_type, b_type});
   return result;
 }
 
@@ -333,8 +331,7 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
     TypedOpResult piece;
     polygon_rings.clear();
     add_rings(polygon, polygon_rings);
-    if (!edge_overlay(polygon_rings, box_rings, OverlayOp::kIntersection, clip_options, piece)) {
-      result.boost_fallbacks += piece.boost_fallbacks;
+    if (options.boost_overlay) {
       MultiPolygon geometry;
       try {
         bg::intersection(polygon.geometry, box, geometry);
@@ -347,8 +344,10 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
         index.build();
       }
       piece = finish(std::move(geometry), index, kClipSearchRadius, clip_options);
-      if (!piece.ok) return piece;
+    } else {
+      edge_overlay(polygon_rings, box_rings, OverlayOp::kIntersection, clip_options, piece);
     }
+    if (!piece.ok) return piece;
     result.reassign.edges += piece.reassign.edges;
     result.reassign.candidates += piece.reassign.candidates;
     for (auto& p : piece.polygons) result.polygons.push_back(std::move(p));

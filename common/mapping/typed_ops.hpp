@@ -1,7 +1,8 @@
 #pragma once
-// Boolean operations and offsetting on typed polygons: Boost.Geometry computes
-// the geometry, then the reassignment pass (edge_reassignment.hpp) types every
-// output edge from the input edges.
+// Boolean operations and offsetting on typed polygons. Union, difference and
+// clip run our edge overlay (edge_overlay.hpp), which carries each edge's
+// type; offsetting runs Boost.Geometry's buffer (the simpler tool there) and
+// types its output with the reassignment pass (edge_reassignment.hpp).
 #include <optional>
 #include <string>
 
@@ -24,24 +25,22 @@ struct TypedOpOptions {
   // turns it off for intermediate results and checks each tile once at the
   // end of an insert instead (validity checks cost as much as the overlay).
   bool validate = true;
-  // typed_union, typed_clip and typed_difference compute the geometry with our edge overlay
-  // (edge_overlay.hpp) and fall back to Boost.Geometry's overlay when it fails
-  // or (with `validate`) its result is not valid. true: Boost only (the
-  // caller's own retry after its check failed; the benchmark's comparison).
+  // true: typed_union, typed_clip and typed_difference use Boost.Geometry's
+  // overlay and the reassignment pass instead of the edge overlay (the
+  // oracle of tests and fuzzing, the benchmark's comparison). Never a
+  // fallback: when the edge overlay fails, the operation fails.
   bool boost_overlay = false;
 };
 
 struct TypedOpResult {
   bool ok = false;
-  std::string error;          // why not ok: Boost threw, or the output is invalid
+  std::string error;          // why not ok: the overlay failed, or the output is invalid
   TypedMultiPolygon polygons;
   ReassignStats reassign;
   // typed_union only: the last `unchanged_tail` polygons are polygons of `a`
   // that took no part (their boxes meet no polygon of b), returned as they
   // were, so a caller that knew them valid need not check them again.
   std::size_t unchanged_tail = 0;
-  // Overlays that fell back from our edge overlay to Boost.Geometry's.
-  int boost_fallbacks = 0;
 };
 
 // Union of a and b; each output edge keeps the type of its source edge.

@@ -1,0 +1,150 @@
+#include "mapping/tile.hpp"
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+#include "mapping/typed_ops.hpp"
+
+namespace pex::mapping {
+
+namespace {
+
+// The cheap sufficient test first; Boost decides what it cannot show (rings
+// touching at points, near-degenerate geometry) and says why when invalid.
+bool valid_layer(std::span<const TypedPolygon> layer, std::string& why) {
+  if (is_clearly_valid(layer)) return true;
+  MultiPolygon geometry;
+  geometry.reserve(layer.size());
+  for (const auto& p : layer) geometry.push_back(p.geometry);
+  return bg::is_valid(geometry, why);
+}
+
+}  // namespace
+
+bool simplify_and_check(TypedMultiPolygon& changed, std::span<const TypedPolygon> kept, double epsilon_m,
+                        std::string& why) {
+  // The kept polygons that can meet the changed ones: boxes overlap (RDP
+  // keeps a subset of the vertices, so a simplified polygon stays in its box).
+  std::vector<Box> boxes;
+  boxes.reserve(changed.size());
+  Box all;
+  bg::assign_inverse(all);
+  for (const auto& p : changed) {
+    boxes.push_back(bg::return_envelope<Box>(p.geometry.outer()));
+    bg::expand(all, boxes.back());
+  }
+  TypedMultiPolygon checked;  // [changed..., neighbours...]
+  for (const auto& p : kept) {
+    if (changed.empty()) break;
+    const Box box = bg::return_envelope<Box>(p.geometry.outer());
+    if (bg::disjoint(box, all)) continue;
+    if (std::any_of(boxes.begin(), boxes.end(), [&](const Box& b) { return !bg::disjoint(b, box); }))
+      checked.push_back(p);
+  }
+  const std::size_t neighbours = checked.size();
+  auto valid_with_neighbours = [&](TypedMultiPolygon& candidate) {
+    checked.erase(checked.begin(), checked.end() - static_cast<std::ptrdiff_t>(neighbours));
+    checked.insert(checked.begin(), std::make_move_iterator(candidate.begin()), std::make_move_iterator(candidate.end()));
+    const bool valid = valid_layer(checked, why);
+    std::move(checked.begin(), checked.begin() + static_cast<std::ptrdiff_t>(candidate.size()), candidate.begin());
+    return valid;
+  };
+  if (epsilon_m > 0.0) {
+    for (const bool check_each_polygon : {false, true}) {
+      TypedMultiPolygon simplified = simplify_typed(changed, epsilon_m, check_each_polygon);
+      if (valid_with_neighbours(simplified)) {
+        changed = std::move(simplified);
+        return true;
+      }
+    }
+  }
+  return valid_with_neighbours(changed);
+}
+
+Tile::Tile(Box box_in, TypedMultiPolygon free_in, TypedMultiPolygon obstacles_in,
+           std::shared_ptr<const TypedMultiPolygon> last_good_planning, PlanningOptions options)
+    : box(box_in),
+      free(std::move(free_in)),
+      obstacles(std::move(obstacles_in)),
+      options_(options),
+      fallback_(std::move(last_good_planning)) {}
+
+const TypedMultiPolygon& Tile::planning() const {
+  const std::lock_guard lock(mutex_);
+  if (!planning_) compute_planning();
+  return *planning_;  // never replaced once set, so the reference stays good
+}
+
+bool Tile::planning_computed() const {
+  const std::lock_guard lock(mutex_);
+  return planning_ != nullptr;
+}
+
+bool Tile::planning_failed() const {
+  planning();
+  const std::lock_guard lock(mutex_);
+  return !error_.empty();
+}
+
+std::string Tile::planning_error() const {
+  planning();
+  const std::lock_guard lock(mutex_);
+  return error_;
+}
+
+std::shared_ptr<const TypedMultiPolygon> Tile::last_good_planning() const {
+  const std::lock_guard lock(mutex_);
+  // Not computed yet: pass on this tile's own fallback rather than keep this
+  // version alive (a chain of never-read versions would hold every old tile
+  // of a particle's lineage).
+  if (!planning_ || !error_.empty()) return fallback_;
+  return planning_;
+}
+
+std::size_t Tile::memory_bytes() const {
+  std::size_t bytes = sizeof(Tile) + mapping::memory_bytes(free) + mapping::memory_bytes(obstacles);
+  const std::lock_guard lock(mutex_);
+  if (planning_) bytes += mapping::memory_bytes(*planning_);
+  else if (fallback_) bytes += mapping::memory_bytes(*fallback_);
+  return bytes;
+}
+
+void Tile::compute_planning() const {
+  TypedMultiPolygon planning;
+  if (obstacles.empty()) {
+    planning = free;
+    // Without obstacles every free edge is a frontier (borders stay).
+    for (auto& p : planning)
+      for (auto& ring : p.edge_types)
+        for (auto& t : ring)
+          if (t != EdgeType::kBorder) t = EdgeType::kFrontier;
+  } else {
+    TypedOpOptions typed;
+    typed.assign_edge_types = options_.assign_edge_types;
+    typed.validate = false;  // checked once below, after RDP
+    typed.border_box = box;
+    auto difference = typed_difference(free, obstacles, EdgeType::kFrontier, EdgeType::kObstacle, typed);
+    std::string why = difference.error;
+    if (difference.ok) {
+      // A difference lies between (free - obstacles) and free.
+      const double a_free = area(free), a_diff = area(difference.polygons);
+      if (a_diff > a_free + 1e-6 || a_diff < a_free - area(obstacles) - 1e-6)
+        why = "difference area out of bounds";
+      else if (!simplify_and_check(difference.polygons, {}, options_.simplify_epsilon_m, why))
+        why = "planning layer invalid: " + why;
+      else
+        why.clear();
+    }
+    if (!why.empty()) {
+      error_ = std::move(why);
+      planning_ = fallback_ ? fallback_ : std::make_shared<const TypedMultiPolygon>();
+      return;
+    }
+    planning = std::move(difference.polygons);
+  }
+  planning_ = std::make_shared<const TypedMultiPolygon>(std::move(planning));
+  fallback_.reset();  // superseded
+}
+
+}  // namespace pex::mapping

@@ -1,0 +1,36 @@
+#pragma once
+// The square tiles of PolygonMap: lines at origin_m + k * size_m on both axes,
+// tile (i, j) the box between lines i, i + 1 and j, j + 1. Every coordinate on
+// a tile line is computed by one expression (line()), and an edge is split at
+// the lines it crosses with crossing points computed from the edge alone in a
+// canonical direction, so both neighbours of a line see the same bits and
+// clipping to tiles adds no rounding.
+#include <cstdint>
+#include <utility>
+
+#include "mapping/typed_polygon.hpp"
+
+namespace pex::mapping {
+
+using TileKey = std::pair<std::int32_t, std::int32_t>;
+
+struct TileGrid {
+  double size_m = 8.0;
+  double origin_m = 0.0;
+
+  // Coordinate of line k; index of the tile column (row) holding v.
+  double line(std::int64_t k) const { return origin_m + static_cast<double>(k) * size_m; }
+  std::int32_t index(double v) const;
+  Box box(const TileKey& key) const;
+  // The keys of the tiles an envelope meets: [first.first, last.first] x [first.second, last.second].
+  std::pair<TileKey, TileKey> range(const Box& envelope) const;
+};
+
+// Splits every edge where it crosses a grid line x = origin_m + k * cell_m or
+// y = origin_m + k * cell_m, with crossing points computed from the edge alone (the same
+// bits in both neighbouring tiles), so clipping to tiles adds no new rounding.
+void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m = 0.0);
+// The same for a typed polygon: the pieces of an edge keep its type.
+void split_at_grid(TypedPolygon& polygon, double cell_m, double origin_m = 0.0);
+
+}  // namespace pex::mapping
