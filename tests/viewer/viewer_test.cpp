@@ -125,6 +125,23 @@ TEST(Viewer, PageShowsTheMapTheRobotAndTheHealthTableLive) {
       << v.report();
   const auto first = v.page();
 
+  // Zoom (the wheel, about the cursor) and pan (a drag) change the view, and the
+  // next map update keeps it (no refit once the user moved the view).
+  const auto view = v.browser().run(R"(
+    const svg = document.getElementById("map"), r = svg.getBoundingClientRect();
+    const box = () => svg.getAttribute("viewBox").split(" ").map(Number);
+    const before = box();
+    svg.dispatchEvent(new WheelEvent("wheel", {deltaY: -400, clientX: r.left + r.width / 2,
+                                              clientY: r.top + r.height / 2, bubbles: true, cancelable: true}));
+    const zoomed = box();
+    svg.dispatchEvent(new MouseEvent("mousedown", {clientX: r.left + 100, clientY: r.top + 100, bubbles: true}));
+    window.dispatchEvent(new MouseEvent("mousemove", {clientX: r.left + 300, clientY: r.top + 100}));
+    window.dispatchEvent(new MouseEvent("mouseup", {}));
+    return {before: before, zoomed: zoomed, panned: box()};)");
+  EXPECT_LT(view["zoomed"][2].get<double>(), 0.8 * view["before"][2].get<double>()) << view.dump();  // narrower
+  EXPECT_LT(view["panned"][0].get<double>(), view["zoomed"][0].get<double>()) << view.dump();  // dragged right
+  EXPECT_DOUBLE_EQ(view["panned"][2].get<double>(), view["zoomed"][2].get<double>()) << view.dump();
+
   // And follows the mission without a reload: the robot moves on the page, the map grows.
   ASSERT_TRUE(v.wait_page(
       [&](const nlohmann::json& p) {
@@ -135,6 +152,8 @@ TEST(Viewer, PageShowsTheMapTheRobotAndTheHealthTableLive) {
       60.0))
       << v.report();
   const auto later = v.page();
+  const auto kept_view = v.browser().run(R"(return document.getElementById("map").getAttribute("viewBox").split(" ").map(Number);)");
+  EXPECT_EQ(kept_view, view["panned"]) << "a map update refitted the view the user had moved";
   EXPECT_GT(later["updates"], first["updates"]);
   // The robot on the page is where the simulator has it (the page lags by its update period).
   ASSERT_TRUE(v.set().truth());
