@@ -38,16 +38,30 @@ bool read_doubles(const std::vector<std::string_view>& tokens, std::size_t at, s
   return true;
 }
 
-bool read_ranges(const std::vector<std::string_view>& tokens, std::size_t at, std::size_t n,
+// Reads tokens[at..at+n) as ranges in [0, max_m]: one beyond a float's range
+// would make its conversion undefined.
+bool read_ranges(const std::vector<std::string_view>& tokens, std::size_t at, std::size_t n, double max_m,
                  std::vector<float>& ranges) {
   if (at + n > tokens.size()) return false;
   ranges.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     double r = 0.0;
-    if (!to_double(tokens[at + i], r)) return false;
+    if (!to_double(tokens[at + i], r) || r < 0.0 || r > max_m) return false;
     ranges[i] = static_cast<float>(r);
   }
   return true;
+}
+
+// "" if the pose, stamp and velocities are within the options' limits, else what is not.
+std::string implausible(const CarmenParseOptions& o, const slam::Pose2& pose, double timestamp_s, double tv = 0.0,
+                        double rv = 0.0) {
+  if (std::abs(pose.x_m) > o.max_abs_coordinate_m || std::abs(pose.y_m) > o.max_abs_coordinate_m ||
+      std::abs(pose.theta_rad) > o.max_abs_coordinate_m)
+    return "pose beyond " + std::to_string(o.max_abs_coordinate_m) + " m";
+  if (timestamp_s < 0.0 || timestamp_s > o.max_timestamp_s)
+    return "timestamp " + std::to_string(timestamp_s) + " s not in [0, " + std::to_string(o.max_timestamp_s) + "]";
+  if (std::abs(tv) > o.max_abs_velocity || std::abs(rv) > o.max_abs_velocity) return "velocity beyond the limit";
+  return "";
 }
 
 LineKind malformed(std::string& error, std::string_view what) {
@@ -73,6 +87,8 @@ LineKind parse_carmen_line(std::string_view line, const CarmenParseOptions& opti
     odom.pose = {v[0], v[1], v[2]};
     odom.tv_mps = v[3];
     odom.rv_radps = v[4];
+    if (auto why = implausible(options, odom.pose, ts, odom.tv_mps, odom.rv_radps); !why.empty())
+      return malformed(error, "ODOM: " + why);
     message = odom;
     return LineKind::kMessage;
   }
@@ -84,7 +100,7 @@ LineKind parse_carmen_line(std::string_view line, const CarmenParseOptions& opti
     CarmenLaser laser;
     double poses[6];
     double ts = 0.0;
-    if (tokens.size() < 2 + n + 9 || !read_ranges(tokens, 2, n, laser.ranges_m) ||
+    if (tokens.size() < 2 + n + 9 || !read_ranges(tokens, 2, n, options.max_range_m, laser.ranges_m) ||
         !read_doubles(tokens, 2 + n, 6, poses) || !to_double(tokens[2 + n + 6], ts))
       return malformed(error, "FLASER: expected n ranges, two poses, timestamp host logger_timestamp");
     const double fov = options.flaser_field_of_view_rad;
@@ -95,6 +111,8 @@ LineKind parse_carmen_line(std::string_view line, const CarmenParseOptions& opti
     laser.max_range_m = options.flaser_max_range_m;
     laser.laser_pose = {poses[0], poses[1], poses[2]};
     laser.odometry = {poses[3], poses[4], poses[5]};
+    for (const auto& pose : {laser.laser_pose, laser.odometry})
+      if (auto why = implausible(options, pose, ts); !why.empty()) return malformed(error, "FLASER: " + why);
     message = std::move(laser);
     return LineKind::kMessage;
   }
@@ -109,7 +127,7 @@ LineKind parse_carmen_line(std::string_view line, const CarmenParseOptions& opti
       return malformed(error, "ROBOTLASER1: bad header or beam count");
     CarmenLaser laser;
     std::size_t m = 0;
-    if (tokens.size() < 9 + n + 1 || !read_ranges(tokens, 9, n, laser.ranges_m) ||
+    if (tokens.size() < 9 + n + 1 || !read_ranges(tokens, 9, n, options.max_range_m, laser.ranges_m) ||
         !to_count(tokens[9 + n], m) || m > options.max_beams)
       return malformed(error, "ROBOTLASER1: bad ranges or remission count");
     const std::size_t at = 9 + n + 1 + m;
@@ -124,6 +142,13 @@ LineKind parse_carmen_line(std::string_view line, const CarmenParseOptions& opti
     laser.max_range_m = header[4];
     laser.laser_pose = {tail[0], tail[1], tail[2]};
     laser.odometry = {tail[3], tail[4], tail[5]};
+    constexpr double kTwoPi = 2 * 3.141592653589793;
+    if (std::abs(header[1]) > kTwoPi || !(header[2] > 0.0 && header[2] <= kTwoPi) ||
+        !(header[3] > 0.0 && header[3] <= kTwoPi) || !(header[4] > 0.0 && header[4] <= options.max_range_m))
+      return malformed(error, "ROBOTLASER1: start angle, field of view, resolution or maximum range not a laser's");
+    for (const auto& pose : {laser.laser_pose, laser.odometry})
+      if (auto why = implausible(options, pose, ts, tail[6], tail[7]); !why.empty())
+        return malformed(error, "ROBOTLASER1: " + why);
     message = std::move(laser);
     return LineKind::kMessage;
   }

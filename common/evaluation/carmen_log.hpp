@@ -44,6 +44,16 @@ struct CarmenParseOptions {
   double flaser_max_range_m = 49.9;
   // A line announcing more beams than this is malformed (guards the allocation).
   std::size_t max_beams = 4096;
+  // Numbers no robot in a building logs make the line malformed (issue 12:
+  // poses of 1e308 and timestamps of -1e18 s went through to pex-carmen2lcm,
+  // whose microsecond stamps they overflow): poses, velocities and ranges
+  // beyond these magnitudes, timestamps outside [0, max_timestamp_s], and
+  // ROBOTLASER1 angles that are not a laser's (a field of view or step not in
+  // (0, 2 pi], a start angle beyond 2 pi) or a maximum range not in (0, max_range_m].
+  double max_abs_coordinate_m = 1e5;  // pose x, y (and theta, in rad)
+  double max_abs_velocity = 1e3;      // tv (m/s), rv (rad/s)
+  double max_range_m = 1e4;           // a reading, or ROBOTLASER1's maximum range
+  double max_timestamp_s = 1e10;      // the year 2286 as Unix time
 };
 
 using CarmenMessage = std::variant<CarmenLaser, CarmenOdometry>;
@@ -53,7 +63,7 @@ enum class LineKind { kMessage, kSkipped, kMalformed };
 
 // Parses one line. Returns kSkipped for comments, PARAM and unknown message
 // names, kMalformed (with `error` filled) for a FLASER/ROBOTLASER1/ODOM line that
-// does not parse or holds non-finite numbers.
+// does not parse, holds non-finite numbers or numbers beyond the options' limits.
 LineKind parse_carmen_line(std::string_view line, const CarmenParseOptions& options,
                            CarmenMessage& message, std::string& error);
 

@@ -67,5 +67,46 @@ TEST(CarmenLog, MalformedLinesAreCountedAndSkipped) {
   EXPECT_TRUE(log.lasers.empty());
 }
 
+// Issue 12: poses of 1e308 and timestamps of -1e18 s went through to
+// pex-carmen2lcm. Each line below is the good line of its kind with one
+// number made absurd; the good lines themselves are taken.
+TEST(CarmenLog, AbsurdNumbersMakeTheLineMalformed) {
+  const std::string odom = "ODOM 1.0 2.0 0.5 0.3 0.1 0.0 100.25 host 100.3\n";
+  const std::string flaser = "FLASER 3 1.0 2.0 81.83 0.1 0.2 0.3 1.1 1.2 1.3 101.5 host 101.6\n";
+  const std::string robotlaser =
+      "ROBOTLASER1 0 -1.5 3.0 1.5 50.0 0.01 0 3 4.0 5.0 50.0 0 0.5 0.6 0.7 1.5 1.6 1.7 0 0 0 0 0 102.5 host 102.6\n";
+  std::istringstream good(odom + flaser + robotlaser);
+  const CarmenLog taken = parse_carmen_log(good);
+  EXPECT_EQ(taken.malformed_lines, 0u) << taken.first_error;
+  EXPECT_EQ(taken.order.size(), 3u);
+
+  auto with = [](std::string line, const std::string& from, const std::string& to) {
+    const auto at = line.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return line.replace(at, from.size(), to);
+  };
+  for (const std::string& line : {
+           with(odom, "1.0 2.0", "1e308 2.0"),            // x
+           with(odom, "100.25", "-1e18"),                 // timestamp
+           with(odom, "100.25", "1e300"),                 // timestamp (overflows int64 us)
+           with(odom, "0.3 0.1", "1e9 0.1"),              // tv
+           with(flaser, "0.1 0.2 0.3", "0.1 1e308 0.3"),  // laser pose y
+           with(flaser, "1.1 1.2 1.3", "1.1 1.2 -1e300"), // odometry theta
+           with(flaser, "2.0 81.83", "2.0 1e300"),        // a range (beyond a float)
+           with(flaser, "1.0 2.0 81.83", "-1.0 2.0 81.83"),  // a negative range
+           with(flaser, "101.5", "-5"),                   // timestamp
+           with(robotlaser, "-1.5 3.0 1.5 50.0", "-1.5 3.0 0 50.0"),     // resolution 0
+           with(robotlaser, "-1.5 3.0 1.5 50.0", "-1.5 3.0 1.5 1e300"),  // maximum range
+           with(robotlaser, "-1.5 3.0", "-1e9 3.0"),      // start angle
+           with(robotlaser, "0.5 0.6 0.7", "0.5 1e200 0.7"),  // laser pose
+           with(robotlaser, "102.5", "-1e18"),            // timestamp
+       }) {
+    std::istringstream text(line);
+    const CarmenLog log = parse_carmen_log(text);
+    EXPECT_EQ(log.malformed_lines, 1u) << line;
+    EXPECT_TRUE(log.order.empty()) << line;
+  }
+}
+
 }  // namespace
 }  // namespace pex::evaluation

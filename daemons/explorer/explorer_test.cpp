@@ -72,6 +72,12 @@ TEST(DecodeMap, RefusesBadMessagesAndDropsBrokenPolygons) {
   auto nan = corridor();
   nan.rings[0].x[1] = std::nan("");
   EXPECT_FALSE(decode_map(nan).ok);
+  // Finite but absurd (issue 12; the fuzz target map_message asserts the bound).
+  auto far = corridor();
+  far.rings[0].x[1] = 1e300;
+  EXPECT_NE(decode_map(far).error.find("beyond"), std::string::npos);
+  far.rings[0].x[1] = -2e6;
+  EXPECT_FALSE(decode_map(far).ok);
   auto bad_type = corridor();
   bad_type.rings[0].edge_type[0] = 5;
   EXPECT_NE(decode_map(bad_type).error.find("edge type"), std::string::npos);

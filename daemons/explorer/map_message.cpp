@@ -88,6 +88,11 @@ DecodedMap decode_map(const pex::polygon_map_t& msg, const MapDecodeOptions& opt
         out.error = "non-finite vertex coordinate";
         return out;
       }
+      if (std::abs(x) > options.max_abs_coordinate_m || std::abs(y) > options.max_abs_coordinate_m) {
+        out.error = "vertex (" + std::to_string(x) + ", " + std::to_string(y) + ") beyond " +
+                    std::to_string(options.max_abs_coordinate_m) + " m";
+        return out;
+      }
       if (t != kWireObstacle && t != kWireFrontier) {
         out.error = "unknown edge type " + std::to_string(static_cast<int>(t));
         return out;

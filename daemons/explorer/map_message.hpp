@@ -12,6 +12,11 @@ namespace pex::explorer {
 
 struct MapDecodeOptions {
   std::int64_t max_vertices = 200'000;  // a larger map is refused (oversize message)
+  // A vertex farther from the origin than this makes the message bad: the
+  // mapper's tiles start within 1e5 m of it (tile_origin_m) and no building
+  // spans 1e6 m, while the planner's integer offset (Clipper) and areas
+  // overflow on coordinates such as 1e300 (issue 12, fuzz target map_message).
+  double max_abs_coordinate_m = 1e6;
 };
 
 struct DecodedMap {
@@ -24,7 +29,8 @@ struct DecodedMap {
 };
 
 // Rings are grouped by their `polygon` index (in order of first appearance);
-// each polygon needs exactly one outer ring. Non-finite coordinates, unknown
+// each polygon needs exactly one outer ring. Non-finite coordinates or ones
+// beyond max_abs_coordinate_m, unknown
 // edge types, array sizes that disagree with the counts, or more than
 // max_vertices vertices make the whole message bad (ok = false). Single
 // broken polygons are dropped and counted, the rest is kept. A ring in the

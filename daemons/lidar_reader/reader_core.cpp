@@ -29,6 +29,11 @@ std::string implausible_scan(const cola::ScanData& scan, const cola::Channel& di
   if (first < -450000 || last > 2250000) return "beams from " + deg(first) + " to " + deg(last);
   if (scan.scan_frequency_centihz < 1000 || scan.scan_frequency_centihz > 10000)
     return "scan frequency " + std::to_string(scan.scan_frequency_centihz * 0.01) + " Hz";
+  // Distances are value x scale + offset: any other scale or an offset made
+  // ranges negative or beyond 1e29 m (found by the fuzz target cola).
+  if (!(dist.scale_factor == 1.0f || dist.scale_factor == 2.0f) || dist.scale_offset != 0.0f)
+    return "DIST1 scale factor " + std::to_string(dist.scale_factor) + ", offset " +
+           std::to_string(dist.scale_offset);
   if (!options.configure_scan) return "";
   const cola::ScanConfig want = options.scan_config();
   const std::int64_t want_step = want.angular_step_1e4deg;

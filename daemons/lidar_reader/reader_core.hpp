@@ -49,7 +49,8 @@ struct ReaderOptions {
 
 // Why a scan telegram is not one the configured sensor can send, "" if it is.
 // Always: an LMS1xx's envelope (start -45 deg or later, end 225 deg or before
-// in device angles, a step of 1/6 to 1 deg, 1 to 2000 beams, 10 to 100 Hz).
+// in device angles, a step of 1/6 to 1 deg, 1 to 2000 beams, 10 to 100 Hz,
+// DIST1 scale factor 1 or 2 and offset 0, as SICK's telegram listing has them).
 // With configure_scan, also what we configured: the step, the first beam, the
 // beam count (each within one step) and the frequency (within 5 %).
 std::string implausible_scan(const cola::ScanData& scan, const cola::Channel& dist, const ReaderOptions& options);

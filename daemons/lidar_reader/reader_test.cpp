@@ -534,6 +534,10 @@ TEST(ReaderCore, ScansTheConfiguredSensorCannotSendAreRefusedAndCounted) {
          s.channels8.clear();
        }},
       {"another frequency", [&](cola::ScanData& s) { s.scan_frequency_centihz = 5000; }},
+      // Found by the fuzz target cola: ranges of -3e29 m were published.
+      {"a negative scale factor", [&](cola::ScanData& s) { dist(s).scale_factor = -1e26f; }},
+      {"a scale factor of 1000", [&](cola::ScanData& s) { dist(s).scale_factor = 1000.0f; }},
+      {"an offset", [&](cola::ScanData& s) { dist(s).scale_offset = -5000.0f; }},
       {"the last scan's device time again",
        [&](cola::ScanData& s) {
          s.time_since_startup_us = static_cast<std::uint32_t>(rig.scans.back().device_utime);

@@ -1,5 +1,6 @@
 // The daemon's handlers without a bus: what they publish, and what they refuse.
 #include "slam_node.hpp"
+#include "slam_options.hpp"
 
 #include <gtest/gtest.h>
 
@@ -220,6 +221,18 @@ TEST(SlamNode, ABrokenCheckpointIsRefusedWithAReasonAndChangesNothing) {
   EXPECT_TRUE(node.checkpoint() == before);
   EXPECT_EQ(node.restore(good), "");
   EXPECT_EQ(node.epoch(), source.epoch());
+}
+
+// Issue 12: null_log_likelihood = -1e308 made 1244 of 1318 poses NaN, exit 0.
+TEST(SlamOptions, NullLogLikelihoodOutsideItsRangeIsAConfigError) {
+  for (const char* value : {"-1e308", "1e308", "0.5", "-101", "nan"}) {
+    auto config = runtime::ConfigReader::from_string(std::string("[grid]\nnull_log_likelihood = ") + value + "\n", "slam.toml");
+    EXPECT_THROW(load_options(config), runtime::ConfigError) << value;
+  }
+  for (const char* value : {"-0.5", "0", "-100"}) {
+    auto config = runtime::ConfigReader::from_string(std::string("[grid]\nnull_log_likelihood = ") + value + "\n", "slam.toml");
+    EXPECT_EQ(load_options(config).filter.grid.null_log_likelihood, std::stod(value)) << value;
+  }
 }
 
 }  // namespace

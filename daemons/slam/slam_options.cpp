@@ -37,7 +37,11 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   f.grid.score_sigma_m2 = grid.get<double>("score_sigma_m2", f.grid.score_sigma_m2, positive<double>());
   f.grid.likelihood_sigma_m2 =
       grid.get<double>("likelihood_sigma_m2", f.grid.likelihood_sigma_m2, positive<double>());
-  f.grid.null_log_likelihood = grid.get<double>("null_log_likelihood", f.grid.null_log_likelihood);
+  // An unmatched beam must not score better than a matched one (> 0), and a
+  // huge penalty turns every weight into -inf and the poses into NaN (issue 12:
+  // -1e308 made 1244 of 1318 poses NaN): GMapping's values are about -0.5.
+  f.grid.null_log_likelihood =
+      grid.get<double>("null_log_likelihood", f.grid.null_log_likelihood, in_range(-100.0, 0.0));
   f.grid.beam_step = grid.get<int>("beam_step", f.grid.beam_step, in_range(1, 100));
   f.grid.along_line_weight = grid.get<double>("along_line_weight", f.grid.along_line_weight, in_range(0.0, 1.0));
   f.grid.line_flatness = grid.get<double>("line_flatness", f.grid.line_flatness, in_range(0.0, 1.0));
