@@ -18,6 +18,10 @@ PEX_DEBS=(
   socat                  # scripts/demo.sh: the viewer's page from the demo's network namespace to this computer's loopback
   curl                   # tests/systemd/sandbox_syscalls.sh: pex-viewer's page fetched under strace
 )
+# scripts/fuzz.sh only: clang and libFuzzer with its sanitizer runtimes.
+if [ "${PEX_DEPS_FUZZ:-0}" = 1 ]; then
+  PEX_DEBS+=(clang-14 libclang-rt-14-dev)
+fi
 missing=()
 for p in "${PEX_DEBS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
