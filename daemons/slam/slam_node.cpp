@@ -38,6 +38,9 @@ void SlamNode::on_scan(const laser_scan_t& msg) {
       !std::isfinite(msg.range_max) || !std::isfinite(msg.range_min) || !std::isfinite(msg.sensor_x) ||
       !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
     throw std::invalid_argument("scan geometry is not finite");
+  if (std::hypot(msg.sensor_x, msg.sensor_y) > options_.max_sensor_offset_m)
+    throw std::invalid_argument("laser mounted " + std::to_string(std::hypot(msg.sensor_x, msg.sensor_y)) +
+                                " m from the robot, more than " + std::to_string(options_.max_sensor_offset_m));
   slam::RangeScan scan;
   scan.utime = msg.utime;
   scan.angle_min_rad = msg.angle_min;

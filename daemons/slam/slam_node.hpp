@@ -23,6 +23,10 @@ struct SlamNodeOptions {
   slam::ParticleFilterOptions filter;
   slam::OdometrySyncOptions sync;
   std::size_t max_beams = 8192;  // a scan with more is refused as bad input
+  // A scan whose laser is mounted farther than this from the robot's centre
+  // is refused: its hits land that far away, and the grid grew to hold them
+  // (2.3e6 m asked for 500 TB; found by the fuzz target slam_input).
+  double max_sensor_offset_m = 10.0;
   // With no filter update for this long (scan time), the particle set is
   // published again with the current scan: identity parents, no resampling,
   // the filter untouched. A standing robot makes no updates, and a mapper

@@ -106,6 +106,12 @@ TEST(SlamNode, RefusesBadInputAndKeepsItsState) {
   laser_scan_t nan_geometry = box_scan(2000);
   nan_geometry.angle_increment = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(node.on_scan(nan_geometry), std::invalid_argument);
+  // Found by the fuzz target slam_input: a laser 2.3e6 m off the robot made
+  // the grid ask for 500 TB.
+  laser_scan_t far_mount = box_scan(2000);
+  far_mount.sensor_x = 2.3e6f;
+  far_mount.sensor_y = 2.3e6f;
+  EXPECT_THROW(node.on_scan(far_mount), std::invalid_argument);
   odometry_t nan_odometry = odometry(2000, 0.0);
   nan_odometry.theta = std::numeric_limits<double>::infinity();
   EXPECT_THROW(node.on_odometry(nan_odometry), std::invalid_argument);
