@@ -86,7 +86,7 @@ bool unite_layer(const TypedMultiPolygon* old, TypedMultiPolygon& piece, const T
   if (!old || old->empty()) {
     out = std::move(piece);
     area_after_union = area(out);
-    return simplify_and_check(out, {}, epsilon_m, why);
+    return simplify_and_check(out, out.size(), epsilon_m, why);
   }
   auto united = typed_union(*old, piece, typed);
   if (!united.ok) {
@@ -99,14 +99,11 @@ bool unite_layer(const TypedMultiPolygon* old, TypedMultiPolygon& piece, const T
     why = "union area out of bounds";
     return false;
   }
-  const auto tail = united.polygons.end() - static_cast<std::ptrdiff_t>(united.unchanged_tail);
-  TypedMultiPolygon kept(std::make_move_iterator(tail), std::make_move_iterator(united.polygons.end()));
-  united.polygons.erase(tail, united.polygons.end());
-  if (!simplify_and_check(united.polygons, kept, epsilon_m, why)) return false;
+  if (!simplify_and_check(united.polygons, united.polygons.size() - united.unchanged_tail, epsilon_m, why))
+    return false;
   result.reassign.edges += united.reassign.edges;
   result.reassign.candidates += united.reassign.candidates;
   out = std::move(united.polygons);
-  out.insert(out.end(), std::make_move_iterator(kept.begin()), std::make_move_iterator(kept.end()));
   return true;
 }
 
@@ -143,11 +140,14 @@ bool update_tile(TileTable& tiles, TilePiece& piece, const PolygonMapOptions& op
 // What a merge unites: per tile, its polygons with an edge on the tile's
 // border (the only ones that can meet another tile's); the others, which lie
 // inside their tile and pass through; and, if `set_holes_aside`, the holes
-// strictly inside their tile's box, left out of the overlay and put back.
+// strictly inside their tile's box, left out of the overlay and put back,
+// with the polygons inside their boxes (islands in them), which meet nothing
+// the merge changes.
 struct MergeParts {
   std::vector<TypedMultiPolygon> parts;
   TypedMultiPolygon inside;
   std::vector<TypedRing> aside;
+  TypedMultiPolygon in_aside_holes;
 };
 
 // Merge, step 1.
@@ -161,17 +161,24 @@ MergeParts collect_parts(const TileTable& tiles, LayerOf&& layer_of, bool set_ho
       return e.min_corner().x() > box.min_corner().x() && e.min_corner().y() > box.min_corner().y() &&
              e.max_corner().x() < box.max_corner().x() && e.max_corner().y() < box.max_corner().y();
     };
-    TypedMultiPolygon touching;
+    TypedMultiPolygon touching, inside;
+    const std::size_t first_aside = m.aside.size();
     for (const auto& polygon : layer_of(*tile)) {
       bool on_border = false;
       for (const auto& ring : polygon.edge_types)
         on_border = on_border || std::find(ring.begin(), ring.end(), EdgeType::kBorder) != ring.end();
       if (!on_border)
-        m.inside.push_back(polygon);
+        inside.push_back(polygon);
       else if (set_holes_aside)
         touching.push_back(without_holes(polygon, strictly_inside, m.aside));
       else
         touching.push_back(polygon);
+    }
+    for (auto& polygon : inside) {
+      const Box e = bg::return_envelope<Box>(polygon.geometry.outer());
+      const bool in_hole = std::any_of(m.aside.begin() + static_cast<std::ptrdiff_t>(first_aside), m.aside.end(),
+                                       [&e](const TypedRing& hole) { return bg::within(e, bg::return_envelope<Box>(hole.ring)); });
+      (in_hole ? m.in_aside_holes : m.inside).push_back(std::move(polygon));
     }
     if (!touching.empty()) m.parts.push_back(std::move(touching));
   }
@@ -208,6 +215,37 @@ std::int64_t border_to_frontier(TypedMultiPolygon& polygons, bool assign_edge_ty
         if (t == EdgeType::kBorder || !assign_edge_types) t = EdgeType::kFrontier;
       }
   return strays;
+}
+
+// Merge, step 4: the vertices a tile line added to an edge (on the line,
+// between two edges of one type, within 1e-9 m of the line through its
+// neighbours) are dropped, so a merged edge is one edge again.
+void drop_tile_line_vertices(TypedMultiPolygon& polygons, const TileGrid& grid) {
+  auto on_line = [&grid](double v) { return grid.line(grid.index(v)) == v; };
+  auto drop = [&](Ring& ring, std::vector<EdgeType>& types) {
+    const std::size_t n = types.size();
+    Ring kept_ring;
+    std::vector<EdgeType> kept_types;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point& u = ring[(i + n - 1) % n];
+      const Point& v = ring[i];
+      const Point& w = ring[i + 1];
+      const double dx = w.x() - u.x(), dy = w.y() - u.y();
+      const double off = dx * (v.y() - u.y()) - dy * (v.x() - u.x());
+      const bool dissolve = (on_line(v.x()) || on_line(v.y())) && types[(i + n - 1) % n] == types[i] &&
+                            off * off <= 1e-18 * (dx * dx + dy * dy) && n - (i - kept_types.size()) > 3;
+      if (dissolve && i > 0) continue;
+      kept_ring.push_back(v);
+      kept_types.push_back(types[i]);
+    }
+    kept_ring.push_back(kept_ring.front());
+    ring = std::move(kept_ring);
+    types = std::move(kept_types);
+  };
+  for (auto& p : polygons) {
+    drop(p.geometry.outer(), p.edge_types[0]);
+    for (std::size_t k = 0; k < p.geometry.inners().size(); ++k) drop(p.geometry.inners()[k], p.edge_types[1 + k]);
+  }
 }
 
 }  // namespace
@@ -260,14 +298,13 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
 }
 
 // Collects what can meet across tile borders (step 1), unites it (step 2),
-// retypes the borders left (step 3), puts the holes set aside back and
-// simplifies and checks the result with the polygons inside tiles near it.
+// retypes the borders left (step 3), dissolves the tile lines' vertices
+// (step 4), checks the result with the polygons inside tiles near it and
+// puts back the holes set aside and the islands in them.
 MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
   MergeResult result;
   if (layer == Layer::kPlanning)
-    for (const auto& [key, tile] : tiles_) {
-      result.stale_planning_tiles += tile->planning_failed() ? 1 : 0;
-    }
+    for (const auto& [key, tile] : tiles_) result.stale_planning_tiles += tile->planning_failed() ? 1 : 0;
   // The tiles' polygons were simplified and checked with the tiles' own
   // tolerance: with it (or none) they need not be simplified again.
   const bool tiles_tolerance = simplify_epsilon_m == options_.simplify_epsilon_m || simplify_epsilon_m <= 0.0;
@@ -275,31 +312,28 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
       tiles_, [layer](const Tile& tile) -> const TypedMultiPolygon& { return layer == Layer::kFree ? tile.free : tile.planning(); },
       tiles_tolerance);
   auto united = unite_all(std::move(parts.parts));
-  if (!united) {
-    result.error = "the edge overlay could not unite the tiles";
-    return result;
-  }
+  if (!united) return {.error = "the edge overlay could not unite the tiles"};
   TypedMultiPolygon merged = std::move(*united);
   result.stray_border_edges = border_to_frontier(merged, options_.assign_edge_types);
   if (!options_.assign_edge_types) border_to_frontier(parts.inside, false);
-  // The holes set aside lie inside their tile's box, where the merged map is
-  // the tile's own polygon, so they sit in it as they sat in the tile.
-  if (!put_back_holes(merged, std::move(parts.aside))) {
-    result.error = "a hole set aside has no polygon to return to";
-    return result;
-  }
-  if (!tiles_tolerance) {
-    merged.insert(merged.end(), std::make_move_iterator(parts.inside.begin()),
-                  std::make_move_iterator(parts.inside.end()));
-    parts.inside.clear();
-  }
-  std::string why;
-  if (!simplify_and_check(merged, parts.inside, simplify_epsilon_m, why)) {
-    result.error = "merged map invalid: " + why;
-    return result;
-  }
+  // With the tiles' tolerance only the vertices the tile lines added go
+  // (a change below 1e-9 m); the polygons inside tiles are kept as they are
+  // and checked only near the merged ones. Another tolerance: all polygons
+  // are simplified and checked.
+  if (tiles_tolerance) drop_tile_line_vertices(merged, grid_);
+  const std::size_t changed = tiles_tolerance ? merged.size() : merged.size() + parts.inside.size();
   merged.insert(merged.end(), std::make_move_iterator(parts.inside.begin()),
                 std::make_move_iterator(parts.inside.end()));
+  std::string why;
+  if (!simplify_and_check(merged, changed, tiles_tolerance ? 0.0 : simplify_epsilon_m, why))
+    return {.error = "merged map invalid: " + why};
+  // The holes set aside and the islands in them lie strictly inside their
+  // tile's box, where the merged map is the tile's own polygon, unchanged:
+  // they sit in it as they sat in the tile.
+  if (!put_back_holes(merged, std::move(parts.aside)))
+    return {.error = "a hole set aside has no polygon to return to"};
+  merged.insert(merged.end(), std::make_move_iterator(parts.in_aside_holes.begin()),
+                std::make_move_iterator(parts.in_aside_holes.end()));
   result.polygons = std::move(merged);
   result.ok = true;
   return result;

@@ -22,44 +22,36 @@ bool valid_layer(std::span<const TypedPolygon> layer, std::string& why) {
 
 }  // namespace
 
-bool simplify_and_check(TypedMultiPolygon& changed, std::span<const TypedPolygon> kept, double epsilon_m,
-                        std::string& why) {
-  // The kept polygons that can meet the changed ones: boxes overlap (RDP
-  // keeps a subset of the vertices, so a simplified polygon stays in its box).
+bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double epsilon_m, std::string& why) {
+  // The kept polygons that can meet the changed ones go right after them:
+  // boxes overlap (RDP keeps a subset of the vertices, so a simplified
+  // polygon stays in its box).
   std::vector<Box> boxes;
-  boxes.reserve(changed.size());
+  boxes.reserve(changed);
   Box all;
   bg::assign_inverse(all);
-  for (const auto& p : changed) {
-    boxes.push_back(bg::return_envelope<Box>(p.geometry.outer()));
+  for (std::size_t k = 0; k < changed; ++k) {
+    boxes.push_back(bg::return_envelope<Box>(layer[k].geometry.outer()));
     bg::expand(all, boxes.back());
   }
-  TypedMultiPolygon checked;  // [changed..., neighbours...]
-  for (const auto& p : kept) {
-    if (changed.empty()) break;
-    const Box box = bg::return_envelope<Box>(p.geometry.outer());
-    if (bg::disjoint(box, all)) continue;
-    if (std::any_of(boxes.begin(), boxes.end(), [&](const Box& b) { return !bg::disjoint(b, box); }))
-      checked.push_back(p);
-  }
-  const std::size_t neighbours = checked.size();
-  auto valid_with_neighbours = [&](TypedMultiPolygon& candidate) {
-    checked.erase(checked.begin(), checked.end() - static_cast<std::ptrdiff_t>(neighbours));
-    checked.insert(checked.begin(), std::make_move_iterator(candidate.begin()), std::make_move_iterator(candidate.end()));
-    const bool valid = valid_layer(checked, why);
-    std::move(checked.begin(), checked.begin() + static_cast<std::ptrdiff_t>(candidate.size()), candidate.begin());
-    return valid;
-  };
-  if (epsilon_m > 0.0) {
+  const auto first_kept = layer.begin() + static_cast<std::ptrdiff_t>(changed);
+  const auto last_neighbour =
+      changed == 0 ? first_kept : std::partition(first_kept, layer.end(), [&](const TypedPolygon& p) {
+        const Box box = bg::return_envelope<Box>(p.geometry.outer());
+        return !bg::disjoint(box, all) &&
+               std::any_of(boxes.begin(), boxes.end(), [&](const Box& b) { return !bg::disjoint(b, box); });
+      });
+  const std::span<const TypedPolygon> checked(layer.data(), static_cast<std::size_t>(last_neighbour - layer.begin()));
+  if (epsilon_m > 0.0 && changed > 0) {
+    const TypedMultiPolygon original(layer.begin(), first_kept);
     for (const bool check_each_polygon : {false, true}) {
-      TypedMultiPolygon simplified = simplify_typed(changed, epsilon_m, check_each_polygon);
-      if (valid_with_neighbours(simplified)) {
-        changed = std::move(simplified);
-        return true;
-      }
+      TypedMultiPolygon simplified = simplify_typed(original, epsilon_m, check_each_polygon);
+      std::move(simplified.begin(), simplified.end(), layer.begin());  // one polygon for each
+      if (valid_layer(checked, why)) return true;
     }
+    std::move(original.begin(), original.end(), layer.begin());
   }
-  return valid_with_neighbours(changed);
+  return valid_layer(checked, why);
 }
 
 Tile::Tile(Box box_in, TypedMultiPolygon free_in, TypedMultiPolygon obstacles_in,
@@ -131,7 +123,7 @@ void Tile::compute_planning() const {
       const double a_free = area(free), a_diff = area(difference.polygons);
       if (a_diff > a_free + 1e-6 || a_diff < a_free - area(obstacles) - 1e-6)
         why = "difference area out of bounds";
-      else if (!simplify_and_check(difference.polygons, {}, options_.simplify_epsilon_m, why))
+      else if (!simplify_and_check(difference.polygons, difference.polygons.size(), options_.simplify_epsilon_m, why))
         why = "planning layer invalid: " + why;
       else
         why.clear();

@@ -12,15 +12,16 @@
 namespace pex::mapping {
 
 // The last step of every layer update (insert, planning layer, merge): RDP
-// of the `changed` polygons with epsilon_m, run by run of equal type, then
-// one validity check of them together with the `kept` polygons (unchanged,
-// valid, interior-disjoint from the changed ones before RDP) whose boxes meet
-// theirs: RDP moves a boundary by up to epsilon_m, so a simplified polygon
-// can cross a kept neighbour. If the simplified layer is not valid, RDP polygon
-// by polygon (each keeping its own validity), then no RDP. False, with the
-// reason in `why`, if none of them is valid; `changed` is then unchanged.
-bool simplify_and_check(TypedMultiPolygon& changed, std::span<const TypedPolygon> kept, double epsilon_m,
-                        std::string& why);
+// of the first `changed` polygons of `layer` with epsilon_m, run by run of
+// equal type, then one validity check of them together with the other
+// polygons (kept: unchanged, valid, interior-disjoint from the changed ones
+// before RDP) whose boxes meet theirs: RDP moves a boundary by up to
+// epsilon_m, so a simplified polygon can cross a kept neighbour. If the
+// simplified polygons are not valid so, RDP polygon by polygon (each keeping
+// its own validity), then no RDP. False, with the reason in `why`, if none
+// of them is valid (the changed polygons are then as they came). The kept
+// polygons are reordered (those near the changed ones first) but not changed.
+bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double epsilon_m, std::string& why);
 
 // One square of the map. An insert writes free and obstacles; the planning
 // layer (free minus obstacles) is derived from them on first use and kept.
