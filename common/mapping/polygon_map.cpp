@@ -219,9 +219,19 @@ std::int64_t border_to_frontier(TypedMultiPolygon& polygons, bool assign_edge_ty
 
 // Merge, step 4: the vertices a tile line added to an edge (on the line,
 // between two edges of one type, within 1e-9 m of the line through its
-// neighbours) are dropped, so a merged edge is one edge again.
-void drop_tile_line_vertices(TypedMultiPolygon& polygons, const TileGrid& grid) {
+// neighbours, and a vertex of no other ring of `polygons` or `others`: a
+// ring touching there would be left on the edge's interior) are dropped,
+// so a merged edge is one edge again.
+void drop_tile_line_vertices(TypedMultiPolygon& polygons, const TypedMultiPolygon& others, const TileGrid& grid) {
   auto on_line = [&grid](double v) { return grid.line(grid.index(v)) == v; };
+  std::map<std::pair<double, double>, int> uses;  // tile-line vertices: how many ring corners
+  auto count = [&](const TypedMultiPolygon& ps) {
+    for_each_edge(ps, [&](const Point& a, const Point&, EdgeType) {
+      if (on_line(a.x()) || on_line(a.y())) ++uses[{a.x(), a.y()}];
+    });
+  };
+  count(polygons);
+  count(others);
   auto drop = [&](Ring& ring, std::vector<EdgeType>& types) {
     const std::size_t n = types.size();
     Ring kept_ring;
@@ -233,7 +243,8 @@ void drop_tile_line_vertices(TypedMultiPolygon& polygons, const TileGrid& grid) 
       const double dx = w.x() - u.x(), dy = w.y() - u.y();
       const double off = dx * (v.y() - u.y()) - dy * (v.x() - u.x());
       const bool dissolve = (on_line(v.x()) || on_line(v.y())) && types[(i + n - 1) % n] == types[i] &&
-                            off * off <= 1e-18 * (dx * dx + dy * dy) && n - (i - kept_types.size()) > 3;
+                            off * off <= 1e-18 * (dx * dx + dy * dy) && n - (i - kept_types.size()) > 3 &&
+                            uses[{v.x(), v.y()}] == 1;
       if (dissolve && i > 0) continue;
       kept_ring.push_back(v);
       kept_types.push_back(types[i]);
@@ -320,7 +331,7 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
   // (a change below 1e-9 m); the polygons inside tiles are kept as they are
   // and checked only near the merged ones. Another tolerance: all polygons
   // are simplified and checked.
-  if (tiles_tolerance) drop_tile_line_vertices(merged, grid_);
+  if (tiles_tolerance) drop_tile_line_vertices(merged, parts.inside, grid_);
   const std::size_t changed = tiles_tolerance ? merged.size() : merged.size() + parts.inside.size();
   merged.insert(merged.end(), std::make_move_iterator(parts.inside.begin()),
                 std::make_move_iterator(parts.inside.end()));
