@@ -210,6 +210,46 @@ TEST(PolygonMap, SameScansGiveTheSameMapBitForBit) {
   }
 }
 
+// The merge dissolves the vertices a tile line added to an edge, but not one
+// where a hole touches its outer ring: the hole's corner would be left on
+// the merged edge's interior (Boost's check read that as a crossing on
+// FR079). Two tiles of 8 m, the line x = 8 through a slanted top edge with a
+// hole touching it at (8, 6).
+TEST(PolygonMap, MergeKeepsATileLineVertexWhereAHoleTouches) {
+  PolygonMapOptions options;
+  options.tile_origin_m = 0.0;
+  PolygonMap map(options);
+  auto typed = [](Ring ring, std::vector<EdgeType> types) {
+    TypedPolygon p;
+    p.geometry.outer() = std::move(ring);
+    p.edge_types = {std::move(types)};
+    return TypedMultiPolygon{p};
+  };
+  const auto F = E::kFrontier, B = E::kBorder;
+  map.restore_tile({0, 0}, typed({{6, 2}, {8, 2}, {8, 5}, {7.5, 5}, {8, 6}, {6, 5.6}, {6, 2}}, {F, B, F, F, F, F}), {});
+  map.restore_tile({1, 0}, typed({{8, 2}, {10, 2}, {10, 6.4}, {8, 6}, {8.5, 5}, {8, 5}, {8, 2}}, {F, F, F, F, F, B}), {});
+  for (const auto& [key, tile] : map.tiles()) ASSERT_TRUE(is_valid(tile->free));
+  const auto merged = map.free_space();
+  ASSERT_TRUE(merged.ok) << merged.error;
+  std::string why;
+  EXPECT_TRUE(is_valid(merged.polygons, &why)) << why;
+  ASSERT_EQ(merged.polygons.size(), 1u);
+  const Polygon& room = merged.polygons[0].geometry;
+  ASSERT_EQ(room.inners().size(), 1u);
+  EXPECT_NEAR(area(merged.polygons), 4 * 3.6 + 0.5 * 4 * 0.8 - 0.5, 1e-9);
+  // (8, 6) stays a corner of the outer ring; (8, 2) and (8, 5) went.
+  auto corners = [](const Ring& ring) { return std::vector<Point>(ring.begin(), ring.end() - 1); };
+  auto has = [&](const Ring& ring, double x, double y) {
+    for (const auto& p : corners(ring))
+      if (p.x() == x && p.y() == y) return true;
+    return false;
+  };
+  EXPECT_TRUE(has(room.outer(), 8, 6));
+  EXPECT_FALSE(has(room.outer(), 8, 2));
+  EXPECT_FALSE(has(room.inners()[0], 8, 5));
+  EXPECT_EQ(corners(room.outer()).size(), 5u);
+}
+
 // The property test: thousands of random scans (noisy, at random poses, with
 // random free ranges) into one map. Every insert: the union never shrinks the
 // free area of the tiles it updates (measured before simplification). Every
