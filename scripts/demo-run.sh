@@ -69,18 +69,6 @@ trap - EXIT
   && echo "demo: map written to $OUT/map.svg and $OUT/map.png"
 "$BIN/pex-explore-report" --world "worlds/$WORLD.wkt" --log "$OUT/demo.lcm" --json-out "$OUT/report.json" >/dev/null \
   || echo "demo: no report (pex-explore-report failed)"
-# The same run with the mapper's obstacle band credited: the map is free space
-# minus a band of obstacle_inner_m + obstacle_outer_m around every wall it saw,
-# which on the simulator's zero-thickness walls eats that much of the floor on
-# the wall's far side. Both figures go into the report.
-band_m=$(awk -F'[= ]+' '/^obstacle_(inner|outer)_m/ {s += $2} END {print s + 0}' config/polygon_mapper.toml)
-if [ -s "$OUT/report.json" ] && credited=$("$BIN/pex-explore-report" --world "worlds/$WORLD.wkt" --log "$OUT/demo.lcm" \
-     --credit-obstacle-band-m "$band_m" 2>/dev/null); then
-  cov=$(echo "$credited" | sed -n 's/.*"coverage": *\([^,}]*\).*/\1/p')
-  iou=$(echo "$credited" | sed -n 's/.*"iou": *\([^,}]*\).*/\1/p')
-  sed -i "s/}\$/,\"band_credit_m\":$band_m,\"coverage_band_credited\":$cov,\"iou_band_credited\":$iou}/" "$OUT/report.json"
-fi
-
 # The last line says what happened, from the report: the phase the mission
 # ended in, how much of the reachable floor the map covers, collisions.
 field() { sed -n "s/.*\"$1\": *\"\{0,1\}\([^\",}]*\).*/\1/p" "$OUT/report.json" 2>/dev/null | head -n 1; }

@@ -33,6 +33,15 @@ class ObstacleEdges {
       if (segments_intersect(a, b, it->first.first, it->first.second)) return true;
     return false;
   }
+  // The frontier point f is in view from `from`: no obstacle edge on the way,
+  // which stops 1 cm short of f (f lies on the map's boundary, often at the
+  // end of an obstacle edge, which is not a wall in the way).
+  bool in_view(const Point& from, const Point& f) const {
+    const double d = distance(from, f);
+    if (d <= 0.01) return true;
+    const Point short_of_f(f.x() + (from.x() - f.x()) * 0.01 / d, f.y() + (from.y() - f.y()) * 0.01 / d);
+    return !blocks(from, short_of_f);
+  }
 
  private:
   using Value = std::pair<mapping::Segment, std::size_t>;
@@ -75,12 +84,7 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
   for (std::size_t i = 0; i < near.size() && i < kTries; ++i) {
     const auto inside = cspace.nearest_interior_point(near[i].second, 0.05);
     if (!inside || cspace.piece_of(*inside) != piece_index) continue;
-    // Stop 1 cm short of f: f lies on the map's boundary, often at the end
-    // of an obstacle edge, which is not a wall in the way.
-    const double d = distance(*inside, f);
-    if (d <= 0.01) return inside;
-    const Point short_of_f(f.x() + (inside->x() - f.x()) * 0.01 / d, f.y() + (inside->y() - f.y()) * 0.01 / d);
-    if (!obstacles.blocks(*inside, short_of_f)) return inside;
+    if (obstacles.in_view(*inside, f)) return inside;
   }
   return std::nullopt;
 }
@@ -156,24 +160,38 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   const Point& robot_point = setup->robot_point;
   const std::optional<Point> start = setup->start;
   const int own_piece = cspace.piece_of(*start);
-  std::optional<ObstacleEdges> obstacles;  // built on first need
+  const ObstacleEdges obstacles(map);
 
   // 2. Candidates on the frontiers, moved into the C-space, or to an
   // approach point when the C-space next to them is cut off from the robot.
+  // A candidate is where the robot sees its frontier point from: the nearest
+  // C-space point can lie on the other side of a wall (a frontier sliver
+  // behind a thin wall, a misaligned scan's free space beyond one), and a
+  // robot sent there stands looking at the wall; such a point is dropped and
+  // an approach point, which is in view by construction, tried instead.
   const auto chains = frontier_chains(map);
   plan.stats.frontier_chains = static_cast<int>(chains.size());
   const auto points = frontier_candidates(chains, options.frontier, &plan.stats.chains_too_short);
   std::vector<Point> targets;
   for (const auto& fp : points) {
     std::optional<Point> position = cspace.nearest_interior_point(fp.point, options.candidate_snap_distance_m);
+    bool out_of_view = false;
+    if (position && !obstacles.in_view(*position, fp.point)) {
+      position.reset();
+      out_of_view = true;
+    }
     bool approach = false;
     if (own_piece >= 0 && options.approach_range_m > 0.0 && (!position || cspace.piece_of(*position) != own_piece)) {
-      if (!obstacles) obstacles.emplace(map);
-      if (auto a = approach_point(cspace, own_piece, fp.point, options.approach_range_m, *obstacles)) {
+      if (auto a = approach_point(cspace, own_piece, fp.point, options.approach_range_m, obstacles)) {
         position = a;
         approach = true;
         ++plan.stats.approach_candidates;
       }
+    }
+    if (!position && out_of_view) {
+      ++plan.stats.candidates_out_of_view;
+      plan.out_of_view_frontier_points.push_back(fp.point);
+      continue;
     }
     if (!position) {
       ++plan.stats.candidates_not_in_cspace;

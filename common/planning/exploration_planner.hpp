@@ -78,6 +78,9 @@ struct PlanStats {
   int frontier_chains = 0;
   int chains_too_short = 0;
   int candidates_not_in_cspace = 0;  // no C-space point near enough, nor an approach point
+  // A C-space point near enough, but with a wall between it and the
+  // frontier point, and no approach point: no reachable place sees it.
+  int candidates_out_of_view = 0;
   int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
   int cspace_vertices = 0;
   int reflex_nodes = 0;
@@ -89,6 +92,10 @@ struct Plan {
   std::string error;                    // why not ok
   std::vector<GoalCandidate> candidates;  // every candidate that got into the C-space
   std::vector<Point> narrow_frontier_points;  // frontier candidates with no C-space point near them
+  // Frontier candidates behind a wall: the C-space near them has a wall
+  // between it and them, and no point of the robot's piece within
+  // approach_range_m has them in view (PlanStats::candidates_out_of_view).
+  std::vector<Point> out_of_view_frontier_points;
   int best = -1;                        // index into candidates, -1: none reachable
   std::vector<int> tour;                // kTour: the visiting order (indices into candidates), best first
   PlanStats stats;

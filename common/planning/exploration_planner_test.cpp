@@ -77,6 +77,26 @@ TEST(PlanExploration, NoApproachThroughAWall) {
   }
 }
 
+// A sliver of free space behind the corridor's top wall, 0.1 m wide and 4 m
+// long, its far side frontier (what a scan seen through a gap, or a scan
+// placed a little off, leaves beyond a thin wall). Its frontier is 0.47 m
+// from the corridor's C-space, within the snap distance; the wall is between.
+TEST(PlanExploration, AFrontierBehindAWallIsOutOfViewNotAGoal) {
+  const mapping::TypedMultiPolygon map = {
+      typed_polygon(testing::rectangle(0, 0, 20, 3)),
+      typed_polygon(testing::rectangle(5, 3.05, 9, 3.15, {E::kObstacle, E::kFrontier, E::kFrontier, E::kFrontier}))};
+  const Plan plan = plan_exploration(map, Pose2{2, 1.5, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.best_candidate(), nullptr);  // without the check: a goal in the corridor facing the wall
+  EXPECT_TRUE(plan.candidates.empty());
+  EXPECT_EQ(plan.stats.candidates_out_of_view, 1);
+  ASSERT_EQ(plan.out_of_view_frontier_points.size(), 1u);
+  EXPECT_GT(plan.out_of_view_frontier_points[0].y(), 3.0);
+  EXPECT_EQ(plan.stats.candidates_not_in_cspace, 0);
+  // Frontiers in view of their C-space point stay goals: the windows of
+  // corridor_with_windows() below.
+}
+
 // A corridor 30 x 3 m whose top wall has 1 m windows of frontier at x = 8,
 // 11 and 15. From x = 10 the nearest is 11; but 8, 11, 15 in that order is
 // the shorter way through all three (9 m against 11 m for 11, 8, 15).

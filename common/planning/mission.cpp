@@ -372,6 +372,7 @@ void Mission::list_frontiers(const Plan& plan) {
     frontiers_.push_back({c.position, why});
   }
   for (const auto& p : plan.narrow_frontier_points) frontiers_.push_back({p, FrontierReason::kTooNarrow});
+  for (const auto& p : plan.out_of_view_frontier_points) frontiers_.push_back({p, FrontierReason::kOutOfView});
 }
 
 void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime) {
@@ -413,21 +414,27 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       no_path += f.reason == FrontierReason::kNoPath;
     }
     const int narrow = plan.stats.candidates_not_in_cspace;
-    // DONE when every frontier goal left has been visited: the robot stood
-    // there facing it, so driving cannot show more (the map keeps a frontier
-    // the laser could not clear). Any frontier it could not get to (no path,
-    // too narrow, given up) makes it DONE_WITH_UNREACHABLE. Both list them.
+    const int out_of_view = plan.stats.candidates_out_of_view;
+    // DONE when every frontier goal left has been visited (the robot stood
+    // there facing it: the map keeps a frontier the laser could not clear)
+    // or is out of view (behind a wall, seen from no place the robot can
+    // reach: a sliver of a misaligned scan beyond a wall, a room behind a
+    // window): driving cannot show more of either. Any frontier it could not
+    // get to (no path, too narrow, given up) makes it DONE_WITH_UNREACHABLE.
+    // Both list them.
     const bool nothing_left = no_path == 0 && given_up == 0 && narrow == 0;
     std::string why;
-    if (plan.candidates.empty() && narrow == 0) {
+    if (plan.candidates.empty() && narrow == 0 && out_of_view == 0) {
       why = "no frontier left";
     } else if (nothing_left) {
-      why = "every frontier left visited (" + std::to_string(visited) + " visited without clearing them)";
+      why = "every frontier left visited or out of view (" + std::to_string(visited) +
+            " visited without clearing them, " + std::to_string(out_of_view) + " behind walls)";
     } else {
-      why = std::to_string(plan.candidates.size() + static_cast<std::size_t>(narrow)) +
+      why = std::to_string(plan.candidates.size() + static_cast<std::size_t>(narrow + out_of_view)) +
             " frontier goals left, none reachable (" + std::to_string(no_path) + " without a path, " +
             std::to_string(narrow) + " too narrow for the robot, " + std::to_string(given_up) + " given up, " +
-            std::to_string(visited) + " visited without clearing them)";
+            std::to_string(visited) + " visited without clearing them, " + std::to_string(out_of_view) +
+            " behind walls)";
     }
     if (empty_plans_ >= options_.done_confirmations) {
       finish(nothing_left ? Phase::kDone : Phase::kDoneWithUnreachable, "exploration done: " + why, now_utime);

@@ -70,7 +70,14 @@ enum class MissionCommand : std::int8_t { kStart = 1, kPause = 2, kResume = 3, k
 const char* to_string(MissionCommand command);
 
 // Values match pex::explore_state_t's FRONTIER_* constants.
-enum class FrontierReason : std::int8_t { kReachable = 0, kNoPath = 1, kTooNarrow = 2, kGivenUp = 3, kVisited = 4 };
+enum class FrontierReason : std::int8_t {
+  kReachable = 0,
+  kNoPath = 1,
+  kTooNarrow = 2,
+  kGivenUp = 3,
+  kVisited = 4,
+  kOutOfView = 5,
+};
 
 struct FrontierLeft {
   Point position;  // the candidate (in the C-space), or the frontier point when it has no C-space point

@@ -477,6 +477,26 @@ TEST(Mission, SqueezesThroughANarrowGapWithoutTheMarginOnlyWhenNothingElseIsLeft
   EXPECT_NE(out.status.find("none reachable"), std::string::npos) << out.status;
 }
 
+// A closed corridor and, behind its top wall, a sliver of free space whose
+// far side is frontier (a misaligned scan beyond a thin wall): no reachable
+// place has it in view, so driving cannot show more. DONE, with it listed.
+TEST(Mission, DoneWhenTheOnlyFrontierLeftIsBehindAWall) {
+  const mapping::TypedMultiPolygon map = {
+      typed_polygon(rectangle(0, 0, 20, 3)),
+      typed_polygon(rectangle(5, 3.05, 9, 3.15, {E::kObstacle, E::kFrontier, E::kFrontier, E::kFrontier}))};
+  Mission m(test_options());
+  for (std::int64_t t : {0 * kSecond, 1 * kSecond}) {
+    m.on_map(map, t);
+    m.on_pose(Pose2{2, 1.5, 0}, t);
+    (void)step_with_inline_planning(m, t);
+  }
+  const auto out = step_with_inline_planning(m, kSecond + 1);
+  EXPECT_EQ(out.phase, Phase::kDone) << out.status;
+  ASSERT_EQ(out.frontiers.size(), 1u);
+  EXPECT_EQ(out.frontiers[0].reason, FrontierReason::kOutOfView);
+  EXPECT_NE(out.status.find("1 behind walls"), std::string::npos) << out.status;
+}
+
 TEST(Mission, CountsDistanceTravelledButNotPoseJumps) {
   Mission m(test_options());
   m.on_pose(Pose2{0, 0, 0}, 0);

@@ -13,6 +13,7 @@ inline constexpr std::string_view kBaseCmd = "BASE_CMD";
 inline constexpr std::string_view kSlamUpdate = "SLAM_UPDATE";
 inline constexpr std::string_view kSlamPose = "SLAM_POSE";
 inline constexpr std::string_view kMap = "MAP";
+inline constexpr std::string_view kMapFree = "MAP_FREE";
 inline constexpr std::string_view kExploreState = "EXPLORE_STATE";
 inline constexpr std::string_view kDaemonStatus = "DAEMON_STATUS";
 inline constexpr std::string_view kSimTruth = "SIM_TRUTH";
@@ -28,13 +29,14 @@ struct ChannelInfo {
   std::string_view publisher;   // daemon that publishes it
 };
 
-inline constexpr std::array<ChannelInfo, 12> kRegistry{{
+inline constexpr std::array<ChannelInfo, 13> kRegistry{{
     {kLidarScan, "pex.laser_scan_t", 25.0, true, "lidar_reader"},
     {kOdometry, "pex.odometry_t", 50.0, true, "base_driver"},
     {kBaseCmd, "pex.velocity_cmd_t", 10.0, true, "explorer"},
     {kSlamUpdate, "pex.slam_update_t", 0.0, true, "slam"},
     {kSlamPose, "pex.pose_t", 50.0, true, "slam"},
     {kMap, "pex.polygon_map_t", 1.0, true, "polygon_mapper"},
+    {kMapFree, "pex.polygon_map_t", 1.0, true, "polygon_mapper"},
     {kExploreState, "pex.explore_state_t", 2.0, true, "explorer"},
     {kDaemonStatus, "pex.daemon_status_t", 1.0, true, "every daemon"},
     {kSimTruth, "pex.pose_t", 50.0, true, "sim"},

@@ -64,6 +64,12 @@ int main(int argc, char** argv) {
       node.counter("slam_epoch_changes") = c.slam_epoch_changes;
       node.counter("map_vertices") = static_cast<std::int64_t>(mapper->map().planning_vertex_count());
     };
+    // MAP (planning map) and, unless switched off, MAP_FREE (explored free space).
+    auto publish_maps = [&node, mapper](std::int64_t now_utime) {
+      if (auto msg = mapper->map_message(now_utime)) node.publish(ch::kMap, *msg);
+      if (mapper->options().publish_free_space)
+        if (auto msg = mapper->free_space_message(now_utime)) node.publish(ch::kMapFree, *msg);
+    };
     node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [&node, mapper, report, watch](const pex::laser_scan_t& scan) {
       try {
         mapper->on_scan(scan);
@@ -74,7 +80,7 @@ int main(int argc, char** argv) {
       report();
     });
     if (source == "slam") {
-      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, report, watch](const pex::slam_update_t& update) {
+      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, report, watch, publish_maps](const pex::slam_update_t& update) {
         bool switched = false;
         const auto epoch_changes = mapper->counters().slam_epoch_changes;
         try {
@@ -86,8 +92,7 @@ int main(int argc, char** argv) {
           spdlog::warn("SLAM started afresh (epoch {}): its frame is not the old map's, which is dropped", update.epoch);
         watch->seen(ch::kSlamUpdate, node.monotonic_us());
         // A new best particle: its map goes out now, consistent with its trajectory.
-        if (switched)
-          if (auto msg = mapper->map_message(node.now_utime())) node.publish(ch::kMap, *msg);
+        if (switched) publish_maps(node.now_utime());
         report();
       });
     } else if (source == "odometry") {
@@ -104,8 +109,8 @@ int main(int argc, char** argv) {
       });
     }
     const auto period = std::chrono::microseconds(static_cast<std::int64_t>(1e6 / mapper->options().publish_rate_hz));
-    node.every(period, [&node, mapper, report](std::int64_t now_utime) {
-      if (auto msg = mapper->map_message(now_utime)) node.publish(ch::kMap, *msg);
+    node.every(period, [publish_maps, report](std::int64_t now_utime) {
+      publish_maps(now_utime);
       report();
     });
     node.every(std::chrono::milliseconds(250), [&node, watch](std::int64_t) {

@@ -33,6 +33,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.insert_min_rotation_rad = config.get<double>("insert_min_rotation_rad", o.insert_min_rotation_rad, non_negative<double>());
   o.insert_max_interval_s = config.get<double>("insert_max_interval_s", o.insert_max_interval_s, non_negative<double>());
   o.publish_rate_hz = config.get<double>("publish_rate_hz", o.publish_rate_hz, runtime::in_range(0.01, 100.0));
+  o.publish_free_space = config.get<bool>("publish_free_space", o.publish_free_space);
   o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, runtime::in_range(0.1, 3600.0));
   o.pose_buffer_s = config.get<double>("pose_buffer_s", o.pose_buffer_s, positive<double>());
   o.max_pose_gap_s = config.get<double>("max_pose_gap_s", o.max_pose_gap_s, positive<double>());
@@ -121,7 +122,7 @@ std::string Mapper::start_from(const mapping::TypedMultiPolygon& polygons) {
   } else {
     map_ = std::move(map);
   }
-  dirty_ = true;
+  mark_changed();
   return "";
 }
 
@@ -217,7 +218,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   last_insert_pose_ = mapping::Pose2{best.x, best.y, best.theta};
   last_scan_utime_ = scan->utime;
   pending_.erase(pending_.begin(), scan + 1);  // older scans will get no update either
-  dirty_ = true;
+  mark_changed();
   return true;
 }
 
@@ -294,7 +295,7 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   last_insert_pose_ = robot;
   last_insert_scan_utime_ = scan.utime;
   last_scan_utime_ = scan.utime;
-  if (result.tiles_touched > 0) dirty_ = true;
+  if (result.tiles_touched > 0) mark_changed();
   return true;
 }
 
@@ -345,18 +346,37 @@ std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
       ++counters_.merge_failures;  // keep the last good message; retried next time
     }
   }
-  if (!message_) return std::nullopt;
-  message_->utime = now_utime;
-  message_->scan_utime = last_scan_utime_;
-  message_->particle = best_;
-  message_->generation = best_ >= 0 ? generation_ : counters_.scans_inserted;
-  message_->scans_inserted = static_cast<std::int32_t>(counters_.scans_inserted);
-  if (last_insert_pose_) {
-    message_->robot_x = last_insert_pose_->x;
-    message_->robot_y = last_insert_pose_->y;
-    message_->robot_theta = last_insert_pose_->theta;
+  return stamped(message_, now_utime);
+}
+
+std::optional<pex::polygon_map_t> Mapper::free_space_message(std::int64_t now_utime) {
+  if (free_space_dirty_) {
+    const auto merged = map().free_space();
+    if (merged.boost_cascade) ++counters_.merge_boost_fallbacks;
+    if (merged.ok) {
+      free_space_message_ = to_message(merged.polygons);
+      free_space_dirty_ = false;
+    } else {
+      ++counters_.merge_failures;  // keep the last good message; retried next time
+    }
   }
-  return message_;
+  return stamped(free_space_message_, now_utime);
+}
+
+std::optional<pex::polygon_map_t> Mapper::stamped(std::optional<pex::polygon_map_t>& message,
+                                                  std::int64_t now_utime) const {
+  if (!message) return std::nullopt;
+  message->utime = now_utime;
+  message->scan_utime = last_scan_utime_;
+  message->particle = best_;
+  message->generation = best_ >= 0 ? generation_ : counters_.scans_inserted;
+  message->scans_inserted = static_cast<std::int32_t>(counters_.scans_inserted);
+  if (last_insert_pose_) {
+    message->robot_x = last_insert_pose_->x;
+    message->robot_y = last_insert_pose_->y;
+    message->robot_theta = last_insert_pose_->theta;
+  }
+  return message;
 }
 
 namespace {
@@ -411,7 +431,7 @@ std::string Mapper::restore(std::string_view checkpoint) {
     last_insert_scan_utime_ = last_insert_scan_utime;
     last_scan_utime_ = last_scan_utime;
     counters_.scans_inserted = scans_inserted;
-    dirty_ = true;
+    mark_changed();
     return "";
   } catch (const archive::ArchiveError& e) {
     return e.what();

@@ -33,6 +33,7 @@ struct MapperOptions {
   // look at a frontier gets that look into the map (0 = never by time).
   double insert_max_interval_s = 1.0;
   double publish_rate_hz = 1.0;
+  bool publish_free_space = true;         // MAP_FREE beside MAP, at the same rate
   double input_timeout_s = 3.0;           // no scan or no pose/update this long: DEGRADED (health)
   double pose_buffer_s = 5.0;             // poses kept for pairing with scans
   double max_pose_gap_s = 0.5;            // poses bracketing a scan may be this far apart
@@ -119,6 +120,13 @@ class Mapper {
   // the merge fails the last good message is kept (counted), so a published
   // map is always valid. nullopt until a scan was inserted.
   std::optional<pex::polygon_map_t> map_message(std::int64_t now_utime);
+  // The MAP_FREE message: the explored free space, the union of the scan
+  // polygons with their obstacle / frontier edges (the paper's map), without
+  // the obstacle band MAP subtracts for planning. What the robot has seen is
+  // scored on it: on a thin wall the band takes obstacle_outer_m of the floor
+  // on the wall's far side, floor the robot has seen. Same caching and
+  // failure rule as map_message().
+  std::optional<pex::polygon_map_t> free_space_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
   // The map that is published: the single map, or the best particle's.
@@ -152,6 +160,10 @@ class Mapper {
   bool apply_slam_update(const pex::slam_update_t& update);
   // The scan-polygon options with the sensor's own range limits applied.
   mapping::ScanPolygonOptions scan_options_for(const pex::laser_scan_t& scan) const;
+  // The map changed: both messages are merged anew when next asked for.
+  void mark_changed() { dirty_ = free_space_dirty_ = true; }
+  // The cached message with this moment's stamps, or nullopt if none yet.
+  std::optional<pex::polygon_map_t> stamped(std::optional<pex::polygon_map_t>& message, std::int64_t now_utime) const;
 
   MapperOptions options_;
   PoseBuffer poses_;
@@ -162,6 +174,8 @@ class Mapper {
   std::int64_t last_scan_utime_ = 0;
   std::optional<pex::polygon_map_t> message_;
   bool dirty_ = false;
+  std::optional<pex::polygon_map_t> free_space_message_;
+  bool free_space_dirty_ = false;
   MapperCounters counters_;
   // slam
   particle_maps::ParticleMaps particle_maps_;

@@ -75,6 +75,41 @@ TEST(Mapper, ScansPairedWithInterpolatedPosesBuildTheRoom) {
   EXPECT_NEAR(msg->robot_x, 1.0 + 0.1 * 79 + 0.05, 0.25);
 }
 
+// A thin wall (no thickness, as the simulator's) splits a 10 x 5 m box into
+// two rooms joined by a door; the robot looks at it from both sides. MAP is
+// the free space minus the obstacle band, which reaches obstacle_outer_m past
+// the wall into the other room's floor; MAP_FREE is the free space the scans
+// saw, floor right up to the wall on both sides.
+TEST(Mapper, FreeSpaceMessageKeepsTheFloorTheObstacleBandTakes) {
+  std::vector<mapping::testing::Wall> walls;
+  mapping::testing::add_box(walls, 0, 0, 10, 5);
+  walls.push_back({mapping::Point{5.0, 0.0}, mapping::Point{5.0, 3.0}});  // the thin wall, door from y = 3 to 5
+  Mapper mapper(MapperOptions{});
+  const std::vector<mapping::Pose2> stops{{2.5, 1.5, 0.0}, {2.5, 4.0, 0.0}, {7.5, 1.5, 3.14}, {7.5, 4.0, 3.14}};
+  std::int64_t t = 1'000'000;
+  for (const auto& stop : stops) {
+    mapper.on_pose({t, stop});
+    mapper.on_scan(make_scan(walls, stop, t + 10'000));
+    mapper.on_pose({t + 20'000, stop});
+    t += 2'000'000;  // > insert_max_interval_s: every stop goes in
+  }
+  ASSERT_EQ(mapper.counters().scans_inserted, 4);
+  const auto planning = mapper.map_message(t);
+  const auto free = mapper.free_space_message(t);
+  ASSERT_TRUE(planning && free);
+  EXPECT_EQ(free->utime, t);
+  EXPECT_EQ(free->scans_inserted, 4);
+  EXPECT_LE(free->free_area_m2, 50.0 + 1e-6);
+  // The band takes at least obstacle_outer_m along each side of the 3 m wall
+  // (and more along the box): the free space has it back.
+  const double band = MapperOptions{}.map.obstacle_outer_m;
+  EXPECT_GT(free->free_area_m2, planning->free_area_m2 + 2 * 3.0 * band);
+  EXPECT_GT(free->free_area_m2, 0.97 * 50.0);
+  EXPECT_GT(free->obstacle_length_m, 20.0);
+  // Cached until the map changes; a new insert makes both new.
+  EXPECT_EQ(mapper.free_space_message(t + 1)->free_area_m2, free->free_area_m2);
+}
+
 TEST(Mapper, MalformedScansAreRefusedAndTheMapKept) {
   Mapper mapper(MapperOptions{});
   pex::laser_scan_t scan{};

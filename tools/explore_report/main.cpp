@@ -1,5 +1,6 @@
 // pex-explore-report --world worlds/X.wkt --log run.lcm [--robot-radius-m 0.25]
 //   [--map-frame start|world] [--wall-tolerance-m 0.1] [--credit-obstacle-band-m 0]
+//   [--scored-map auto|MAP_FREE|MAP]
 //   [--start-pose X Y THETA]
 //   [--json-out FILE] [--svg FILE]
 // Scores an exploration run recorded with lcm-logger against its world: one
@@ -51,6 +52,11 @@ int main(int argc, char** argv) {
                  "count reachable space this close to a map obstacle edge as mapped (MAP is free space minus "
                  "polygon_mapper's obstacle band; its obstacle_outer_m is 0.10); default 0: the map as published")
       ->check(CLI::NonNegativeNumber);
+  std::string scored_map = "auto";
+  app.add_option("--scored-map", scored_map,
+                 "the map scored: MAP_FREE (the explored free space), MAP (the planning map: free space minus the "
+                 "obstacle band), auto (MAP_FREE if the log has it, else MAP)")
+      ->check(CLI::IsMember({"auto", "MAP_FREE", "MAP"}));
   app.add_option("--start-pose", start_pose, "X_M Y_M THETA_RAD: the start pose, if not the world's START line")
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
@@ -72,6 +78,10 @@ int main(int argc, char** argv) {
   pex::kinematics::Pose2 start = world.start;
   if (!start_pose.empty()) start = {start_pose[0], start_pose[1], start_pose[2]};
   if (map_frame == "start") options.map_in_world = start;
+  using pex::explore_report::ScoredMap;
+  options.scored_map = scored_map == "MAP_FREE" ? ScoredMap::kFreeSpace
+                       : scored_map == "MAP"    ? ScoredMap::kPlanningMap
+                                                : ScoredMap::kAuto;
 
   std::string error;
   const auto log = pex::explore_report::read_log(log_path, &error);
@@ -92,14 +102,16 @@ int main(int argc, char** argv) {
   const auto report = pex::explore_report::make_report(world_name, *log, world, reachable, options, &map_world);
 
   std::fprintf(stderr,
-               "pex-explore-report: %lld events (%lld undecodable); MAP %s, EXPLORE_STATE %s, SIM_CLOCK %s, "
+               "pex-explore-report: %lld events (%lld undecodable); MAP %s, MAP_FREE %s (scored: %s), EXPLORE_STATE %s, SIM_CLOCK %s, "
                "explorer DAEMON_STATUS %s; map frame %s; mission_time_s %s\n",
                static_cast<long long>(log->events), static_cast<long long>(log->rejected),
-               log->map ? "yes" : "none", log->explore_state ? "yes" : "none", log->sim_clock ? "yes" : "none",
+               log->map ? "yes" : "none", log->free_space ? "yes" : "none",
+               report.scored_map ? report.scored_map->c_str() : "none", log->explore_state ? "yes" : "none", log->sim_clock ? "yes" : "none",
                log->explorer_status ? "yes" : "none", map_frame.c_str(),
                log->explore_state ? std::to_string(log->explore_state->mission_time_s).c_str() : "none");
   if (!report.map_error.empty())
-    std::fprintf(stderr, "pex-explore-report: the last MAP does not decode: %s\n", report.map_error.c_str());
+    std::fprintf(stderr, "pex-explore-report: the last %s does not decode: %s\n", report.scored_map->c_str(),
+                 report.map_error.c_str());
   if (report.map_polygons_dropped > 0)
     std::fprintf(stderr, "pex-explore-report: %d invalid map polygons dropped (not counted as mapped)\n",
                  report.map_polygons_dropped);

@@ -51,9 +51,10 @@ std::optional<LogContents> read_log(const std::string& path, std::string* error)
   LogContents out;
   for (const lcm::LogEvent* event = log.readNextEvent(); event; event = log.readNextEvent()) {
     ++out.events;
-    if (event->channel == ch::kMap) {
+    if (event->channel == ch::kMap || event->channel == ch::kMapFree) {
       pex::polygon_map_t msg;
-      if (decode(*event, msg)) out.map = std::move(msg); else ++out.rejected;
+      if (!decode(*event, msg)) ++out.rejected;
+      else (event->channel == ch::kMap ? out.map : out.free_space) = std::move(msg);
     } else if (event->channel == ch::kExploreState) {
       pex::explore_state_t msg;
       if (decode(*event, msg)) out.explore_state = std::move(msg); else ++out.rejected;
@@ -115,10 +116,14 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.plan_ms_p99 = us_to_ms(counter(*st, "plan_us_p99"));
     r.control_ms_p99 = us_to_ms(counter(*st, "control_us_p99"));
   }
-  if (log.map) {
+  const bool free_space = options.scored_map == ScoredMap::kFreeSpace ||
+                          (options.scored_map == ScoredMap::kAuto && log.free_space.has_value());
+  const auto& scored = free_space ? log.free_space : log.map;
+  if (scored) {
+    r.scored_map = std::string(free_space ? runtime::channels::kMapFree : runtime::channels::kMap);
     explorer::MapDecodeOptions decode_options;
     decode_options.max_vertices = std::numeric_limits<std::int64_t>::max();  // score whatever was published
-    const auto decoded = explorer::decode_map(*log.map, decode_options);
+    const auto decoded = explorer::decode_map(*scored, decode_options);
     if (!decoded.ok) {
       r.map_error = decoded.error;
     } else {
@@ -203,6 +208,7 @@ std::string to_json(const Report& r) {
   j.number("plan_ms_p50", r.plan_ms_p50, 3);
   j.number("plan_ms_p99", r.plan_ms_p99, 3);
   j.number("control_ms_p99", r.control_ms_p99, 3);
+  j.string("scored_map", r.scored_map);
   return j.str();
 }
 

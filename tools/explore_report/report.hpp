@@ -17,7 +17,8 @@ namespace pex::explore_report {
 
 // The last decodable message of each channel the report needs.
 struct LogContents {
-  std::optional<pex::polygon_map_t> map;              // MAP
+  std::optional<pex::polygon_map_t> map;              // MAP (the planning map)
+  std::optional<pex::polygon_map_t> free_space;       // MAP_FREE (the explored free space)
   std::optional<pex::explore_state_t> explore_state;  // EXPLORE_STATE
   std::optional<pex::sim_clock_t> sim_clock;          // SIM_CLOCK
   std::optional<pex::daemon_status_t> explorer_status;  // DAEMON_STATUS with name "explorer"
@@ -33,7 +34,15 @@ std::optional<LogContents> read_log(const std::string& path, std::string* error)
 // "done_with_unreachable", ...), "unknown_<n>" for others.
 std::string phase_name(std::int8_t phase);
 
+// Which map is scored. The explored free space (MAP_FREE) is what the robot
+// has seen; MAP is it minus polygon_mapper's obstacle band, which on a
+// zero-thickness wall takes obstacle_outer_m of floor the robot has seen from
+// the wall's other side. kAuto: MAP_FREE when the log has it, else MAP (logs
+// from before MAP_FREE).
+enum class ScoredMap { kAuto, kPlanningMap, kFreeSpace };
+
 struct ReportOptions {
+  ScoredMap scored_map = ScoredMap::kAuto;
   double robot_radius_m = 0.25;
   double wall_tolerance_m = 0.1;
   // Reachable space this close to a map obstacle edge counts as mapped
@@ -49,6 +58,7 @@ struct ReportOptions {
 struct Report {
   std::string world;
   std::optional<std::string> strategy, phase;
+  std::optional<std::string> scored_map;  // the channel scored: "MAP_FREE" or "MAP"
   std::optional<double> sim_time_s, path_m, explored_m2, reachable_m2, coverage, iou, obstacle_on_wall;
   std::optional<std::int64_t> collisions, goals, plans;
   std::optional<double> plan_ms_p50, plan_ms_p99, control_ms_p99;

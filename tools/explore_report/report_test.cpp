@@ -145,7 +145,7 @@ TEST(ExploreReport, FullLogGivesEveryField) {
       << json;
   EXPECT_NE(json.find("\"coverage\":0.50000,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"collisions\":1,\"goals\":4,\"plans\":7,\"plan_ms_p50\":1.500,\"plan_ms_p99\":12.000,"
-                      "\"control_ms_p99\":null}"),
+                      "\"control_ms_p99\":null,\"scored_map\":\"MAP\"}"),
             std::string::npos)
       << json;
 
@@ -161,6 +161,45 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   const auto off_wall = svg.find("stroke=\"#ff00ff\"");  // the x = 3 edge, off the walls
   ASSERT_NE(off_wall, std::string::npos);
   EXPECT_LT(svg.find("d=\"M", off_wall), svg.find("/>", off_wall));
+}
+
+// MAP_FREE (the explored free space) is scored when the log has it; MAP
+// (free space minus the obstacle band) when asked for, or when MAP_FREE is absent.
+TEST(ExploreReport, ScoresTheExploredFreeSpaceWhenTheLogHasIt) {
+  const auto world = room();
+  const auto reachable = evaluation::reachable_free_space(world, 0.25, world.start);
+  auto half = [](const char* wkt) {
+    mapping::Polygon p;
+    bg::read_wkt(wkt, p);
+    bg::correct(p);
+    return explorer::encode_map(mapping::with_uniform_type({p}, mapping::EdgeType::kObstacle), 5);
+  };
+  TempLog log;
+  log.add(ch::kMapFree, half("POLYGON((-3 -2, 0 -2, 0 2, -3 2, -3 -2))"));  // the left half (start frame)
+  log.add(ch::kMap, half("POLYGON((-3 -2, -1.5 -2, -1.5 2, -3 2, -3 -2))"));  // a quarter
+  log.write();
+  const auto contents = read_log(log.path(), nullptr);
+  ASSERT_TRUE(contents && contents->map && contents->free_space);
+  ReportOptions options;
+  options.map_in_world = world.start;
+  const auto scored_free = make_report("room", *contents, world, reachable, options);
+  EXPECT_EQ(scored_free.scored_map, "MAP_FREE");
+  EXPECT_NEAR(*scored_free.explored_m2, 12.0, 1e-9);
+  EXPECT_NEAR(*scored_free.coverage, 0.5, 1e-9);
+  options.scored_map = ScoredMap::kPlanningMap;
+  const auto scored_planning = make_report("room", *contents, world, reachable, options);
+  EXPECT_EQ(scored_planning.scored_map, "MAP");
+  EXPECT_NEAR(*scored_planning.explored_m2, 6.0, 1e-9);
+  EXPECT_LT(*scored_planning.coverage, 0.3);
+  // Without MAP_FREE in the log, auto scores MAP; asking for MAP_FREE scores nothing.
+  auto without_free = *contents;
+  without_free.free_space.reset();
+  options.scored_map = ScoredMap::kAuto;
+  EXPECT_EQ(make_report("room", without_free, world, reachable, options).scored_map, "MAP");
+  options.scored_map = ScoredMap::kFreeSpace;
+  const auto none = make_report("room", without_free, world, reachable, options);
+  EXPECT_FALSE(none.scored_map);
+  EXPECT_FALSE(none.coverage);
 }
 
 TEST(ExploreReport, MissingChannelsGiveNulls) {
@@ -182,7 +221,8 @@ TEST(ExploreReport, MissingChannelsGiveNulls) {
                                     "\"path_m\":0.000,\"explored_m2\":null,\"reachable_m2\":") +
                             reachable_m2 +
                             ",\"coverage\":null,\"iou\":null,\"obstacle_on_wall\":null,\"collisions\":null,"
-                            "\"goals\":0,\"plans\":0,\"plan_ms_p50\":null,\"plan_ms_p99\":null,\"control_ms_p99\":null}");
+                            "\"goals\":0,\"plans\":0,\"plan_ms_p50\":null,\"plan_ms_p99\":null,\"control_ms_p99\":null,"
+                            "\"scored_map\":null}");
 }
 
 TEST(ExploreReport, UnreadableLogsAreErrors) {

@@ -44,9 +44,11 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
     out += format("  piece %zu: %.2f m2, %zu holes, %.3f m from the robot%s\n", i, bg::area(pieces[i].geometry),
                   pieces[i].geometry.inners().size(), d, d == 0.0 ? " (the robot's)" : "");
   }
-  out += format("frontiers: %d chains (%d too short), %zu candidates, %d approach points, %d with no C-space near\n",
-                plan.stats.frontier_chains, plan.stats.chains_too_short, plan.candidates.size(),
-                plan.stats.approach_candidates, plan.stats.candidates_not_in_cspace);
+  out += format(
+      "frontiers: %d chains (%d too short), %zu candidates, %d approach points, %d with no C-space near, %d out of "
+      "view (behind a wall)\n",
+      plan.stats.frontier_chains, plan.stats.chains_too_short, plan.candidates.size(), plan.stats.approach_candidates,
+      plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view);
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
     out += format("  %zu: frontier (%.2f, %.2f) -> (%.2f, %.2f)%s, chain %d (%.2f m): ", i, c.frontier_point.x(),
