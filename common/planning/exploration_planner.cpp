@@ -188,6 +188,14 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
         ++plan.stats.approach_candidates;
       }
     }
+    // No C-space point near it and no approach point: a gap narrower than
+    // the robot, unless the nearest C-space point within approach_range_m
+    // has a wall between it and the frontier (a sliver beyond a wall, more
+    // than the snap distance from the free side: out of view).
+    if (!position && !out_of_view && options.approach_range_m > 0.0) {
+      const auto nearest = cspace.nearest_interior_point(fp.point, options.approach_range_m);
+      out_of_view = nearest && !obstacles.in_view(*nearest, fp.point);
+    }
     if (!position && out_of_view) {
       ++plan.stats.candidates_out_of_view;
       plan.out_of_view_frontier_points.push_back(fp.point);

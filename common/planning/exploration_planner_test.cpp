@@ -93,6 +93,16 @@ TEST(PlanExploration, AFrontierBehindAWallIsOutOfViewNotAGoal) {
   ASSERT_EQ(plan.out_of_view_frontier_points.size(), 1u);
   EXPECT_GT(plan.out_of_view_frontier_points[0].y(), 3.0);
   EXPECT_EQ(plan.stats.candidates_not_in_cspace, 0);
+
+  // The same sliver 1.5 m beyond the wall, farther than the snap distance
+  // from the corridor's C-space: out of view too, not "too narrow".
+  const mapping::TypedMultiPolygon farther = {
+      typed_polygon(testing::rectangle(0, 0, 20, 3)),
+      typed_polygon(testing::rectangle(5, 4.4, 9, 4.5, {E::kObstacle, E::kFrontier, E::kFrontier, E::kFrontier}))};
+  const Plan far_plan = plan_exploration(farther, Pose2{2, 1.5, 0}, {}, options());
+  ASSERT_TRUE(far_plan.ok) << far_plan.error;
+  EXPECT_EQ(far_plan.stats.candidates_out_of_view, 1);
+  EXPECT_EQ(far_plan.stats.candidates_not_in_cspace, 0);
   // Frontiers in view of their C-space point stay goals: the windows of
   // corridor_with_windows() below.
 }
