@@ -6,7 +6,8 @@
 # JSON line per run (pex-explore-report) and writes the table into
 # docs/exploration.md between the "exploration-benchmark" markers.
 #   STRATEGIES (default "greedy tour"), SPEED (default 10), MISSION_S (mission
-#   clock limit per run, default 4000), OUT (default out/bench-explore)
+#   clock limit per run, default 4000), OUT (default out/bench-explore),
+#   JOBS (runs side by side, default 1), TABLE_ONLY=1 (tabulate the runs in OUT)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 STRATEGIES=${STRATEGIES:-greedy tour}
@@ -20,13 +21,32 @@ if ((${#worlds[@]} == 0)); then
 fi
 mkdir -p "$OUT"
 results="$OUT/results.jsonl"
+# One run (its own namespace, its own directory); the report is collected below.
+run_one() {
+  local world=$1 strategy=$2 run="$OUT/$1-$2"
+  echo "bench explore: $world with $strategy (speed x$SPEED, mission limit ${MISSION_S} s)" >&2
+  rm -f "$run/report.json"
+  WORLD=$world STRATEGY=$strategy SPEED=$SPEED MISSION_S=$MISSION_S OUT=$run BIN=$BIN QUIET=1 \
+    scripts/netns-run bash scripts/demo-run.sh >"$run.txt" 2>&1 || true
+}
+# JOBS runs side by side (default 1): each has its own namespace and bus, and
+# the simulator paces its clock to the daemons, so a loaded machine changes
+# only the wall time. TABLE_ONLY=1 tabulates the runs already in OUT.
+if [ "${TABLE_ONLY:-0}" != 1 ]; then
+  running=0
+  for world in "${worlds[@]}"; do
+    for strategy in $STRATEGIES; do
+      run_one "$world" "$strategy" &
+      running=$((running + 1))
+      if ((running >= ${JOBS:-1})); then wait -n || true; running=$((running - 1)); fi
+    done
+  done
+  wait || true
+fi
 : >"$results"
 for world in "${worlds[@]}"; do
   for strategy in $STRATEGIES; do
     run="$OUT/$world-$strategy"
-    echo "bench explore: $world with $strategy (speed x$SPEED, mission limit ${MISSION_S} s)" >&2
-    WORLD=$world STRATEGY=$strategy SPEED=$SPEED MISSION_S=$MISSION_S OUT=$run BIN=$BIN QUIET=1 \
-      scripts/netns-run bash scripts/demo-run.sh >"$run.txt" 2>&1 || true
     if [ -s "$run/report.json" ]; then
       cat "$run/report.json" | tee -a "$results"
     else

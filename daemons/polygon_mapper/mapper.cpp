@@ -338,29 +338,24 @@ std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
     const auto merged = map().planning_map();
     counters_.stale_planning_tiles = merged.stale_planning_tiles;
     counters_.boost_planning_tiles = merged.boost_planning_tiles;
-    if (merged.boost_cascade) ++counters_.merge_boost_fallbacks;
-    if (merged.ok) {
-      message_ = to_message(merged.polygons);
-      dirty_ = false;
-    } else {
-      ++counters_.merge_failures;  // keep the last good message; retried next time
-    }
+    take_merge(merged, message_, dirty_);
   }
   return stamped(message_, now_utime);
 }
 
 std::optional<pex::polygon_map_t> Mapper::free_space_message(std::int64_t now_utime) {
-  if (free_space_dirty_) {
-    const auto merged = map().free_space();
-    if (merged.boost_cascade) ++counters_.merge_boost_fallbacks;
-    if (merged.ok) {
-      free_space_message_ = to_message(merged.polygons);
-      free_space_dirty_ = false;
-    } else {
-      ++counters_.merge_failures;  // keep the last good message; retried next time
-    }
-  }
+  if (free_space_dirty_) take_merge(map().free_space(), free_space_message_, free_space_dirty_);
   return stamped(free_space_message_, now_utime);
+}
+
+void Mapper::take_merge(const mapping::MergeResult& merged, std::optional<pex::polygon_map_t>& message, bool& dirty) {
+  if (merged.boost_cascade) ++counters_.merge_boost_fallbacks;
+  if (merged.ok) {
+    message = to_message(merged.polygons);
+    dirty = false;
+  } else {
+    ++counters_.merge_failures;  // keep the last good message; retried next time
+  }
 }
 
 std::optional<pex::polygon_map_t> Mapper::stamped(std::optional<pex::polygon_map_t>& message,

@@ -162,6 +162,9 @@ class Mapper {
   mapping::ScanPolygonOptions scan_options_for(const pex::laser_scan_t& scan) const;
   // The map changed: both messages are merged anew when next asked for.
   void mark_changed() { dirty_ = free_space_dirty_ = true; }
+  // A merge into its cached message: encoded if it succeeded (the message is
+  // then clean), else counted and the last good message kept.
+  void take_merge(const mapping::MergeResult& merged, std::optional<pex::polygon_map_t>& message, bool& dirty);
   // The cached message with this moment's stamps, or nullopt if none yet.
   std::optional<pex::polygon_map_t> stamped(std::optional<pex::polygon_map_t>& message, std::int64_t now_utime) const;
 
