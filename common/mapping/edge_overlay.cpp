@@ -267,8 +267,10 @@ class Overlay {
     const double min_x = meet_min_x_, max_x = meet_max_x_, min_y = meet_min_y_, max_y = meet_max_y_;
     const int n = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(edges_.size()) / 4.0)), 1, 64);
     const double cell_x = std::max((max_x - min_x) / n, 1e-6), cell_y = std::max((max_y - min_y) / n, 1e-6);
-    auto col = [&](double x) { return std::clamp(static_cast<int>((x - min_x) / cell_x), 0, n - 1); };
-    auto row = [&](double y) { return std::clamp(static_cast<int>((y - min_y) / cell_y), 0, n - 1); };
+    // Clamped in double before the cast: a far coordinate does not fit an int.
+    const double last = n - 1;
+    auto col = [&](double x) { return static_cast<int>(std::clamp((x - min_x) / cell_x, 0.0, last)); };
+    auto row = [&](double y) { return static_cast<int>(std::clamp((y - min_y) / cell_y, 0.0, last)); };
     // fn(cell, row, column) for every cell the edge's box (widened by kEps) covers.
     auto for_each_cell = [&](const InputEdge& e, auto&& fn) {
       for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
