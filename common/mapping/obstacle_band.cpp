@@ -169,8 +169,38 @@ std::optional<MultiPolygon> direct_obstacle_band(const Chains& chains, double in
   return geometry_of(band);
 }
 
-MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m, std::string* why) {
-  const Chains chains = obstacle_chains(scan);
+void trim_chain_ends(Chains& chains, double end_trim_m) {
+  if (!(end_trim_m > 0.0)) return;
+  for (auto& chain : chains) {
+    if (chain.size() < 2 || bg::equals(chain.front(), chain.back())) continue;  // closed: no ends
+    const double cut = std::min(end_trim_m, 0.25 * static_cast<double>(bg::length(chain)));
+    // Walks from the front, dropping `cut` of length; then the same reversed.
+    auto trim_front = [cut](Chain& c) {
+      double left = cut;
+      std::size_t i = 0;
+      while (i + 1 < c.size()) {
+        const double d = bg::distance(c[i], c[i + 1]);
+        if (d > left) {
+          const double t = left / d;
+          c[i] = Point(c[i].x() + t * (c[i + 1].x() - c[i].x()), c[i].y() + t * (c[i + 1].y() - c[i].y()));
+          break;
+        }
+        left -= d;
+        ++i;
+      }
+      c.erase(c.begin(), c.begin() + static_cast<std::ptrdiff_t>(i));
+    };
+    trim_front(chain);
+    std::reverse(chain.begin(), chain.end());
+    trim_front(chain);
+    std::reverse(chain.begin(), chain.end());
+  }
+}
+
+MultiPolygon obstacle_band(const TypedPolygon& scan, double inner_m, double outer_m, std::string* why,
+                           double end_trim_m) {
+  Chains chains = obstacle_chains(scan);
+  trim_chain_ends(chains, end_trim_m);
   MultiPolygon band;
   if (chains.empty()) return band;
   if (auto direct = direct_obstacle_band(chains, inner_m, outer_m)) return std::move(*direct);  // checked there

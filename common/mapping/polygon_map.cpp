@@ -264,7 +264,8 @@ void drop_tile_line_vertices(TypedMultiPolygon& polygons, const TypedMultiPolygo
 PreparedScan prepare_scan(TypedPolygon scan, const PolygonMapOptions& options) {
   PreparedScan prepared;
   try {
-    prepared.band = obstacle_band(scan, options.obstacle_inner_m, options.obstacle_outer_m, &prepared.band_error);
+    prepared.band = obstacle_band(scan, options.obstacle_inner_m, options.obstacle_outer_m, &prepared.band_error,
+                                  options.obstacle_end_trim_m);
   } catch (const std::exception& e) {
     prepared.band_error = std::string("obstacle band failed: ") + e.what();
   }

@@ -39,6 +39,10 @@ struct PolygonMapOptions {
   // free side loses little area, noise beyond the wall is cut).
   double obstacle_inner_m = 0.02;
   double obstacle_outer_m = 0.10;
+  // Each obstacle chain's band ends this far short of the chain's ends
+  // (obstacle_band.hpp says why: doors narrowed by the union of the jambs'
+  // bands). 0: the whole chain.
+  double obstacle_end_trim_m = 0.0;
   // RDP tolerance after every operation (0 = off). Never merges edge types.
   double simplify_epsilon_m = 0.01;
   // false: plain geometry, all edges frontier (benchmark baseline).

@@ -40,6 +40,39 @@ TEST(ObstacleBand, CoversObstacleChainsAsymmetrically) {
   EXPECT_FALSE(bg::within(Point(2, 0.2), band));    // inside the free side: beyond inner
 }
 
+// The same two walls with the band ending 0.1 m short of the chain's ends
+// (a door jamb at (0, 0) and at (4, 4)); the corner keeps its band.
+TEST(ObstacleBand, TrimmedEndsStopShortOfTheChainsEnds) {
+  TypedPolygon p;
+  p.geometry.outer() = {{0, 0}, {4, 0}, {4, 4}, {0, 4}, {0, 0}};
+  p.edge_types = {{E::kObstacle, E::kObstacle, E::kFrontier, E::kFrontier}};
+  const auto band = obstacle_band(p, 0.1, 0.3, nullptr, 0.1);
+  ASSERT_FALSE(band.empty());
+  EXPECT_TRUE(bg::is_valid(band));
+  EXPECT_NEAR(bg::area(band), 2 * 3.9 * 0.4, 0.15);
+  EXPECT_FALSE(bg::within(Point(0.05, -0.2), band));  // past the trimmed end
+  EXPECT_TRUE(bg::within(Point(0.15, -0.2), band));
+  EXPECT_FALSE(bg::within(Point(4.2, 3.95), band));
+  EXPECT_TRUE(bg::within(Point(4.2, 3.85), band));
+  EXPECT_TRUE(bg::within(Point(4.2, -0.2), band));    // the corner
+}
+
+TEST(ObstacleBand, TrimKeepsShortAndClosedChains) {
+  Chains chains;
+  chains.push_back(Chain{{0, 0}, {0.2, 0}});               // short: a quarter off each end
+  chains.push_back(Chain{{0, 1}, {0.05, 1}, {1, 1}});       // the first point goes
+  chains.push_back(Chain{{0, 2}, {1, 2}, {1, 3}, {0, 2}});  // closed: whole
+  trim_chain_ends(chains, 0.1);
+  ASSERT_EQ(chains[0].size(), 2u);
+  EXPECT_NEAR(chains[0][0].x(), 0.05, 1e-12);
+  EXPECT_NEAR(chains[0][1].x(), 0.15, 1e-12);
+  ASSERT_EQ(chains[1].size(), 2u);
+  EXPECT_NEAR(chains[1][0].x(), 0.1, 1e-12);
+  EXPECT_NEAR(chains[1][1].x(), 0.9, 1e-12);
+  EXPECT_EQ(chains[2].size(), 4u);
+  EXPECT_NEAR(chains[2][0].x(), 0.0, 1e-12);
+}
+
 // The band built chain by chain is Boost's buffer of the chains, up to where
 // the round joins put their points: same area within 0.5 %, valid, and most
 // scans of a rock field take the direct way.

@@ -60,6 +60,8 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m, runtime::in_range(-1e5, 1e5));
   o.map.obstacle_inner_m = map.get<double>("obstacle_inner_m", o.map.obstacle_inner_m, non_negative<double>());
   o.map.obstacle_outer_m = map.get<double>("obstacle_outer_m", o.map.obstacle_outer_m, positive<double>());
+  o.map.obstacle_end_trim_m =
+      map.get<double>("obstacle_end_trim_m", o.map.obstacle_end_trim_m, runtime::in_range(0.0, 1.0));
   o.map.simplify_epsilon_m = map.get<double>("simplify_epsilon_m", o.map.simplify_epsilon_m, non_negative<double>());
   if (o.scan.free_range_m > o.scan.range_max_m)
     throw runtime::ConfigError(config.origin() + ": scan.free_range_m (" + std::to_string(o.scan.free_range_m) +
