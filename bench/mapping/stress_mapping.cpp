@@ -19,6 +19,11 @@
 //   --dump FILE        (--intel) write the layers of the first map's tiles
 //                      whose planning layer failed, and its merged planning
 //                      map, as WKT
+#include <CLI/CLI.hpp>
+
+#ifndef PEX_VERSION
+#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
+#endif
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -170,23 +175,28 @@ int main(int argc, char** argv) {
   long random = 0, merge_every = 200;
   int map_count = 1;
   std::string log;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string key = argv[i];
-    if (key == "--random") random = std::atol(argv[i + 1]);
-    else if (key == "--intel") log = argv[i + 1];
-    else if (key == "--maps") map_count = std::atoi(argv[i + 1]);
-    else if (key == "--verbose") g_verbose = std::string(argv[i + 1]) == "1";
-    else if (key == "--dump") g_dump = argv[i + 1];
-    else if (key == "--merge-epsilon") g_merge_epsilon = std::atof(argv[i + 1]);
-    else if (key == "--merge-every") merge_every = std::atol(argv[i + 1]);
-    else {
-      std::fprintf(stderr, "unknown option %s\n", key.c_str());
-      return 2;
-    }
+  CLI::App app{"Count the polygon map's failures over many inserts (docs/mapping.md)", "pex-stress-mapping"};
+  app.add_option("--random", random, "N random noisy scans of a room with pillars into one map");
+  app.add_option("--intel", log, "every scan of this CARMEN log after 0.2 m / 0.25 rad of motion");
+  app.add_option("--maps", map_count, "(--intel) into this many maps at perturbed poses")->check(CLI::PositiveNumber);
+  app.add_option("--merge-every", merge_every, "merge both layers every K inserts and check them")
+      ->check(CLI::PositiveNumber);
+  double merge_epsilon = -1.0;
+  app.add_option("--merge-epsilon", merge_epsilon, "merge with this RDP tolerance (default: the map's)");
+  int verbose = 0;
+  app.add_option("--verbose", verbose, "1: every merge's outcome and every failed planning layer's reason");
+  app.add_option("--dump", g_dump, "(--intel) write the failed tiles' layers and the merged map to this file");
+  app.set_version_flag("--version", std::string("pex-stress-mapping ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 64;  // --help, --version: 0; a bad command line: 64, as the other tools
   }
-  if (merge_every < 1 || map_count < 1 || (random <= 0 && log.empty())) {
-    std::fprintf(stderr, "usage: %s --random N | --intel FILE [--maps M] [--merge-every K]\n", argv[0]);
-    return 2;
+  g_verbose = verbose == 1;
+  if (merge_epsilon >= 0.0) g_merge_epsilon = merge_epsilon;
+  if (random <= 0 && log.empty()) {
+    std::fprintf(stderr, "pex-stress-mapping: give --random N or --intel FILE (--help)\n");
+    return 64;
   }
   return random > 0 ? run_random(random, merge_every) : run_log(log, map_count, merge_every);
 }
