@@ -142,7 +142,7 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
     return fail("angle_min / angle_increment not finite or increment zero");
   if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta))
     return fail("pose not finite");
-  if (!(o.free_range_m > 0.0) || !(o.range_max_m > o.range_min_m))
+  if (!(o.free_range_m > 0.0) || !(o.range_max_m > o.range_min_m) || !(o.obstacle_range_m >= 0.0))
     return fail("bad range options");
 
   // Beams in counter-clockwise order; at most one turn (a 360-degree scanner
@@ -158,32 +158,42 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
   auto range_at = [&](std::size_t k) { return ranges[reversed ? n - 1 - k : k]; };
   auto angle_at = [&](std::size_t k) { return first_angle + step * static_cast<double>(k); };
 
-  std::vector<bool> returned(n);
+  // What each beam gives: an obstacle point, free space to the free range (no
+  // return), or free space to the obstacle range (a return beyond it).
+  enum class Beam : std::uint8_t { kReturn, kNoReturn, kFar };
+  const bool far_cut = o.obstacle_range_m > 0.0 && o.obstacle_range_m < o.range_max_m;
+  std::vector<Beam> beam(n);
   std::vector<Point> sensor_points(n);
   for (std::size_t k = 0; k < n; ++k) {
     const double r = range_at(k);
-    returned[k] = std::isfinite(r) && r >= o.range_min_m && r < o.range_max_m;
-    if (returned[k]) {
+    const bool returned = std::isfinite(r) && r >= o.range_min_m && r < o.range_max_m;
+    if (returned && far_cut && r >= o.obstacle_range_m) {
+      beam[k] = Beam::kFar;
+      ++result.beams_beyond_obstacle_range;
+    } else if (returned) {
+      beam[k] = Beam::kReturn;
       sensor_points[k] = Point(r * std::cos(angle_at(k)), r * std::sin(angle_at(k)));
       ++result.beams_returned;
     } else {
+      beam[k] = Beam::kNoReturn;
       ++result.beams_no_return;
     }
   }
 
-  // Pieces in angular order: clusters (obstacle polylines) and no-return runs.
+  // Pieces in angular order: clusters (obstacle polylines) and runs of beams
+  // that give free space only (an arc at their free extent).
   struct Piece {
-    bool cluster;
+    Beam kind;
     std::size_t first, last;  // beam indices
+    bool cluster() const { return kind == Beam::kReturn; }
   };
   std::vector<Piece> pieces;
   const double sin_step = std::sin(step);
   const double sin_gap = std::sin(std::max(o.break_lambda_rad - step, 1e-6));
   for (std::size_t k = 0; k < n; ++k) {
-    const bool continues =
-        !pieces.empty() && pieces.back().last + 1 == k && pieces.back().cluster == returned[k];
+    const bool continues = !pieces.empty() && pieces.back().last + 1 == k && pieces.back().kind == beam[k];
     bool joins = continues;
-    if (continues && returned[k]) {
+    if (continues && beam[k] == Beam::kReturn) {
       const double r_prev = range_at(k - 1);
       const double break_m = r_prev * sin_step / sin_gap + 3.0 * o.break_sigma_m;
       joins = bg::distance(sensor_points[k - 1], sensor_points[k]) <= break_m;
@@ -191,10 +201,10 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
     if (joins) {
       pieces.back().last = k;
     } else {
-      pieces.push_back({static_cast<bool>(returned[k]), k, k});
+      pieces.push_back({beam[k], k, k});
     }
   }
-  for (const auto& p : pieces) result.clusters += p.cluster ? 1 : 0;
+  for (const auto& p : pieces) result.clusters += p.cluster() ? 1 : 0;
 
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
   auto to_map = [&](const Point& p) {
@@ -207,17 +217,18 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
     for (const auto& piece : pieces) {
       std::vector<Point> chain;
       EdgeType inner_type = EdgeType::kFrontier;
-      if (piece.cluster) {
+      if (piece.cluster()) {
         std::vector<Point> points(sensor_points.begin() + piece.first,
                                   sensor_points.begin() + piece.last + 1);
         chain = cluster_polyline(points, level, o);
         inner_type = EdgeType::kObstacle;
       } else {
+        const double extent = piece.kind == Beam::kFar ? o.obstacle_range_m : o.free_range_m;
         const double a0 = angle_at(piece.first), a1 = angle_at(piece.last);
         const int steps = std::max(1, static_cast<int>(std::ceil((a1 - a0) / o.free_arc_step_rad)));
         for (int j = 0; j <= steps; ++j) {
           const double a = (piece.first == piece.last) ? a0 : a0 + (a1 - a0) * j / steps;
-          chain.emplace_back(o.free_range_m * std::cos(a), o.free_range_m * std::sin(a));
+          chain.emplace_back(extent * std::cos(a), extent * std::sin(a));
           if (piece.first == piece.last) break;
         }
       }

@@ -33,6 +33,16 @@ struct ScanPolygonOptions {
   double range_max_m = 30.0;
   // A beam with no return marks free space up to this range (frontier arc).
   double free_range_m = 4.0;
+  // Returns at or beyond this range give no obstacle edge; their beams mark
+  // free space up to this range (frontier arc there). Why: a pose's heading
+  // error moves a return sideways by range x error. SLAM's heading is good to
+  // about a degree (Intel: 1.35 deg mean relation error), which puts a wall
+  // seen at 15 m a quarter metre off; seen again from near, it was drawn
+  // twice, and the doubled jambs closed the office's 1 m doors in the
+  // planning map. Within 8 m a degree is 0.14 m. Obstacles far away are seen
+  // again from nearer when the robot goes to the frontier this leaves.
+  // 0: every return below range_max_m is an obstacle (the paper's polygon).
+  double obstacle_range_m = 0.0;
   // Successive Edge Following with the adaptive breakpoint of Borges & Aldon
   // (2004): beams i-1 and i belong to one cluster when their points are at
   // most r[i-1] * sin(dphi) / sin(lambda - dphi) + 3 sigma apart, so the
@@ -66,8 +76,9 @@ struct ScanPolygonResult {
   bool ok = false;
   std::string error;       // why there is no polygon, when !ok
   TypedPolygon polygon;    // valid, simple, counter-clockwise, no holes, when ok
-  int beams_returned = 0;
+  int beams_returned = 0;       // returns that drew obstacle edges
   int beams_no_return = 0;
+  int beams_beyond_obstacle_range = 0;  // returns at or beyond obstacle_range_m
   int clusters = 0;
   // Which construction gave the polygon: 0 full (RDP + refit), 1 RDP without
   // refit, 2 every return as a vertex (always simple: a star around the origin).

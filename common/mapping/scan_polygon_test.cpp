@@ -106,6 +106,43 @@ TEST(ScanToPolygon, NoReturnBeamsEndAtTheFreeRangeAsFrontier) {
   EXPECT_NEAR(area(map), sector, 0.02 * sector);
 }
 
+// A room 3 m deep and 16 m wide seen from its middle: the near wall is drawn,
+// the side walls beyond the obstacle range are not, and their beams end in a
+// frontier at that range (free space seen, the wall to be seen from nearer).
+TEST(ScanToPolygon, ReturnsBeyondTheObstacleRangeGiveFreeSpaceToItNotWalls) {
+  std::vector<Wall> walls;
+  add_box(walls, -8, -3, 8, 3);
+  const ScanSpec spec;
+  const Pose2 pose{0.0, 0.0, 1.5707963};
+  ScanPolygonOptions options;
+  options.obstacle_range_m = 5.0;
+  const auto result = build(cast_scan(walls, pose, spec), spec, pose, options);
+  ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_GT(result.beams_beyond_obstacle_range, 0);
+  EXPECT_GT(result.beams_returned, 0);
+  bool far_obstacle = false;
+  double frontier_at_cut = 0.0;
+  for_each_edge(result.polygon, [&](const Point& a, const Point& b, EdgeType t) {
+    const double ra = std::hypot(a.x(), a.y()), rb = std::hypot(b.x(), b.y());
+    if (t == EdgeType::kObstacle && std::max(ra, rb) > 5.0 + 1e-6) far_obstacle = true;
+    if (t == EdgeType::kFrontier && std::abs(ra - 5.0) < 1e-6 && std::abs(rb - 5.0) < 1e-6)
+      frontier_at_cut += bg::distance(a, b);
+  });
+  EXPECT_FALSE(far_obstacle);
+  EXPECT_GT(frontier_at_cut, 1.0);
+  // Free space reaches the cut along the room, not past it; the near wall bounds it.
+  EXPECT_TRUE(bg::within(Point(4.9, 0.0), result.polygon.geometry));
+  EXPECT_TRUE(bg::within(Point(-4.9, 0.0), result.polygon.geometry));
+  EXPECT_FALSE(bg::within(Point(5.2, 0.0), result.polygon.geometry));
+  EXPECT_FALSE(bg::within(Point(0.0, 3.1), result.polygon.geometry));
+
+  // Without the cut the same scan draws the side walls 8 m away.
+  const auto whole = build(cast_scan(walls, pose, spec), spec, pose);
+  ASSERT_TRUE(whole.ok) << whole.error;
+  EXPECT_EQ(whole.beams_beyond_obstacle_range, 0);
+  EXPECT_TRUE(bg::within(Point(7.5, 0.0), whole.polygon.geometry));
+}
+
 TEST(ScanToPolygon, RefusesBadInputWithAnError) {
   const ScanSpec spec;
   const std::vector<float> ranges(10, 2.0f);

@@ -135,6 +135,10 @@ class ParticleFilter {
   // (nullopt before two updates): the matcher's view of the robot's turn, which
   // the odometry pairing uses to estimate its clock offset (OdometryLagEstimator).
   std::optional<double> best_turn_at_last_update() const;
+  // The odometry's travel (path length) and turn (summed |dtheta|) since the
+  // last update: what the update gate measures.
+  double travel_since_update_m() const { return linear_since_update_m_; }
+  double turn_since_update_rad() const { return angular_since_update_rad_; }
   // The best particle's pose at every update generation so far (index = generation).
   std::vector<Pose2> best_trajectory() const;
 

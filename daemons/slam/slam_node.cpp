@@ -67,7 +67,9 @@ void SlamNode::process(std::vector<slam::PairedScan> ready) {
     if (updated) {
       outputs_.publish_update(update_message(paired.scan.utime));
       last_published_scan_utime_ = paired.scan.utime;
-    } else if (period_us > 0 && paired.scan.utime - last_published_scan_utime_ >= period_us) {
+    } else if (period_us > 0 && paired.scan.utime - last_published_scan_utime_ >= period_us &&
+               filter_.travel_since_update_m() <= options_.republish_max_travel_m &&
+               filter_.turn_since_update_rad() <= options_.republish_max_turn_rad) {
       outputs_.publish_update(republish_message(paired.scan.utime));
       last_published_scan_utime_ = paired.scan.utime;
       ++republished_;

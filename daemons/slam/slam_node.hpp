@@ -33,6 +33,14 @@ struct SlamNodeOptions {
   // (re)started meanwhile would wait for one for ever while the explorer
   // waits for its map. 0 = never.
   double republish_period_s = 1.0;
+  // ... but only while the robot stands: odometry travel and turn since the
+  // last update at most these. Between updates a particle's pose is odometry
+  // plus sampled motion noise, unmatched: a robot driving at 0.4 m/s took
+  // longer than the period for the 0.5 m gate, and the scans republished
+  // at those poses were 2-4 degrees off (0.4 m at 7 m) and drew slanted walls
+  // across rooms and doors in the polygon maps (office, 2026-11-25).
+  double republish_max_travel_m = 0.01;
+  double republish_max_turn_rad = 0.01;
   double input_timeout_s = 3.0;  // no LIDAR_SCAN or no ODOMETRY this long: DEGRADED (health)
   // The filter across restarts (SlamNode::checkpoint), written every
   // checkpoint_period_s (node clock) and on stop, read at start: "" = none.

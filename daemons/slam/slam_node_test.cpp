@@ -169,6 +169,26 @@ void expect_same_update(const slam_update_t& a, const slam_update_t& b) {
 // the node that never stopped publishes, update for update and pose for pose:
 // the same epoch, the next generation (so the mapper follows its parents), no
 // jump in SLAM_POSE.
+// A robot driving makes updates every 0.5 m: 1.25 s apart at 0.4 m/s, longer
+// than the republish period. Its scans between updates must not go out at
+// unmatched poses (odometry plus motion noise drew slanted walls into the
+// polygon maps); once it stands, the set is republished again.
+TEST(SlamNode, ADrivingRobotIsNotRepublishedOnlyAStandingOne) {
+  Published out;
+  SlamNode node = make_node(out, 4);
+  drive_steps(node, 0, 101);  // 5 s, 2 m
+  EXPECT_EQ(node.republished(), 0);
+  const std::size_t driving_updates = out.updates.size();
+  EXPECT_EQ(driving_updates, 5u);  // the first scan and one every 0.5 m
+  for (int i = 101; i < 200; ++i) {  // stands at x = 2.0 m for 5 s
+    const std::int64_t t = 1'000'000 + 50'000 * static_cast<std::int64_t>(i);
+    node.on_odometry(odometry(t, 2.0));
+    node.on_scan(box_scan(t));
+  }
+  EXPECT_GE(node.republished(), 3);
+  for (std::size_t k = driving_updates; k < out.updates.size(); ++k) EXPECT_TRUE(out.updates[k].republished);
+}
+
 TEST(SlamNode, ARestoredNodeGoesOnWithTheSameEpochAndTheNextGeneration) {
   Published never_stopped_out, restarted_out;
   SlamNode never_stopped = make_node(never_stopped_out);

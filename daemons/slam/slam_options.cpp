@@ -89,6 +89,10 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
       check.get<double>("min_translation_m", f.odometry_check.min_translation_m, non_negative<double>());
   f.odometry_check.margin = check.get<double>("margin", f.odometry_check.margin, non_negative<double>());
   o.republish_period_s = config.get<double>("republish_period_s", o.republish_period_s, non_negative<double>());
+  o.republish_max_travel_m =
+      config.get<double>("republish_max_travel_m", o.republish_max_travel_m, in_range(0.0, 10.0));
+  o.republish_max_turn_rad =
+      config.get<double>("republish_max_turn_rad", o.republish_max_turn_rad, in_range(0.0, 10.0));
   o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, positive<double>());
   o.checkpoint_file = config.get_path("checkpoint_file", o.checkpoint_file, /*must_exist=*/false);
   o.checkpoint_period_s =
