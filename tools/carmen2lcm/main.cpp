@@ -162,6 +162,11 @@ int main(int argc, char** argv) {
   in.clear();
   in.seekg(0);
 
+  LogWriter out(out_path);
+  if (!out.good()) {
+    std::fprintf(stderr, "pex-carmen2lcm: cannot write %s\n", out_path.c_str());
+    return EX_CANTCREAT;
+  }
   // Parse every line first: the direction of the odometry is decided over the whole log.
   ev::CarmenLog log;
   std::size_t line_number = 0;
@@ -186,11 +191,6 @@ int main(int argc, char** argv) {
   const ev::OdometryDirectionResult direction =
       raw_odometry ? ev::OdometryDirectionResult{} : ev::correct_odometry_direction(log);
 
-  LogWriter out(out_path);
-  if (!out.good()) {
-    std::fprintf(stderr, "pex-carmen2lcm: cannot write %s\n", out_path.c_str());
-    return EX_CANTCREAT;
-  }
   std::size_t scans = 0, odometry = 0;
   for (const ev::CarmenLog::Entry& entry : log.order) {
     bool ok = true;
