@@ -1,18 +1,22 @@
 // A CARMEN log (the SLAM benchmark's text format, pex-carmen2lcm's input):
-// evaluation::parse_carmen_log, line by line.
+// evaluation::parse_carmen_log, line by line, then
+// evaluation::correct_odometry_direction (pex-carmen2lcm's default).
 //
 // Input: the file's text.
 // Invariants: nothing crashes; every line is a message, skipped or malformed
 // (with the first error kept); every message taken is finite
 // and within the options' limits (poses, stamps, ranges, velocities), its
 // beam count within max_beams; the log's order
-// indexes its messages exactly once each.
+// indexes its messages exactly once each. The direction correction keeps
+// every message and its time, leaves every pose finite, and changes nothing
+// when it reverses no step.
 #include <cmath>
 #include <cstdint>
 #include <sstream>
 #include <string>
 
 #include "evaluation/carmen_log.hpp"
+#include "evaluation/odometry_direction.hpp"
 #include "fuzz_check.hpp"
 
 namespace {
@@ -57,5 +61,33 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     PEX_FUZZ_CHECK(plausible_time(o.timestamp_s, options) && plausible_pose(o.pose, options.max_abs_coordinate_m) &&
                        std::abs(o.tv_mps) <= options.max_abs_velocity && std::abs(o.rv_radps) <= options.max_abs_velocity,
                    "odometry numbers");
+
+  CarmenLog corrected = log;
+  const OdometryDirectionResult result = correct_odometry_direction(corrected);
+  PEX_FUZZ_CHECK(corrected.lasers.size() == log.lasers.size() && corrected.odometry.size() == log.odometry.size(),
+                 "direction: message count");
+  PEX_FUZZ_CHECK(result.changed_laser_poses <= log.lasers.size() && result.reversed_steps < log.odometry.size() + 1,
+                 "direction: counts");
+  auto same = [](const pex::slam::Pose2& a, const pex::slam::Pose2& b) {
+    return a.x_m == b.x_m && a.y_m == b.y_m && a.theta_rad == b.theta_rad;
+  };
+  auto finite = [](const pex::slam::Pose2& p) {
+    return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
+  };
+  for (std::size_t i = 0; i < log.lasers.size(); ++i) {
+    const CarmenLaser& a = corrected.lasers[i];
+    const CarmenLaser& b = log.lasers[i];
+    PEX_FUZZ_CHECK(a.timestamp_s == b.timestamp_s && a.ranges_m == b.ranges_m, "direction: laser data");
+    PEX_FUZZ_CHECK(finite(a.odometry) && finite(a.laser_pose), "direction: laser pose not finite");
+    if (result.reversed_steps == 0)
+      PEX_FUZZ_CHECK(same(a.odometry, b.odometry) && same(a.laser_pose, b.laser_pose), "direction: laser changed");
+  }
+  for (std::size_t i = 0; i < log.odometry.size(); ++i) {
+    PEX_FUZZ_CHECK(corrected.odometry[i].timestamp_s == log.odometry[i].timestamp_s &&
+                       finite(corrected.odometry[i].pose),
+                   "direction: odometry");
+    if (result.reversed_steps == 0)
+      PEX_FUZZ_CHECK(same(corrected.odometry[i].pose, log.odometry[i].pose), "direction: odometry changed");
+  }
   return 0;
 }

@@ -25,15 +25,20 @@
 #include <unistd.h>
 
 #include "carmen_run.hpp"
+#include "evaluation/odometry_direction.hpp"
 
 namespace {
 
 std::string shared_data(const char* file) { return std::string(PEX_SHARED_DIR) + "/data/" + file; }
 
-pex::evaluation::CarmenLog load_log(const std::string& path) {
+// The log as pex-carmen2lcm writes it by default: steps driven backwards but
+// logged forwards turned round (raw_odometry: as logged).
+pex::evaluation::CarmenLog load_log(const std::string& path, bool raw_odometry = false) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open " + path);
-  return pex::evaluation::parse_carmen_log(in);
+  pex::evaluation::CarmenLog log = pex::evaluation::parse_carmen_log(in);
+  if (!raw_odometry) pex::evaluation::correct_odometry_direction(log);
+  return log;
 }
 
 std::vector<pex::evaluation::Relation> load_relations(const std::string& path) {
@@ -43,7 +48,9 @@ std::vector<pex::evaluation::Relation> load_relations(const std::string& path) {
 }
 
 int run_once(int argc, char** argv) {
-  const auto log = load_log(argv[2]);
+  bool raw_odometry = false;
+  for (int i = 7; i < argc; ++i) raw_odometry = raw_odometry || std::strcmp(argv[i], "raw_odometry=1") == 0;
+  const auto log = load_log(argv[2], raw_odometry);
   const auto relations = load_relations(argv[3]);
   pex::slam::ParticleFilterOptions options;
   if (argc > 5) options.particle_count = std::stoi(argv[5]);
@@ -90,6 +97,7 @@ int run_once(int argc, char** argv) {
     else if (key == "str") options.motion.str = v;
     else if (key == "stt") options.motion.stt = v;
     else if (key == "odometry_from_laser") odometry_from_laser = v != 0.0;
+    else if (key == "raw_odometry") continue;  // read before the log was loaded
     else if (key == "odometry_lead_s") sync.odometry_lead_us = std::llround(v * 1e6);
     else if (key == "estimate_lead") sync.estimate_lead = v != 0.0;
     else if (key == "resample_threshold") options.resample_threshold = v;

@@ -3,6 +3,9 @@
 // handlers), and the trajectory is scored with the relations that fall inside
 // that span. The filter must beat raw odometry by a wide margin, and the same
 // log and seed must give the same pose file, byte for byte.
+//
+// FR079 (issue 13): the whole log with the shipped config/slam.toml, its large
+// loops closed (docs/slam.md, "Loops of big buildings").
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -27,12 +30,21 @@ constexpr int kScans = 2000;  // the first 395 s of the log: 246 relations, up t
 
 const fs::path kData = fs::path(PEX_SHARED_DIR) / "data";
 const fs::path kBin = fs::path(PEX_BINARY_DIR) / "bin";
+const fs::path kShippedConfig = fs::path(PEX_SOURCE_DIR) / "config" / "slam.toml";
 
 std::string read_file(const fs::path& path) {
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+// Runs `program args` with its output in dir/out.txt, shown when it fails.
+int run_in(const fs::path& dir, const fs::path& program, const std::string& args) {
+  const std::string command = program.string() + " " + args + " > " + (dir / "out.txt").string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  if (status != 0) std::cerr << read_file(dir / "out.txt");
+  return status;
 }
 
 class SlamReplay : public ::testing::Test {
@@ -58,12 +70,7 @@ class SlamReplay : public ::testing::Test {
   static void TearDownTestSuite() {
     if (!dir_.empty()) fs::remove_all(dir_);
   }
-  static int run(const fs::path& program, const std::string& args) {
-    const std::string command = program.string() + " " + args + " > " + (dir_ / "out.txt").string() + " 2>&1";
-    const int status = std::system(command.c_str());
-    if (status != 0) std::cerr << read_file(dir_ / "out.txt");
-    return status;
-  }
+  static int run(const fs::path& program, const std::string& args) { return run_in(dir_, program, args); }
   static fs::path run_slam(const std::string& name) {
     const fs::path poses = dir_ / name;
     EXPECT_EQ(run(kBin / "pex-slam", "--log " + (dir_ / "head.lcm").string() + " --poses " + poses.string() +
@@ -115,6 +122,37 @@ TEST_F(SlamReplay, SameLogAndSeedGiveTheSamePoses) {
   const std::string second = read_file(run_slam("poses_b.txt"));
   ASSERT_FALSE(first.empty());
   EXPECT_EQ(first, second);
+}
+
+// The whole FR079 log (1061 s, 4934 scans, 1685 relations up to 1038 s apart)
+// through pex-carmen2lcm and `pex-slam --log` with the shipped configuration.
+// With the odometry as logged (driving backwards counted forwards) the loops
+// did not close: 0.205 m (seed 1), 0.691 m (seed 2); with the steps reversed by
+// the converter, 0.063 / 0.063 / 0.064 m (seeds 1 / 2 / 3). 0.10 m is the test's bound, the
+// benchmark's figure is in docs/slam.md.
+TEST(SlamReplayFr079, ShippedConfigClosesTheLoops) {
+  if (!fs::exists(kData / "fr079.clf") || !fs::exists(kData / "fr079.relations"))
+    GTEST_SKIP() << "no FR079 log in " << kData;
+  const fs::path dir = fs::temp_directory_path() / ("pex_slam_replay_fr079_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  ASSERT_EQ(run_in(dir, kBin / "pex-carmen2lcm", (kData / "fr079.clf").string() + " " + (dir / "fr079.lcm").string()), 0);
+  ASSERT_EQ(run_in(dir, kBin / "pex-slam", "--config " + kShippedConfig.string() + " --log " +
+                                               (dir / "fr079.lcm").string() + " --poses " +
+                                               (dir / "poses.txt").string() + " --log-level warn"),
+            0);
+  std::ifstream poses_in(dir / "poses.txt");
+  const auto poses = ev::read_poses(poses_in);
+  std::ifstream relations_in(kData / "fr079.relations");
+  const auto relations = ev::read_relations(relations_in).relations;
+  fs::remove_all(dir);
+  ASSERT_EQ(poses.malformed_lines, 0u);
+  ev::MetricOptions options;
+  options.split_gap_s = 100.0;
+  const auto slam = ev::evaluate_relations(poses.poses, relations, options);
+  std::cout << "fr079 " << ev::to_json_line(slam) << '\n';
+  EXPECT_EQ(slam.relations, relations.size());
+  EXPECT_LT(slam.trans_mean_m, 0.10);
+  EXPECT_LT(slam.far.trans_mean_m, 0.10);  // relations >= 100 s apart: the loops
 }
 
 }  // namespace

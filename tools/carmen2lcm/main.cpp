@@ -9,6 +9,13 @@
 // backwards (the Intel log's do, by up to 0.6 s). `--odometry odom` writes the
 // ODOM lines instead (a log without ODOM lines always uses the laser lines').
 //
+// Direction: some logs (FR079) integrate the ODOM lines' speed without its sign,
+// so driving backwards advances the poses. By default the odometry is rebuilt
+// with those steps turned round where the ODOM lines' `tv` says the robot went
+// backwards (evaluation::correct_odometry_direction; a log whose poses agree
+// with its speeds, or without ODOM lines, is written unchanged). `--raw-odometry`
+// writes the poses as logged.
+//
 // Time: message utime fields are the lines' ipc_timestamp (µs); the log events'
 // time stamps are the same but never decrease (lcm-logplayer paces by them).
 #include <CLI/CLI.hpp>
@@ -30,6 +37,7 @@
 #include <pex/odometry_t.hpp>
 
 #include "evaluation/carmen_log.hpp"
+#include "evaluation/odometry_direction.hpp"
 #include "runtime/channels.hpp"
 
 namespace {
@@ -120,6 +128,9 @@ int main(int argc, char** argv) {
   app.add_option("--odometry", odometry_source, "odometry from the laser lines' poses or the ODOM lines")
       ->check(CLI::IsMember({"laser", "odom"}))
       ->capture_default_str();
+  bool raw_odometry = false;
+  app.add_flag("--raw-odometry", raw_odometry,
+               "odometry poses as logged (no reversal of steps the ODOM lines' speed says went backwards)");
   app.add_option("--flaser-max-range-m", parse.flaser_max_range_m,
                  "FLASER readings at or beyond this are no return")
       ->capture_default_str();
@@ -156,7 +167,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-carmen2lcm: cannot write %s\n", out_path.c_str());
     return EX_CANTCREAT;
   }
-  std::size_t scans = 0, odometry = 0, malformed = 0, line_number = 0;
+  // Parse every line first: the direction of the odometry is decided over the whole log.
+  ev::CarmenLog log;
+  std::size_t line_number = 0;
   std::string error;
   ev::CarmenMessage message;
   while (std::getline(in, line)) {
@@ -164,20 +177,34 @@ int main(int argc, char** argv) {
     const ev::LineKind kind = ev::parse_carmen_line(line, parse, message, error);
     if (kind == ev::LineKind::kSkipped) continue;
     if (kind == ev::LineKind::kMalformed) {
-      if (malformed++ < 5) std::fprintf(stderr, "pex-carmen2lcm: line %zu: %s\n", line_number, error.c_str());
+      if (log.malformed_lines++ < 5) std::fprintf(stderr, "pex-carmen2lcm: line %zu: %s\n", line_number, error.c_str());
       continue;
     }
+    if (auto* laser = std::get_if<ev::CarmenLaser>(&message)) {
+      log.order.push_back({true, log.lasers.size()});
+      log.lasers.push_back(std::move(*laser));
+    } else {
+      log.order.push_back({false, log.odometry.size()});
+      log.odometry.push_back(std::get<ev::CarmenOdometry>(message));
+    }
+  }
+  const ev::OdometryDirectionResult direction =
+      raw_odometry ? ev::OdometryDirectionResult{} : ev::correct_odometry_direction(log);
+
+  std::size_t scans = 0, odometry = 0;
+  for (const ev::CarmenLog::Entry& entry : log.order) {
     bool ok = true;
-    if (const auto* laser = std::get_if<ev::CarmenLaser>(&message)) {
-      const std::int64_t utime = to_utime(laser->timestamp_s);
+    if (entry.is_laser) {
+      const ev::CarmenLaser& laser = log.lasers[entry.index];
+      const std::int64_t utime = to_utime(laser.timestamp_s);
       if (odometry_from_laser) {
-        ok = ok && out.write(ch::kOdometry, utime, odometry_message(utime, laser->odometry, 0.0, 0.0));
+        ok = ok && out.write(ch::kOdometry, utime, odometry_message(utime, laser.odometry, 0.0, 0.0));
         ++odometry;
       }
-      ok = ok && out.write(ch::kLidarScan, utime, scan_message(*laser, static_cast<std::int32_t>(scans), sensor_mounting(*laser, frontlaser_offset_m)));
+      ok = ok && out.write(ch::kLidarScan, utime, scan_message(laser, static_cast<std::int32_t>(scans), sensor_mounting(laser, frontlaser_offset_m)));
       ++scans;
     } else if (!odometry_from_laser) {
-      const auto& odom = std::get<ev::CarmenOdometry>(message);
+      const ev::CarmenOdometry& odom = log.odometry[entry.index];
       const std::int64_t utime = to_utime(odom.timestamp_s);
       ok = out.write(ch::kOdometry, utime, odometry_message(utime, odom.pose, odom.tv_mps, odom.rv_radps));
       ++odometry;
@@ -187,7 +214,10 @@ int main(int argc, char** argv) {
       return EX_IOERR;  // 74: the output went bad while writing
     }
   }
+  if (direction.reversed_steps > 0)
+    std::fprintf(stderr, "pex-carmen2lcm: %zu odometry steps driven backwards but logged forwards reversed (%zu laser poses moved)\n",
+                 direction.reversed_steps, direction.changed_laser_poses);
   std::fprintf(stderr, "pex-carmen2lcm: %zu scans, %zu odometry readings (%s), %zu malformed lines\n",
-               scans, odometry, odometry_from_laser ? "from laser lines" : "from ODOM lines", malformed);
+               scans, odometry, odometry_from_laser ? "from laser lines" : "from ODOM lines", log.malformed_lines);
   return scans > 0 ? 0 : 1;
 }
