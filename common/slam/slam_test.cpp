@@ -201,7 +201,11 @@ ParticleFilterOptions small_filter(std::uint64_t seed) {
 
 TEST(ParticleFilter, ChildrenDescendFromTheirParents) {
   const Drive d = drive(3);
-  ParticleFilter filter(small_filter(5));
+  // Resampling at every update whose weights differ at all, so the lineage is
+  // checked across resamplings, not only where every particle is its own parent.
+  ParticleFilterOptions options = small_filter(5);
+  options.resample_threshold = 1.0;
+  ParticleFilter filter(options);
   int resampled_updates = 0;
   for (std::size_t i = 0; i < d.truth.size(); ++i) {
     std::vector<const TrajectoryNode*> previous;
@@ -221,7 +225,7 @@ TEST(ParticleFilter, ChildrenDescendFromTheirParents) {
     resampled_updates += filter.last_update().resampled;
   }
   EXPECT_GT(filter.generation(), 5);
-  (void)resampled_updates;
+  EXPECT_GT(resampled_updates, 0);
 }
 
 TEST(ParticleFilter, CorrectsOdometryDriftInASyntheticRoom) {
