@@ -34,14 +34,10 @@ struct ScanPolygonOptions {
   // A beam with no return marks free space up to this range (frontier arc).
   double free_range_m = 4.0;
   // Returns at or beyond this range give no obstacle edge; their beams mark
-  // free space up to this range (frontier arc there). Why: a pose's heading
-  // error moves a return sideways by range x error. SLAM's heading is good to
-  // about a degree (Intel: 1.35 deg mean relation error), which puts a wall
-  // seen at 15 m a quarter metre off; seen again from near, it was drawn
-  // twice, and the doubled jambs closed the office's 1 m doors in the
-  // planning map. Within 8 m a degree is 0.14 m. Obstacles far away are seen
-  // again from nearer when the robot goes to the frontier this leaves.
-  // 0: every return below range_max_m is an obstacle (the paper's polygon).
+  // free space up to this range (frontier arc there). For a pose whose
+  // heading is less certain than the far walls need: a heading error moves a
+  // return sideways by range x error. 0: every return below range_max_m is
+  // an obstacle (the paper's polygon). docs/mapping.md has what it measured.
   double obstacle_range_m = 0.0;
   // Successive Edge Following with the adaptive breakpoint of Borges & Aldon
   // (2004): beams i-1 and i belong to one cluster when their points are at
