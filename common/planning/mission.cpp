@@ -237,6 +237,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
         // A new leg of the same mission: what was visited stays visited, but
         // the frontiers given up get another chance and DONE is confirmed anew.
         blacklist_ = visited_;
+        given_up_retried_ = false;
         goal_failures_ = plan_failures_ = empty_plans_ = 0;
         end_utime_ = -1;
         want_tight_ = false;
@@ -435,6 +436,18 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
             std::to_string(narrow) + " too narrow for the robot, " + std::to_string(given_up) + " given up, " +
             std::to_string(visited) + " visited without clearing them, " + std::to_string(out_of_view) +
             " behind walls)";
+    }
+    if (empty_plans_ >= options_.done_confirmations && given_up > 0 && !given_up_retried_) {
+      // Before it calls the mission done, every goal given up gets one more
+      // try, once a leg: a goal given up early (no progress while the map
+      // was young and its path kept changing) is often plain to reach once
+      // the rest is mapped (office, tour: one such goal was the mission's
+      // only frontier left). Visited goals stay visited.
+      given_up_retried_ = true;
+      blacklist_ = visited_;
+      empty_plans_ = 0;
+      status_ = "trying the " + std::to_string(given_up) + " goals given up once more before finishing (" + why + ")";
+      return;
     }
     if (empty_plans_ >= options_.done_confirmations) {
       finish(nothing_left ? Phase::kDone : Phase::kDoneWithUnreachable, "exploration done: " + why, now_utime);

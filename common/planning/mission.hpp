@@ -268,6 +268,7 @@ class Mission {
   std::int64_t outstanding_utime_ = 0;
   std::optional<PlanRequest> pending_request_;  // made, not yet handed out
   bool want_tight_ = false;                     // the next select plan goes without the margin
+  bool given_up_retried_ = false;               // this leg's goals given up had their second try
   std::int64_t last_request_utime_ = -1;
   std::int64_t last_request_map_utime_ = -1;
   std::int64_t select_after_map_utime_ = -1;  // SELECTING waits for a map newer than this

@@ -336,6 +336,32 @@ TEST(Mission, FailsAfterRepeatedGoalsWithoutProgress) {
   EXPECT_EQ(m.blacklist().size(), 2u);
 }
 
+// A goal given up is tried once more before the mission ends: here the wheels
+// are stuck, so the only goal is given up twice and the mission ends
+// DONE_WITH_UNREACHABLE, saying so; one try more, not a loop.
+TEST(Mission, AGoalGivenUpIsTriedOnceMoreBeforeTheMissionEnds) {
+  Mission m(test_options());
+  int goals_taken = 0;
+  Phase phase = Phase::kIdle, previous = Phase::kIdle;
+  std::string status;
+  bool retry_said = false;
+  for (std::int64_t t = 0; t <= 60 * kSecond; t += 100'000) {
+    m.on_pose(Pose2{5, 1.5, 0}, t);
+    if (t % kSecond == 0) m.on_map(corridor(false, true), t);
+    const auto out = step_with_inline_planning(m, t);
+    phase = out.phase;
+    status = out.status;
+    retry_said = retry_said || status.find("once more") != std::string::npos;
+    if (phase == Phase::kMoving && previous != Phase::kMoving) ++goals_taken;
+    previous = phase;
+    if (is_finished(phase)) break;
+  }
+  ASSERT_EQ(phase, Phase::kDoneWithUnreachable) << status;
+  EXPECT_NE(status.find("1 given up"), std::string::npos) << status;
+  EXPECT_TRUE(retry_said);
+  EXPECT_EQ(goals_taken, 2);
+}
+
 // No driving blind: with scan_timeout_us set, the robot stands until the
 // first scan, stops when scans stop (map and pose still fresh), and goes on
 // to the same goal when they come back.
