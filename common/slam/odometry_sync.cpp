@@ -134,6 +134,14 @@ void OdometrySync::observe_update(std::int64_t scan_utime, std::optional<double>
   }
 }
 
+PairedScan OdometrySync::pair_front(std::int64_t wanted_utime) {
+  PairedScan paired{std::move(scans_.front()), pose_at(wanted_utime)};
+  scans_.pop_front();
+  paired.odometry_stale = wanted_utime - newest_odometry_utime_ > options_.max_odometry_age_us;
+  if (paired.odometry_stale) ++stale_pairings_;
+  return paired;
+}
+
 std::vector<PairedScan> OdometrySync::take_ready() {
   std::vector<PairedScan> ready;
   while (!scans_.empty()) {
@@ -143,20 +151,14 @@ std::vector<PairedScan> OdometrySync::take_ready() {
     const bool waited_too_long = scans_.back().utime - scan.utime > options_.max_wait_us ||
                                  scans_.size() > options_.max_buffered_scans;
     if (!odometry_caught_up && !waited_too_long) break;
-    const Pose2 odometry = pose_at(wanted);
-    ready.push_back({std::move(scans_.front()), odometry});
-    scans_.pop_front();
+    ready.push_back(pair_front(wanted));
   }
   return ready;
 }
 
 std::vector<PairedScan> OdometrySync::flush() {
   std::vector<PairedScan> ready;
-  while (!scans_.empty()) {
-    const Pose2 odometry = pose_at(scans_.front().utime - lead_us());
-    ready.push_back({std::move(scans_.front()), odometry});
-    scans_.pop_front();
-  }
+  while (!scans_.empty()) ready.push_back(pair_front(scans_.front().utime - lead_us()));
   return ready;
 }
 

@@ -52,6 +52,13 @@ struct StepLimits {
 struct OdometrySyncOptions {
   StepLimits limits;
   std::int64_t max_wait_us = 500'000;
+  // A scan paired with a reading older than its time by more than this (the
+  // odometry stopped or fell behind, and the scan waited max_wait_us) has no
+  // motion prior worth the name: it is marked odometry_stale. While turning
+  // at 0.7 rad/s, 0.8 s of it put a filter update 32 degrees off, beyond the
+  // matcher's reach, and that scan into every particle's map (a simulated
+  // mission at x10, where 80 ms of a loaded machine is 0.8 s).
+  std::int64_t max_odometry_age_us = 100'000;
   std::size_t max_buffered_scans = 64;  // beyond this the oldest scan is paired at once
   std::size_t history = 256;            // odometry readings kept for interpolation
   // How far the odometry's time stamps run ahead of the scans' (us): a scan
@@ -70,6 +77,7 @@ struct OdometrySyncOptions {
 struct PairedScan {
   RangeScan scan;
   Pose2 odometry;
+  bool odometry_stale = false;  // see OdometrySyncOptions::max_odometry_age_us
 };
 
 class OdometrySync {
@@ -96,6 +104,7 @@ class OdometrySync {
   std::size_t out_of_order_odometry() const { return out_of_order_odometry_; }
   std::size_t impossible_steps() const { return impossible_steps_; }
   std::size_t odometry_resets() const { return odometry_resets_; }
+  std::size_t stale_pairings() const { return stale_pairings_; }
 
   // A filter update ran on the scan stamped scan_utime, and the best
   // particle's lineage turned matched_turn_rad since the previous update
@@ -119,6 +128,8 @@ class OdometrySync {
   std::string restore(std::string_view checkpoint);
 
  private:
+  // The oldest buffered scan with the odometry at wanted_utime, marked stale or not.
+  PairedScan pair_front(std::int64_t wanted_utime);
   struct Reading {
     std::int64_t utime;
     Pose2 raw;  // as received (its own frame)
@@ -141,6 +152,7 @@ class OdometrySync {
   Pose2 frame_;                   // raw -> first frame
   std::size_t impossible_steps_ = 0;
   std::size_t odometry_resets_ = 0;
+  std::size_t stale_pairings_ = 0;
   std::string why_;
   OdometryLagEstimator lag_{options_.lag};
   std::optional<std::int64_t> last_update_utime_;

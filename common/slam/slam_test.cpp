@@ -320,6 +320,42 @@ void drive(OdometrySync& sync, std::int64_t& t, double& x, int readings, double 
 }
 }  // namespace
 
+// Odometry that stops while scans go on: after max_wait the scans are paired
+// with the newest reading, and those whose reading is older than
+// max_odometry_age are marked stale and counted (SLAM skips them); one within
+// the age is not.
+TEST(OdometrySync, AScanWhoseOdometryIsTooOldIsMarkedStale) {
+  OdometrySyncOptions options;
+  options.max_wait_us = 200'000;
+  options.max_odometry_age_us = 100'000;
+  OdometrySync sync(options);
+  ASSERT_TRUE(sync.add_odometry(1'000'000, {0.0, 0.0, 0.0}));
+  std::vector<PairedScan> paired;
+  for (std::int64_t t = 1'040'000; t <= 1'600'000; t += 40'000) {
+    RangeScan scan;
+    scan.utime = t;
+    ASSERT_TRUE(sync.add_scan(scan));
+    for (auto& p : sync.take_ready()) paired.push_back(std::move(p));
+  }
+  ASSERT_GE(paired.size(), 5u);
+  std::size_t stale = 0;
+  for (const auto& p : paired) {
+    EXPECT_EQ(p.odometry_stale, p.scan.utime - 1'000'000 > 100'000) << p.scan.utime;
+    stale += p.odometry_stale ? 1 : 0;
+  }
+  EXPECT_GT(stale, 0u);
+  EXPECT_EQ(sync.stale_pairings(), stale);
+  // Odometry back: the next scan is paired normally.
+  ASSERT_TRUE(sync.add_odometry(1'700'000, {0.1, 0.0, 0.0}));
+  RangeScan scan;
+  scan.utime = 1'690'000;
+  ASSERT_TRUE(sync.add_scan(scan));
+  bool fresh_seen = false;
+  for (const auto& p : sync.take_ready())
+    if (p.scan.utime == 1'690'000) fresh_seen = !p.odometry_stale;
+  EXPECT_TRUE(fresh_seen);
+}
+
 TEST(OdometrySync, AnAbsurdReadingIsHeldAndCountedAndMovesNothing) {
   OdometrySync sync;
   std::int64_t t = 0;

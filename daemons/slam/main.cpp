@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
       node.counter("filter_updates") = slam->filter().generation() + 1;
       node.counter("updates_republished") = slam->republished();
       node.counter("corrected_odometry_steps") = slam->filter().corrected_odometry_steps();
+      node.counter("scans_without_odometry") = static_cast<std::int64_t>(slam->odometry_sync().stale_pairings());
     });
     node.on_shutdown([slam, &node, &poses_path, &checkpoint_out] {
       slam->flush();

@@ -57,6 +57,7 @@ void SlamNode::flush() { process(sync_.flush()); }
 
 void SlamNode::process(std::vector<slam::PairedScan> ready) {
   for (const slam::PairedScan& paired : ready) {
+    if (paired.odometry_stale) continue;  // no motion prior: an update would put the scan anywhere (counted by sync_)
     const bool updated = filter_.process(paired.scan, paired.odometry);
     if (updated) sync_.observe_update(paired.scan.utime, filter_.best_turn_at_last_update());
     recorder_.record(paired.scan.utime, filter_, paired.odometry);

@@ -70,6 +70,8 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   auto sync = config.section("sync");
   o.sync.max_wait_us = 1000 * sync.get<std::int64_t>("max_odometry_wait_ms", o.sync.max_wait_us / 1000,
                                                      non_negative<std::int64_t>());
+  o.sync.max_odometry_age_us =
+      1000 * sync.get<std::int64_t>("max_odometry_age_ms", o.sync.max_odometry_age_us / 1000, in_range<std::int64_t>(1, 60'000));
   auto& l = o.sync.limits;
   l.enabled = sync.get<bool>("check_odometry_steps", l.enabled);
   l.max_speed_mps = sync.get<double>("odometry_max_speed_mps", l.max_speed_mps, positive<double>());
