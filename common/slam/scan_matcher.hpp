@@ -22,6 +22,7 @@ struct MatcherOptions {
   // When > 0, replaces beam_step by a rule in angle that holds for any
   // scanner: every n-th usable beam with n the smallest stride that puts
   // beams this far apart (2 on a 1° scanner for 1.5°, 3 on a 0.5° one).
+  // Off: 1.5° and 2° lost a loop on FR079 (docs/slam.md, issue 13).
   double beam_spacing_rad = 0.0;
 };
 
@@ -62,6 +63,7 @@ struct ProposalOptions {
   // this far apart (0: every beam). Neighbouring beams of a dense scanner say
   // nearly the same; counting each as independent evidence makes a 0.5°
   // scanner's weights twice as sharp as a 1° one's for the same scene.
+  // Off: 1° cost FR079 2-6 mm (docs/slam.md, issue 13).
   double beam_spacing_rad = 0.0;
 };
 
