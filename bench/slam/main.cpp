@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <numbers>
 #include <iostream>
 #include <string>
 #include <filesystem>
@@ -87,6 +88,8 @@ int run_once(int argc, char** argv) {
     else if (key == "line_flatness") options.grid.line_flatness = v;
     else if (key == "check_free") options.grid.check_free_before_hit = v != 0.0;
     else if (key == "match_beam_step") options.matcher.beam_step = static_cast<int>(v);
+    else if (key == "match_beam_spacing_deg") options.matcher.beam_spacing_rad = v * std::numbers::pi / 180.0;
+    else if (key == "proposal_beam_spacing_deg") options.proposal.beam_spacing_rad = v * std::numbers::pi / 180.0;
     else if (key == "threads") options.threads = static_cast<int>(v);
     else if (key == "sample_scale") options.proposal.sample_scale = v;
     else if (key == "linear_offset_m") options.proposal.linear_offset_m = v;

@@ -131,6 +131,15 @@ void CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
 }
 
 PoseEvaluation CowGridMap::evaluate(const Pose2& pose, const ScanPoints& scan) const {
+  return evaluate_terms<true>(pose, scan);
+}
+
+double CowGridMap::log_likelihood(const Pose2& pose, const ScanPoints& scan) const {
+  return evaluate_terms<false>(pose, scan).log_likelihood;
+}
+
+template <bool kWithScore>
+PoseEvaluation CowGridMap::evaluate_terms(const Pose2& pose, const ScanPoints& scan) const {
   const float c = static_cast<float>(std::cos(pose.theta_rad));
   const float s = static_cast<float>(std::sin(pose.theta_rad));
   const float px = static_cast<float>(pose.x_m);
@@ -210,7 +219,7 @@ PoseEvaluation CowGridMap::evaluate(const Pose2& pose, const ScanPoints& scan) c
       }
     }
     if (best_d2 < std::numeric_limits<float>::max()) {
-      score += std::exp(-best_d2 * inv_score_sigma);
+      if constexpr (kWithScore) score += std::exp(-best_d2 * inv_score_sigma);
       log_likelihood += -static_cast<double>(best_d2) * inv_likelihood_sigma;
       ++result.matched_beams;
     } else {

@@ -75,6 +75,8 @@ class CowGridMap final : public ParticleMap {
   std::unique_ptr<ParticleMap> clone() const override;
   void insert(const Pose2& robot_pose, const ScanPoints& scan) override;
   PoseEvaluation evaluate(const Pose2& robot_pose, const ScanPoints& scan) const override;
+  // The likelihood alone: no exp() per beam for the score.
+  double log_likelihood(const Pose2& robot_pose, const ScanPoints& scan) const override;
   std::size_t referenced_bytes() const override;
 
   // The cell containing world point (x, y), or nullptr when never written.
@@ -110,6 +112,8 @@ class CowGridMap final : public ParticleMap {
     if (!tile) return nullptr;
     return &tile->cells[((iy & (kTileSize - 1)) << kTileBits) | (ix & (kTileSize - 1))];
   }
+  template <bool kWithScore>
+  PoseEvaluation evaluate_terms(const Pose2& robot_pose, const ScanPoints& scan) const;
   Cell& mutable_cell(int ix, int iy);
   void update_normal(Cell& cell) const;
   void grow_to_include(int tx, int ty);

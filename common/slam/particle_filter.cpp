@@ -119,7 +119,8 @@ double ParticleFilter::check_odometry_step(const ScanPoints& match_points, const
 void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   UpdateStats stats;
   const std::size_t n = particles_.size();
-  const ScanPoints match_points = subsample(points, options_.matcher.beam_step);
+  const ScanPoints match_points = matcher_beams(points, options_.matcher);
+  const ScanPoints likelihood_points = proposal_beams(points, options_.proposal);
   Pose2 odometry_step = relative(odometry_at_update_, odometry);
   stats.odometry_scale = check_odometry_step(match_points, odometry_step, stats);
   if (stats.odometry_scale != 1.0) {
@@ -147,12 +148,12 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
       double increment = 0.0;
       if (match.evaluation.score > options_.matcher.minimum_score) {
         const ProposalResult proposal = sample_improved_proposal(
-            *p.map, points, match.pose, predicted, step_std, options_.proposal, rng);
+            *p.map, likelihood_points, match.pose, predicted, step_std, options_.proposal, rng);
         p.pose = proposal.pose;
         increment = proposal.log_weight_increment;
       } else {
         failed[i] = 1;
-        increment = p.map->evaluate(p.pose, points).log_likelihood;
+        increment = p.map->log_likelihood(p.pose, likelihood_points);
       }
       p.log_weight += increment;
       p.lineage_log_likelihood += increment;

@@ -28,6 +28,11 @@ class ParticleMap {
   // Score and likelihood of `scan` taken from `robot_pose`. Must be a pure
   // function of the map, the pose and the scan.
   virtual PoseEvaluation evaluate(const Pose2& robot_pose, const ScanPoints& scan) const = 0;
+  // evaluate(...).log_likelihood, equal to it bit for bit; a map may compute
+  // it alone for less (the proposal's 27 samples need nothing else).
+  virtual double log_likelihood(const Pose2& robot_pose, const ScanPoints& scan) const {
+    return evaluate(robot_pose, scan).log_likelihood;
+  }
   // Bytes of storage this map references (shared parts counted fully).
   virtual std::size_t referenced_bytes() const = 0;
 };

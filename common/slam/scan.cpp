@@ -9,6 +9,7 @@ ScanPoints to_scan_points(const RangeScan& scan, const ScanConversionOptions& op
   ScanConversionStats local;
   ScanPoints points;
   points.utime = scan.utime;
+  points.beam_spacing_rad = std::abs(scan.angle_increment_rad);
   points.beams.reserve(scan.ranges_m.size());
   const double max_range = std::min(scan.range_max_m, options.usable_range_m);
   for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {

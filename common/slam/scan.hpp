@@ -30,6 +30,9 @@ struct BeamPoint {
 struct ScanPoints {
   std::int64_t utime = 0;
   std::vector<BeamPoint> beams;  // usable returns only, in beam order
+  // The scanner's angle between neighbouring beams (|angle_increment_rad| of
+  // the RangeScan; 0 when unknown): what decimation by angle works from.
+  double beam_spacing_rad = 0.0;
 };
 
 struct ScanConversionOptions {

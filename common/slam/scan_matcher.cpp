@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -11,9 +12,26 @@ ScanPoints subsample(const ScanPoints& scan, int step) {
   if (step <= 1) return scan;
   ScanPoints out;
   out.utime = scan.utime;
+  out.beam_spacing_rad = scan.beam_spacing_rad * step;
   out.beams.reserve(scan.beams.size() / static_cast<std::size_t>(step) + 1);
   for (std::size_t i = 0; i < scan.beams.size(); i += static_cast<std::size_t>(step)) out.beams.push_back(scan.beams[i]);
   return out;
+}
+
+int beam_stride(const ScanPoints& scan, double spacing_rad) {
+  if (!(spacing_rad > 0.0) || !(scan.beam_spacing_rad > 0.0)) return 1;
+  // The tolerance absorbs an increment sent as a float (1° is not exact).
+  const double n = std::ceil(spacing_rad / scan.beam_spacing_rad - 1e-3);
+  return static_cast<int>(std::clamp(n, 1.0, 1000.0));
+}
+
+ScanPoints matcher_beams(const ScanPoints& scan, const MatcherOptions& options) {
+  return subsample(scan, options.beam_spacing_rad > 0.0 ? beam_stride(scan, options.beam_spacing_rad)
+                                                        : options.beam_step);
+}
+
+ScanPoints proposal_beams(const ScanPoints& scan, const ProposalOptions& options) {
+  return subsample(scan, beam_stride(scan, options.beam_spacing_rad));
 }
 
 MatchResult match_scan(const ParticleMap& map, const ScanPoints& scan, const Pose2& initial,
@@ -25,6 +43,10 @@ MatchResult match_scan(const ParticleMap& map, const ScanPoints& scan, const Pos
   double linear = options.linear_step_m;
   double angular = options.angular_step_rad;
   int refinement = 0;
+  // The move taken in the last round (-1: none since the steps changed). Its
+  // opposite (index ^ 1) leads back to the pose that move left, which scored
+  // less than the current one, so it is not evaluated again.
+  int last_move = -1;
   // Each round tries the six unit moves (world-frame x/y, turning) and takes
   // the best that improves; with no improvement the steps are halved.
   while (true) {
@@ -36,20 +58,26 @@ MatchResult match_scan(const ParticleMap& map, const ScanPoints& scan, const Pos
                                          {current.x_m, current.y_m - linear, current.theta_rad},
                                          {current.x_m, current.y_m, current.theta_rad + angular},
                                          {current.x_m, current.y_m, current.theta_rad - angular}}};
-    for (Pose2 candidate : moves) {
+    int best_move = -1;
+    for (int m = 0; m < static_cast<int>(moves.size()); ++m) {
+      if (last_move >= 0 && m == (last_move ^ 1)) continue;
+      Pose2 candidate = moves[static_cast<std::size_t>(m)];
       candidate.theta_rad = normalize_angle(candidate.theta_rad);
       const PoseEvaluation e = map.evaluate(candidate, scan);
       ++result.evaluations;
       if (e.score > best_eval.score) {
         best_eval = e;
         best = candidate;
+        best_move = m;
       }
     }
     if (best_eval.score > current_eval.score) {
       current = best;
       current_eval = best_eval;
+      last_move = best_move;
       continue;
     }
+    last_move = -1;
     if (++refinement > options.refinements) break;
     linear *= 0.5;
     angular *= 0.5;
@@ -77,7 +105,7 @@ ProposalResult sample_improved_proposal(const ParticleMap& map, const ScanPoints
         const Eigen::Vector3d d(i * options.linear_offset_m, j * options.linear_offset_m,
                                 k * options.angular_offset_rad);
         const Pose2 x{matched.x_m + d.x(), matched.y_m + d.y(), normalize_angle(matched.theta_rad + d.z())};
-        double lw = map.evaluate(x, scan).log_likelihood;
+        double lw = map.log_likelihood(x, scan);
         if (options.use_motion_prior) {
           const double ex = (x.x_m - predicted.x_m) / sx;
           const double ey = (x.y_m - predicted.y_m) / sy;

@@ -19,10 +19,23 @@ struct MatcherOptions {
   // proposal and the weights use all): neighbouring beams of a 1° scanner say
   // nearly the same about the pose, and the climb is most of the filter's time.
   int beam_step = 2;
+  // When > 0, replaces beam_step by a rule in angle that holds for any
+  // scanner: every n-th usable beam with n the smallest stride that puts
+  // beams this far apart (2 on a 1° scanner for 1.5°, 3 on a 0.5° one).
+  // Off: 1.5° and 2° lost a loop on FR079 (docs/slam.md, issue 13).
+  double beam_spacing_rad = 0.0;
 };
 
 // Every step-th beam of `scan` (all for step <= 1).
 ScanPoints subsample(const ScanPoints& scan, int step);
+
+// The smallest stride n >= 1 with n * scan.beam_spacing_rad >= spacing_rad
+// (1 for spacing_rad <= 0 or a scan whose spacing is unknown).
+int beam_stride(const ScanPoints& scan, double spacing_rad);
+
+// The beams the hill climb scores: by angle when options.beam_spacing_rad > 0,
+// else every options.beam_step-th.
+ScanPoints matcher_beams(const ScanPoints& scan, const MatcherOptions& options);
 
 struct MatchResult {
   Pose2 pose;
@@ -46,7 +59,16 @@ struct ProposalOptions {
   // Scale of the drawn deviation from the fitted mean (1 = a true sample of the
   // Gaussian, 0 = its mean).
   double sample_scale = 1.0;
+  // The likelihood (the 27 samples, hence the weights) uses beams at least
+  // this far apart (0: every beam). Neighbouring beams of a dense scanner say
+  // nearly the same; counting each as independent evidence makes a 0.5°
+  // scanner's weights twice as sharp as a 1° one's for the same scene.
+  // Off: 1° cost FR079 2-6 mm (docs/slam.md, issue 13).
+  double beam_spacing_rad = 0.0;
 };
+
+// The beams the likelihood uses (beam_stride of options.beam_spacing_rad).
+ScanPoints proposal_beams(const ScanPoints& scan, const ProposalOptions& options);
 
 struct ProposalResult {
   Pose2 pose;             // the drawn pose

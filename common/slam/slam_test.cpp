@@ -143,6 +143,82 @@ TEST(ScanMatcher, RecoversAKnownOffset) {
   EXPECT_GT(match.evaluation.log_likelihood, map.evaluate(guess, points).log_likelihood);
 }
 
+// Scores a pose by its distance to a target and records every pose scored.
+class RecordingMap final : public ParticleMap {
+ public:
+  explicit RecordingMap(Pose2 target) : target_(target) {}
+  std::unique_ptr<ParticleMap> clone() const override { return std::make_unique<RecordingMap>(*this); }
+  void insert(const Pose2&, const ScanPoints&) override {}
+  PoseEvaluation evaluate(const Pose2& pose, const ScanPoints&) const override {
+    scored.push_back(pose);
+    const double dx = pose.x_m - target_.x_m, dy = pose.y_m - target_.y_m;
+    const double dt = normalize_angle(pose.theta_rad - target_.theta_rad);
+    PoseEvaluation e;
+    e.score = std::exp(-(dx * dx + dy * dy) / 0.01 - dt * dt / 0.01);
+    e.log_likelihood = std::log(e.score);
+    return e;
+  }
+  std::size_t referenced_bytes() const override { return 0; }
+  mutable std::vector<Pose2> scored;
+
+ private:
+  Pose2 target_;
+};
+
+TEST(ScanMatcher, TheClimbNeverScoresAgainThePoseItJustLeft) {
+  // A move that improved leaves a pose that scored less; the opposite move of
+  // the next round (same step) leads straight back there. Climbing along x
+  // from 0 to 0.17 m passes 0, 0.05 and 0.10 m with the first step (5 cm),
+  // which later, finer steps never reach again: each is scored once.
+  const Pose2 target{0.17, 0.0, 0.0};
+  RecordingMap map(target);
+  const MatchResult match = match_scan(map, ScanPoints{}, Pose2{0.0, 0.0, 0.0}, {});
+  EXPECT_NEAR(match.pose.x_m, target.x_m, 0.002);
+  EXPECT_EQ(match.evaluations, static_cast<int>(map.scored.size()));
+  for (const double x : {0.0, 0.05, 0.10}) {
+    int times = 0;
+    for (const Pose2& p : map.scored)
+      times += std::abs(p.x_m - x) < 1e-9 && std::abs(p.y_m) < 1e-9 && std::abs(p.theta_rad) < 1e-9;
+    EXPECT_EQ(times, 1) << "x = " << x;
+  }
+}
+
+TEST(CowGridMap, TheLikelihoodAloneEqualsEvaluatesBitForBit) {
+  CowGridMap map({});
+  for (int i = 0; i < 4; ++i) {
+    const Pose2 known{0.1 * i, 0.05 * i, 0.02 * i};
+    map.insert(known, to_scan_points(scan_from(known), {}));
+  }
+  const ScanPoints points = to_scan_points(scan_from({0.33, 0.1, 0.05}), {});
+  for (const Pose2 pose : {Pose2{0.3, 0.1, 0.05}, Pose2{0.36, 0.12, 0.04}, Pose2{5.0, 5.0, 1.0}})
+    EXPECT_EQ(map.log_likelihood(pose, points), map.evaluate(pose, points).log_likelihood);
+}
+
+TEST(ScanMatcher, BeamsAreDecimatedByAngleWhateverTheScanner) {
+  auto scan_of = [](int beams, double increment_rad) {
+    RangeScan range;
+    range.angle_min_rad = -std::numbers::pi / 2;
+    range.angle_increment_rad = increment_rad;
+    range.range_max_m = 50.0;
+    range.ranges_m.assign(static_cast<std::size_t>(beams), 3.0f);
+    return to_scan_points(range, {});
+  };
+  const double degree = std::numbers::pi / 180.0;
+  const ScanPoints one_degree = scan_of(180, static_cast<float>(degree));  // sent as a float, as LCM does
+  const ScanPoints half_degree = scan_of(360, -0.5 * degree);             // clockwise
+  EXPECT_EQ(beam_stride(one_degree, 1.0 * degree), 1);
+  EXPECT_EQ(beam_stride(one_degree, 1.5 * degree), 2);
+  EXPECT_EQ(beam_stride(half_degree, 1.0 * degree), 2);
+  EXPECT_EQ(beam_stride(half_degree, 1.5 * degree), 3);
+  EXPECT_EQ(beam_stride(half_degree, 0.0), 1);
+  EXPECT_EQ(beam_stride(ScanPoints{}, 1.0 * degree), 1);  // spacing unknown: every beam
+  MatcherOptions by_angle;
+  by_angle.beam_spacing_rad = 1.5 * degree;
+  EXPECT_EQ(matcher_beams(half_degree, by_angle).beams.size(), 120u);
+  EXPECT_EQ(matcher_beams(one_degree, by_angle).beams.size(), 90u);
+  EXPECT_NEAR(matcher_beams(half_degree, by_angle).beam_spacing_rad, 1.5 * degree, 1e-12);
+}
+
 TEST(CowGridMap, CellsOnAWallLearnTheWallNormal) {
   CowGridMap map({});
   for (int i = 0; i < 10; ++i) {
