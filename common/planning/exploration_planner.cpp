@@ -113,6 +113,7 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
   s.robot_point = Point(robot.x, robot.y);
   const auto start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
   if (!start) {
+    plan.robot_outside_cspace = true;
     plan.error = "the robot is not within " + std::to_string(options.start_snap_distance_m) +
                  " m of the configuration space";
     return std::nullopt;

@@ -90,6 +90,7 @@ struct PlanStats {
 struct Plan {
   bool ok = false;
   std::string error;                    // why not ok
+  bool robot_outside_cspace = false;    // not ok because the robot is farther than start_snap_distance_m from it
   std::vector<GoalCandidate> candidates;  // every candidate that got into the C-space
   std::vector<Point> narrow_frontier_points;  // frontier candidates with no C-space point near them
   // Frontier candidates behind a wall: the C-space near them has a wall

@@ -341,6 +341,17 @@ void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
   const Plan& plan = result.plan;
   plan_stats_ = plan.stats;
   if (!plan.ok) {
+    if (plan.robot_outside_cspace && outstanding_purpose_ == Purpose::kSelect && !outstanding_tight_ &&
+        options_.tight_fallback && options_.planner.cspace.clearance_margin_m > 0.0) {
+      // The robot stands where the margin leaves no room: a nook it reached
+      // on a plan without the margin, or a pose SLAM put a little into a
+      // wall's band. Plan again at once without the margin, as the tight
+      // fallback does (intel: FAILED five plans later, in a nook whose
+      // tight C-space had 41 candidates).
+      want_tight_ = true;
+      last_request_utime_ = -1;
+      return;
+    }
     count_plan_failure(plan);  // MOVING / HOMING keep following the last path meanwhile
     return;
   }

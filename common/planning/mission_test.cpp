@@ -503,6 +503,29 @@ TEST(Mission, SqueezesThroughANarrowGapWithoutTheMarginOnlyWhenNothingElseIsLeft
   EXPECT_NE(out.status.find("none reachable"), std::string::npos) << out.status;
 }
 
+// A robot that stands where the margin leaves no room (here 0.32 m from a
+// wall: inside the robot's radius plus margin, outside its radius) plans its
+// next goal without the margin instead of failing.
+TEST(Mission, ARobotOutsideTheMarginsCSpacePlansWithoutTheMargin) {
+  MissionOptions o = test_options();
+  o.planner.cspace.clearance_margin_m = 0.05;
+  o.planner.start_snap_distance_m = 0.02;
+  Mission m(o);
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{5, 0.32, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_NE(out.status.find("without clearance margin"), std::string::npos) << out.status;
+
+  o.tight_fallback = false;
+  Mission strict(o);
+  strict.on_map(corridor(false, true), 0);
+  strict.on_pose(Pose2{5, 0.32, 0}, 0);
+  out = step_with_inline_planning(strict, 0);
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_NE(out.status.find("not within"), std::string::npos) << out.status;
+}
+
 // A closed corridor and, behind its top wall, a sliver of free space whose
 // far side is frontier (a misaligned scan beyond a thin wall): no reachable
 // place has it in view, so driving cannot show more. DONE, with it listed.
