@@ -17,6 +17,8 @@ PEX_DEBS=(
   chromium chromium-driver               # the viewer's browser tests: headless Chromium through WebDriver
   socat                  # scripts/demo.sh: the viewer's page from the demo's network namespace to this computer's loopback
   curl                   # tests/systemd/sandbox_syscalls.sh: pex-viewer's page fetched under strace
+  default-jre libjchart2d-java  # pex-spy: lcm-spy's Swing GUI and its message view's plots (jchart2d)
+  xvfb xdotool xclip imagemagick  # tests/spy: an X server, clicks and keys, the clipboard, screenshots
 )
 # scripts/fuzz.sh only: clang and libFuzzer with its sanitizer runtimes.
 if [ "${PEX_DEPS_FUZZ:-0}" = 1 ]; then
