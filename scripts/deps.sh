@@ -8,6 +8,7 @@ PEX_DEBS=(
   libeigen3-dev libboost-dev libspdlog-dev libfmt-dev libpolyclipping-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libtomlplusplus-dev libcli11-dev libsystemd-dev
+  libcairo2-dev          # pex-render-map, pex-make-world: SVG and compressed, antialiased PNG
   iproute2 util-linux procps
   nftables libfaketime   # fault tests: LCM datagrams dropped, the wall clock stepped
   dpkg-dev file          # scripts/package.sh: cpack runs dpkg-shlibdeps (and file) for Depends

@@ -21,7 +21,7 @@ field() { dpkg-deb -f "$deb" "$1"; }
 [ "$(field Package)" = polyexplore ] || fail "Package: $(field Package)"
 [ "$(field Version)" = "$version" ] || fail "Version: $(field Version)"
 depends=$(field Depends)
-for d in liblcm1 liblcm-bin libsystemd0 libspdlog adduser iproute2; do
+for d in liblcm1 liblcm-bin libsystemd0 libspdlog libcairo2 adduser iproute2; do
   [[ ", $depends" == *", $d"* ]] || fail "Depends lacks $d: $depends"
 done
 recommends=$(field Recommends)  # pex-spy: lcm.jar, jchart2d, a JRE with Swing
