@@ -8,6 +8,7 @@
 #   /usr/share/polyexplore/worlds   worlds/*.wkt
 #   /usr/share/polyexplore/config/sim  the simulator's config set (for polyexplore-sim.target)
 #   /usr/share/java/pex_types.jar   LCM types for lcm-spy
+#   /usr/bin/pex-spy, pex-logplayer-gui  lcm-spy / lcm-logplayer-gui launchers (tools/spy)
 # Included last from the top CMakeLists.txt, after every program is defined.
 # Install rules only: no compile flags or targets of others change.
 
@@ -102,7 +103,11 @@ set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 # what the units and maintainer scripts run.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "liblcm-bin, adduser, iproute2, systemd")
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "liblcm-java, default-jre-headless, libjchart2d-java")
+# pex-spy, pex-logplayer-gui (lcm-spy, lcm-logplayer-gui): lcm.jar, jchart2d for the message
+# view, and a JRE with Swing (not -headless). Recommends, not Depends: the daemons run
+# without Java, apt installs Recommends unless told not to, and the launchers name what
+# is missing (exit 69).
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "liblcm-java, libjchart2d-java, default-jre | java-runtime")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${_pex_pkg_dir}/conffiles
     ${PROJECT_SOURCE_DIR}/cmake/debian/postinst

@@ -8,6 +8,7 @@ PEX_DEBS=(
   libeigen3-dev libboost-dev libspdlog-dev libfmt-dev libpolyclipping-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libtomlplusplus-dev libcli11-dev libsystemd-dev
+  libcairo2-dev          # pex-render-map, pex-make-world: SVG and compressed, antialiased PNG
   iproute2 util-linux procps
   nftables libfaketime   # fault tests: LCM datagrams dropped, the wall clock stepped
   dpkg-dev file          # scripts/package.sh: cpack runs dpkg-shlibdeps (and file) for Depends
@@ -17,6 +18,8 @@ PEX_DEBS=(
   chromium chromium-driver               # the viewer's browser tests: headless Chromium through WebDriver
   socat                  # scripts/demo.sh: the viewer's page from the demo's network namespace to this computer's loopback
   curl                   # tests/systemd/sandbox_syscalls.sh: pex-viewer's page fetched under strace
+  default-jre libjchart2d-java  # pex-spy: lcm-spy's Swing GUI and its message view's plots (jchart2d)
+  xvfb xdotool xclip imagemagick  # tests/spy: an X server, clicks and keys, the clipboard, screenshots
 )
 # scripts/fuzz.sh only: clang and libFuzzer with its sanitizer runtimes.
 if [ "${PEX_DEPS_FUZZ:-0}" = 1 ]; then

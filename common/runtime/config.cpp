@@ -6,8 +6,10 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -15,8 +17,20 @@ namespace pex::runtime {
 
 struct ConfigReader::State {
   std::string origin;
-  toml::table root;
+  toml::table root;                 // the layers merged
   std::set<std::string> read_keys;  // dotted paths of every key asked for
+  struct Source {
+    std::string file;
+    int line = 0;
+  };
+  std::map<std::string, Source> sources;  // dotted path of every value in root -> the file that set it
+  std::vector<Effective> effective;       // every key read, in order
+  std::map<std::string, std::size_t> effective_index;
+  // The file that set `path` ("" if none: a default).
+  std::string file_of(const std::string& path) const {
+    const auto it = sources.find(path);
+    return it == sources.end() ? std::string() : it->second.file;
+  }
 };
 
 Constraint<std::string> one_of(std::vector<std::string> allowed) {
@@ -44,16 +58,48 @@ ConfigReader::ConfigReader() : ConfigReader(std::make_shared<State>(), "") {
 ConfigReader::ConfigReader(std::shared_ptr<State> state, std::string prefix)
     : state_(std::move(state)), prefix_(std::move(prefix)) {}
 
-ConfigReader ConfigReader::from_file(const std::string& path) {
+// `toml_table` (a toml::table) over state.root: values replace, tables merge; every
+// value's file and line noted.
+void ConfigReader::add_layer(State& state, const void* toml_table, const std::string& file) {
+  std::function<void(toml::table&, const toml::table&, const std::string&)> merge =
+      [&](toml::table& into, const toml::table& from, const std::string& prefix) {
+        for (const auto& [k, v] : from) {
+          const std::string key(k.str());
+          const std::string dotted = prefix + key;
+          toml::node* existing = into.get(key);
+          if (const toml::table* sub = v.as_table()) {
+            if (existing && !existing->is_table())
+              throw ConfigError(file + ": '" + dotted + "' is a table here but a value in " + state.file_of(dotted));
+            if (!existing) into.insert(key, toml::table{});
+            merge(*into.get(key)->as_table(), *sub, dotted + ".");
+            continue;
+          }
+          if (existing && existing->is_table())
+            throw ConfigError(file + ": '" + dotted + "' is a value here but a table in an earlier file");
+          v.visit([&](const auto& value) { into.insert_or_assign(key, value); });
+          state.sources[dotted] = {file, static_cast<int>(v.source().begin.line)};
+        }
+      };
+  merge(state.root, *static_cast<const toml::table*>(toml_table), "");
+}
+
+ConfigReader ConfigReader::from_file(const std::string& path) { return from_files({path}); }
+
+ConfigReader ConfigReader::from_files(const std::vector<std::string>& paths) {
+  if (paths.empty()) return ConfigReader();
   auto state = std::make_shared<State>();
-  state->origin = path;
-  try {
-    state->root = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
-       << e.description();
-    throw ConfigError(os.str());
+  for (const auto& path : paths) state->origin += (state->origin.empty() ? "" : " + ") + path;
+  for (const auto& path : paths) {
+    toml::table layer;
+    try {
+      layer = toml::parse_file(path);
+    } catch (const toml::parse_error& e) {
+      std::ostringstream os;
+      os << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+         << e.description();
+      throw ConfigError(os.str());
+    }
+    add_layer(*state, &layer, path);
   }
   return ConfigReader(std::move(state), "");
 }
@@ -61,13 +107,15 @@ ConfigReader ConfigReader::from_file(const std::string& path) {
 ConfigReader ConfigReader::from_string(std::string_view toml_text, std::string origin) {
   auto state = std::make_shared<State>();
   state->origin = std::move(origin);
+  toml::table layer;
   try {
-    state->root = toml::parse(toml_text, state->origin);
+    layer = toml::parse(toml_text, state->origin);
   } catch (const toml::parse_error& e) {
     std::ostringstream os;
     os << state->origin << ":" << e.source().begin.line << ": " << e.description();
     throw ConfigError(os.str());
   }
+  add_layer(*state, &layer, state->origin);
   return ConfigReader(std::move(state), "");
 }
 
@@ -78,7 +126,9 @@ std::string ConfigReader::path_of(std::string_view key) const {
 }
 
 void ConfigReader::fail(std::string_view key, const std::string& what) const {
-  throw ConfigError(state_->origin + ": key '" + path_of(key) + "': " + what);
+  // the file that set the key, when several are layered
+  const std::string file = state_->file_of(path_of(key));
+  throw ConfigError((file.empty() ? state_->origin : file) + ": key '" + path_of(key) + "': " + what);
 }
 
 namespace {
@@ -100,19 +150,55 @@ std::string describe(const toml::node& n) {
   return os.str();
 }
 
+// A double as TOML, the shortest text that reads back to the same value, always
+// with a point or exponent (1.0, not 1: TOML's float).
+std::string double_text(double v) {
+  char buf[40];
+  for (int precision = 1; precision <= 17; ++precision) {
+    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  std::string text = buf;
+  if (text.find_first_of(".eEni") == std::string::npos) text += ".0";  // not inf/nan either
+  return text;
+}
+
+// A TOML basic string: "...", with \\, \" and control characters escaped.
+std::string string_text(const std::string& v) {
+  std::string out = "\"";
+  for (const char ch : v) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (c < 0x20 || c == 0x7F) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04X", c);
+      out += buf;
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
+
 template <class T>
 std::string to_text(const T& v) {
   std::ostringstream os;
   if constexpr (std::is_same_v<T, std::vector<double>>) {
     os << "[";
-    for (size_t i = 0; i < v.size(); ++i) os << (i ? ", " : "") << v[i];
+    for (size_t i = 0; i < v.size(); ++i) os << (i ? ", " : "") << double_text(v[i]);
     os << "]";
   } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
     os << "[";
-    for (size_t i = 0; i < v.size(); ++i) os << (i ? ", " : "") << '"' << v[i] << '"';
+    for (size_t i = 0; i < v.size(); ++i) os << (i ? ", " : "") << string_text(v[i]);
     os << "]";
   } else if constexpr (std::is_same_v<T, std::string>) {
-    os << '"' << v << '"';
+    os << string_text(v);
+  } else if constexpr (std::is_same_v<T, double>) {
+    os << double_text(v);
+  } else if constexpr (std::is_same_v<T, bool>) {
+    os << (v ? "true" : "false");
   } else {
     os << v;
   }
@@ -171,6 +257,7 @@ T ConfigReader::get(std::string_view key, T default_value, Constraint<T> check) 
   if (check) {
     if (auto err = check(value)) fail(key, *err + ", got " + to_text(value));
   }
+  note_effective(path, to_text(value));
   return value;
 }
 
@@ -187,10 +274,13 @@ template std::vector<std::string> ConfigReader::get<std::vector<std::string>>(
 
 std::string ConfigReader::get_path(std::string_view key, std::string default_value, bool must_exist) {
   std::string path = get<std::string>(key, std::move(default_value));
-  const std::string& file = state_->origin;
+  // relative to the folder of the file that set it (a default: as it is)
+  const std::string file = state_->file_of(path_of(key));
   const auto slash = file.rfind('/');
-  if (!path.empty() && path.front() != '/' && file.front() != '<')
+  if (!path.empty() && path.front() != '/' && !file.empty()) {
     path = (slash == std::string::npos ? std::string() : file.substr(0, slash + 1)) + path;
+    note_effective(path_of(key), string_text(path));
+  }
   if (must_exist && !path.empty() && !std::ifstream(path).good())
     fail(key, "cannot read '" + path + "'");
   return path;
@@ -205,6 +295,29 @@ ConfigReader ConfigReader::section(std::string_view name) const {
 
 bool ConfigReader::has(std::string_view key) const {
   return lookup(state_->root, path_of(key)) != nullptr;
+}
+
+void ConfigReader::note_effective(const std::string& path, std::string value) {
+  std::string source = "default";
+  if (const auto it = state_->sources.find(path); it != state_->sources.end())
+    source = it->second.file + ":" + std::to_string(it->second.line);
+  const auto [it, inserted] = state_->effective_index.emplace(path, state_->effective.size());
+  if (inserted) state_->effective.push_back({path, std::move(value), std::move(source)});
+  else state_->effective[it->second] = {path, std::move(value), std::move(source)};
+}
+
+std::vector<ConfigReader::Effective> ConfigReader::effective() const { return state_->effective; }
+
+std::string ConfigReader::effective_toml() const {
+  std::size_t width = 0;
+  for (const auto& e : state_->effective) width = std::max(width, e.key.size() + 3 + e.value.size());
+  std::string out;
+  for (const auto& e : state_->effective) {
+    std::string line = e.key + " = " + e.value;
+    line.resize(std::max(line.size(), width), ' ');
+    out += line + "  # " + e.source + "\n";
+  }
+  return out;
 }
 
 void ConfigReader::finish() const {
@@ -222,7 +335,9 @@ void ConfigReader::finish() const {
       };
   walk(state_->root, "");
   if (unknown.empty()) return;
-  std::string text = state_->origin + ": unknown key";
+  // the file of the first unknown key (several files: the one that has it)
+  const std::string file = state_->file_of(unknown.front());
+  std::string text = (file.empty() ? state_->origin : file) + ": unknown key";
   text += unknown.size() > 1 ? "s" : "";
   for (size_t i = 0; i < unknown.size(); ++i) text += (i ? ", '" : " '") + unknown[i] + "'";
   text += " (misspelt, or not a setting of this daemon)";

@@ -6,6 +6,15 @@
 // parameter dictionary does); a value of the wrong type or outside its
 // constraint throws ConfigError whose message names the file, the key and the
 // bad value, in one line. Keys carry their unit in the name (`timeout_ms`).
+//
+// Layering, the one rule (docs/deployment.md): the defaults in code, then each
+// file given in order (`--config A --config B`), key by key: a key takes the value of
+// the last file that sets it, else its default. So a robot overlay (config/robot/X.toml)
+// need hold only what differs from config/X.toml, and a file given last (on the robot
+// /etc/polyexplore/X.toml) wins over both. Arrays are values (replaced whole), tables
+// merge. A relative path is taken relative to the folder of the file that set it.
+// effective() lists every key read with its value and where it came from
+// (`pex-<daemon> --print-config`).
 #include <functional>
 #include <memory>
 #include <optional>
@@ -57,6 +66,9 @@ class ConfigReader {
   ConfigReader();
   // Throws ConfigError if the file cannot be read or is not valid TOML.
   static ConfigReader from_file(const std::string& path);
+  // The layers, lowest first (an empty list: the defaults). Throws ConfigError for a
+  // file that cannot be read, is not valid TOML, or makes a table of an earlier value.
+  static ConfigReader from_files(const std::vector<std::string>& paths);
   static ConfigReader from_string(std::string_view toml_text, std::string origin);
 
   // Value at `key` (in this reader's table) or `default_value` if absent.
@@ -80,13 +92,27 @@ class ConfigReader {
   // Throws ConfigError naming every key of the file that nobody read.
   void finish() const;
 
-  // The file name (or "<defaults>") that errors name.
+  // The file name (or "<defaults>") that errors name; several files: "A + B".
   const std::string& origin() const;
+
+  // A key read so far: its value as TOML text and where the value came from.
+  struct Effective {
+    std::string key;     // dotted path: "map.obstacle_end_trim_m"
+    std::string value;   // TOML: 0.05, "sim", [1.0, 2.0], true
+    std::string source;  // "default" or "FILE:LINE"
+  };
+  // Every key read, in the order the daemon read them.
+  std::vector<Effective> effective() const;
+  // effective() as a TOML file, each value with its source in a comment (itself a
+  // valid config: the same daemon reads it back to the same values).
+  std::string effective_toml() const;
 
  private:
   struct State;  // the parsed toml++ table and the keys read so far
   ConfigReader(std::shared_ptr<State> state, std::string prefix);
   std::string path_of(std::string_view key) const;
+  void note_effective(const std::string& path, std::string value);
+  static void add_layer(State& state, const void* toml_table, const std::string& file);
 
   std::shared_ptr<State> state_;
   std::string prefix_;  // "" or "section." for nested readers

@@ -3,7 +3,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
+#include <fstream>
+#include <tuple>
 #include <set>
 #include <toml++/toml.h>
 
@@ -164,4 +168,91 @@ TEST(ShippedConfig, EveryDaemonOnTheSimClockHasACompleteRobotFileOnTheSystemCloc
   EXPECT_GE(on_sim, 5);  // lidar_reader, base_driver, slam, polygon_mapper, explorer
   // The simulator is the clock: it never runs on its own.
   EXPECT_NE(toml::parse_file((config_dir / "sim.toml").string())["clock"].value_or(std::string()), "sim");
+}
+
+// Layering: defaults < each file in order, key by key (docs/deployment.md).
+namespace {
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / ("pex_config_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "robot");
+  const auto path = dir / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+}  // namespace
+
+TEST(ConfigLayers, EachKeyFromTheLastFileThatSetsItElseItsDefault) {
+  const std::string base = write_file("slam.toml", "clock = \"sim\"\nrate_hz = 2.0\n[filter]\nparticles = 30\nseed = 7\n");
+  const std::string robot = write_file("robot/slam.toml", "clock = \"system\"\n\n[filter]\nparticles = 60\n");
+  ConfigReader c = ConfigReader::from_files({base, robot});
+  EXPECT_EQ(c.get<std::string>("clock", "x"), "system");    // the overlay
+  EXPECT_EQ(c.get<double>("rate_hz", 1.0), 2.0);             // the base file
+  ConfigReader filter = c.section("filter");
+  EXPECT_EQ(filter.get<int>("particles", 10), 60);            // the overlay, in a table
+  EXPECT_EQ(filter.get<int>("seed", 1), 7);                   // the base, in the same table
+  EXPECT_EQ(c.get<int>("timeout_ms", 500), 500);              // nobody: the default
+  EXPECT_NO_THROW(c.finish());
+  EXPECT_EQ(c.origin(), base + " + " + robot);
+  const auto e = c.effective();
+  ASSERT_EQ(e.size(), 5u);
+  EXPECT_EQ(e[0].key, "clock");
+  EXPECT_EQ(e[0].value, "\"system\"");
+  EXPECT_EQ(e[0].source, robot + ":1");
+  EXPECT_EQ(e[1].key, "rate_hz");
+  EXPECT_EQ(e[1].value, "2.0");
+  EXPECT_EQ(e[1].source, base + ":2");
+  EXPECT_EQ(e[2].key, "filter.particles");
+  EXPECT_EQ(e[2].source, robot + ":4");
+  EXPECT_EQ(e[3].key, "filter.seed");
+  EXPECT_EQ(e[3].source, base + ":5");
+  EXPECT_EQ(e[4].key, "timeout_ms");
+  EXPECT_EQ(e[4].value, "500");
+  EXPECT_EQ(e[4].source, "default");
+  // the other order: the base wins
+  ConfigReader reversed = ConfigReader::from_files({robot, base});
+  EXPECT_EQ(reversed.get<std::string>("clock", "x"), "sim");
+}
+
+TEST(ConfigLayers, ErrorsNameTheFileThatSetTheKey) {
+  const std::string base = write_file("mapper.toml", "rate_hz = 2.0\n");
+  const std::string robot = write_file("robot/mapper.toml", "rate_hz = -1.0\ntypo_m = 3\n");
+  ConfigReader c = ConfigReader::from_files({base, robot});
+  EXPECT_THAT(error_of([&] { c.get<double>("rate_hz", 1.0, pex::runtime::positive<double>()); }),
+              AllOf(HasSubstr(robot + ": key 'rate_hz'"), HasSubstr("must be > 0")));
+  EXPECT_THAT(error_of([&] { c.finish(); }), HasSubstr(robot + ": unknown key 'typo_m'"));
+  // a value in one file, a table in the next: refused
+  const std::string table = write_file("robot/table.toml", "[rate_hz]\nx = 1\n");
+  EXPECT_THAT(error_of([&] { ConfigReader::from_files({base, table}); }),
+              AllOf(HasSubstr(table), HasSubstr("'rate_hz' is a table here but a value in " + base)));
+}
+
+TEST(ConfigLayers, ARelativePathIsTakenFromTheFolderOfTheFileThatSetIt) {
+  const std::string base = write_file("sim.toml", "world_file = \"../worlds/a.wkt\"\nlog_file = \"a.log\"\n");
+  const std::string robot = write_file("robot/sim.toml", "world_file = \"b.wkt\"\n");
+  ConfigReader c = ConfigReader::from_files({base, robot});
+  const std::string dir = std::filesystem::path(base).parent_path().string();
+  EXPECT_EQ(c.get_path("world_file", "", false), dir + "/robot/b.wkt");
+  EXPECT_EQ(c.get_path("log_file", "", false), dir + "/a.log");
+  EXPECT_EQ(c.effective()[0].value, "\"" + dir + "/robot/b.wkt\"");  // printed as resolved
+}
+
+TEST(ConfigLayers, TheEffectiveConfigIsAConfigThatReadsBackToTheSameValues) {
+  const std::string base = write_file(
+      "explorer.toml", "name = \"a \\\"quoted\\\" b\"\nstep_m = 0.1\nxs_m = [1, 2.5, -0.3]\non = true\nn = 3\n");
+  ConfigReader c = ConfigReader::from_files({base});
+  auto read_all = [](ConfigReader& r) {
+    return std::make_tuple(r.get<std::string>("name", ""), r.get<double>("step_m", 0), r.get<std::vector<double>>("xs_m", {}),
+                           r.get<bool>("on", false), r.get<int>("n", 0), r.get<double>("gain", 1.0 / 3.0));
+  };
+  const auto values = read_all(c);
+  const std::string text = c.effective_toml();
+  EXPECT_THAT(text, HasSubstr("step_m = 0.1"));
+  EXPECT_THAT(text, HasSubstr("xs_m = [1.0, 2.5, -0.3]"));
+  EXPECT_THAT(text, HasSubstr("# " + base + ":2"));
+  EXPECT_THAT(text, HasSubstr("# default"));
+  ConfigReader again = ConfigReader::from_string(text, "printed.toml");
+  EXPECT_EQ(read_all(again), values) << text;
+  EXPECT_NO_THROW(again.finish());
 }

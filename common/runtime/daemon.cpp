@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <string>
 
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -46,8 +47,14 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   std::replace(program.begin(), program.end(), '_', '-');
   CLI::App app{info.description, program};
   app.set_version_flag("--version", program + " " + PEX_VERSION);
-  app.add_option("--config", g_args.config_path, "TOML configuration file (default: built-in defaults)")
+  app.add_option("--config", g_args.config_paths,
+                 "TOML configuration file; several: layered, each key from the last file that sets it "
+                 "(default: built-in defaults)")
       ->check(CLI::ExistingFile);
+  bool print_config = false;
+  app.add_flag("--print-config", print_config,
+               "print the effective configuration (each key, its value, and where it came from: default or "
+               "FILE:LINE) and exit");
   app.add_option("--lcm-url", g_args.lcm_url,
                  "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0 (default: $LCM_DEFAULT_URL or LCM's)");
   app.add_option("--log-level", g_args.log_level, "trace, debug, info, warn, error, critical, off")
@@ -70,16 +77,32 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
     return app.exit(e) == 0 ? exit_code::kOk : exit_code::kUsage;
   }
 
+  g_args.config_path = g_args.config_paths.empty() ? "" : g_args.config_paths.back();
+
   auto logger = spdlog::stderr_color_mt(info.name);
   logger->set_pattern("%Y-%m-%dT%H:%M:%S.%e %n[%P] %^%l%$: %v");
   spdlog::set_default_logger(logger);
   spdlog::set_level(spdlog::level::from_str(g_args.log_level));
 
+  if (print_config) {
+    try {
+      ConfigReader config = ConfigReader::from_files(g_args.config_paths);
+      load_runtime_options(config, info.is_clock_source);
+      if (info.load_options) info.load_options(config);
+      config.finish();
+      std::printf("# %s --print-config: defaults < %s (each key: the last that sets it)\n%s", program.c_str(),
+                  g_args.config_paths.empty() ? "no file" : config.origin().c_str(), config.effective_toml().c_str());
+      return exit_code::kOk;
+    } catch (const ConfigError& e) {
+      spdlog::critical("config error: {}", e.what());
+      return exit_code::kConfig;
+    }
+  }
+
   const bool offline = !g_args.replay_logs.empty();
   const int signal_fd = make_signal_fd();
   try {
-    ConfigReader config =
-        g_args.config_path.empty() ? ConfigReader() : ConfigReader::from_file(g_args.config_path);
+    ConfigReader config = ConfigReader::from_files(g_args.config_paths);
     const RuntimeOptions every_daemon = load_runtime_options(config, info.is_clock_source);
     const bool sim_clock = every_daemon.clock == ClockSource::kSim;
     if (sim_clock && offline) spdlog::info("clock = \"sim\" is ignored in replay: the log's time is the clock");

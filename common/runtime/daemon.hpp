@@ -4,6 +4,11 @@
 //   args (CLI11) -> logging (spdlog) -> config (TOML) -> Node -> setup(node, config)
 //   -> unknown config keys rejected -> READY=1 -> poll loop until SIGTERM -> flush.
 //
+// `--config FILE` may be given several times: layered, each key from the last file that
+// sets it (runtime/config.hpp). `--print-config` prints the effective configuration,
+// every key with its value and source (default or FILE:LINE), as TOML, and exits 0
+// (78 for a bad config, as a start would).
+//
 // Exit codes, documented for systemd (RestartPreventExitStatus=64 78):
 //   0   clean stop (SIGINT/SIGTERM, or the end of a replayed log)
 //   1   fatal error at run time, or at start for a reason not listed below
@@ -49,6 +54,9 @@ struct DaemonInfo {
   // The daemon publishes SIM_CLOCK (pex-sim): it cannot run on it, so
   // `clock = "sim"` in its config is a config error.
   bool is_clock_source = false;
+  // Reads the daemon's typed options (its load_options) and nothing else: what
+  // `--print-config` runs instead of setup, so every key is read as the daemon reads it.
+  std::function<void(ConfigReader&)> load_options = {};
 };
 
 // setup() reads its typed options from `config` and wires handlers into `node`.
@@ -68,7 +76,8 @@ RuntimeOptions load_runtime_options(ConfigReader& config, bool is_clock_source =
 
 // The options every daemon gets, after parsing (for daemons that need them in setup).
 struct CommonArgs {
-  std::string config_path;
+  std::vector<std::string> config_paths;  // the layers, lowest first
+  std::string config_path;                // the last of them ("" if none)
   std::string lcm_url;
   std::string log_level = "info";
   std::vector<std::string> replay_logs;

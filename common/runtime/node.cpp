@@ -1,5 +1,7 @@
 #include "runtime/node.hpp"
 
+#include "runtime/daemon_state.hpp"
+
 #include <poll.h>
 #include <sys/signalfd.h>
 #include <systemd/sd-daemon.h>
@@ -270,7 +272,7 @@ void Node::set_state(int8_t state, std::string reason) {
     if (state == pex::daemon_status_t::STATE_OK)
       spdlog::info("state OK{}{}", reason.empty() ? "" : ": ", reason);
     else
-      spdlog::warn("state {}{}{}", static_cast<int>(state), reason.empty() ? "" : ": ", reason);
+      spdlog::warn("state {}{}{}", daemon_state_name(state), reason.empty() ? "" : ": ", reason);
   }
   const int8_t before = published_state();
   state_ = state;
@@ -303,7 +305,7 @@ void Node::publish_status() {
   publish(channels::kDaemonStatus, s);
   if (!options_.offline && state_ != pex::daemon_status_t::STATE_STOPPING) {
     const std::string& reason = clock_problem_.empty() ? state_reason_ : clock_problem_;
-    const std::string text = "STATUS=state " + std::to_string(s.state) + (reason.empty() ? "" : " (" + reason + ")") +
+    const std::string text = std::string("STATUS=") + daemon_state_name(s.state) + (reason.empty() ? "" : " (" + reason + ")") +
                              ", in " + std::to_string(msgs_in_) + ", out " + std::to_string(msgs_out_) +
                              ", rejected " + std::to_string(msgs_rejected_);
     sd_notify(0, text.c_str());

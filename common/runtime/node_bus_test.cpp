@@ -4,7 +4,17 @@
 // handed the tick over yet, and the scan stamps fell behind (bus_tap.hpp).
 #include <gtest/gtest.h>
 #include <sys/socket.h>
+#include <sys/un.h>
 #include <unistd.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <string>
+
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
 #include <atomic>
 #include <vector>
@@ -15,6 +25,8 @@
 
 #include "runtime/channels.hpp"
 #include "runtime/node.hpp"
+#include "runtime/daemon_state.hpp"
+#include <pex/daemon_status_t.hpp>
 
 using pex::runtime::ClockSource;
 using pex::runtime::Node;
@@ -111,4 +123,43 @@ TEST(BusTapOnUdpm, QueuesOnlyItsChannel) {
   EXPECT_EQ(queued, 5);
   std::uint8_t byte;
   EXPECT_LT(::recv(tap.fd(), &byte, 1, MSG_DONTWAIT), 0);
+}
+
+// Health as words, where a person reads it: the journal ("state DEGRADED: why") and
+// systemd's status line (STATUS=DEGRADED (why), ...: `systemctl status`), taken here
+// from a NOTIFY_SOCKET of the test's own, as systemd would receive it.
+TEST(NodeHealthWords, JournalAndSystemdStatusSayTheStateInWords) {
+  EXPECT_STREQ(pex::runtime::daemon_state_name(pex::daemon_status_t::STATE_STARTING), "STARTING");
+  EXPECT_STREQ(pex::runtime::daemon_state_name(pex::daemon_status_t::STATE_OK), "OK");
+  EXPECT_STREQ(pex::runtime::daemon_state_name(pex::daemon_status_t::STATE_DEGRADED), "DEGRADED");
+  EXPECT_STREQ(pex::runtime::daemon_state_name(pex::daemon_status_t::STATE_ERROR), "ERROR");
+  EXPECT_STREQ(pex::runtime::daemon_state_name(pex::daemon_status_t::STATE_STOPPING), "STOPPING");
+  EXPECT_STREQ(pex::runtime::daemon_state_name(42), "UNKNOWN");
+
+  const std::string path = (std::filesystem::temp_directory_path() / ("pex_notify_" + std::to_string(::getpid()))).string();
+  ::unlink(path.c_str());
+  const int sock = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(sock, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+  ASSERT_EQ(::bind(sock, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  ::setenv("NOTIFY_SOCKET", path.c_str(), 1);
+  std::ostringstream journal;
+  auto before = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(journal)));
+  {
+    Node node(NodeOptions{"t", kUrl, false, "", 1.0});
+    node.set_state(pex::daemon_status_t::STATE_DEGRADED, "no scans for 2.0 s");
+  }
+  spdlog::set_default_logger(before);
+  ::unsetenv("NOTIFY_SOCKET");
+  std::string notified;
+  char buf[512];
+  for (ssize_t n; (n = ::recv(sock, buf, sizeof buf, MSG_DONTWAIT)) > 0;) notified += std::string(buf, n) + "\n";
+  ::close(sock);
+  ::unlink(path.c_str());
+  EXPECT_NE(journal.str().find("state DEGRADED: no scans for 2.0 s"), std::string::npos) << journal.str();
+  EXPECT_NE(notified.find("STATUS=DEGRADED (no scans for 2.0 s), in "), std::string::npos) << notified;
+  EXPECT_EQ(notified.find("STATUS=state "), std::string::npos) << notified;
 }

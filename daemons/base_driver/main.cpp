@@ -8,7 +8,9 @@
 
 int main(int argc, char** argv) {
   std::unique_ptr<pex::base_driver::Driver> driver;
-  return pex::runtime::run_daemon(argc, argv, {"base_driver", "differential base over CANopen CiA 402 -> ODOMETRY"},
+  return pex::runtime::run_daemon(argc, argv, {.name = "base_driver",
+                                   .description = "differential base over CANopen CiA 402 -> ODOMETRY",
+                                   .load_options = [](auto& c) { (void)pex::base_driver::load_options(c); }},
                                   [&driver](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
                                     driver = std::make_unique<pex::base_driver::Driver>(
                                         node, pex::base_driver::load_options(config));

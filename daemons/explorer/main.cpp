@@ -32,7 +32,9 @@ std::int64_t us_of_ms(double ms) { return static_cast<std::int64_t>(std::llround
 
 int main(int argc, char** argv) {
   return pex::runtime::run_daemon(
-      argc, argv, {"explorer", "frontier exploration: goals on frontiers, shortest paths, path following"},
+      argc, argv, {.name = "explorer",
+       .description = "frontier exploration: goals on frontiers, shortest paths, path following",
+       .load_options = [](auto& c) { (void)pex::explorer::load_options(c); }},
       [](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
         auto explorer =
             std::make_shared<ExplorerNode>(pex::explorer::load_options(config), ExplorerNode::Planning::kWorkerThread);

@@ -8,7 +8,9 @@
 
 int main(int argc, char** argv) {
   std::unique_ptr<pex::lidar_reader::Reader> reader;
-  return pex::runtime::run_daemon(argc, argv, {"lidar_reader", "SICK LMS1xx (CoLa-A over TCP) -> LIDAR_SCAN"},
+  return pex::runtime::run_daemon(argc, argv, {.name = "lidar_reader",
+                                   .description = "SICK LMS1xx (CoLa-A over TCP) -> LIDAR_SCAN",
+                                   .load_options = [](auto& c) { (void)pex::lidar_reader::load_options(c); }},
                                   [&reader](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
                                     reader = std::make_unique<pex::lidar_reader::Reader>(
                                         node, pex::lidar_reader::load_options(config));

@@ -25,6 +25,7 @@ using pex::polygon_mapper::Mapper;
 int main(int argc, char** argv) {
   pex::runtime::DaemonInfo info{"polygon_mapper", "typed polygonal map (MAP) from LIDAR_SCAN and a pose source"};
   info.supports_replay = true;
+  info.load_options = [](auto& c) { (void)pex::polygon_mapper::load_options(c); };
   return pex::runtime::run_daemon(argc, argv, info, [](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
     auto mapper = std::make_shared<Mapper>(pex::polygon_mapper::load_options(config));
     // The map survives a restart: published at once from the checkpoint, and

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<pex::simd::Simulator> simulator;  // outlives the node's handlers' use of it
   pex::runtime::DaemonInfo info{"sim", "simulated world, LMS111 (CoLa-A/TCP) and CiA 402 wheel drives (CAN)"};
   info.is_clock_source = true;  // publishes SIM_CLOCK, paced by the wall clock x speed
+  info.load_options = [](auto& c) { (void)pex::simd::load_options(c); };
   info.add_options = [&speed, &world](CLI::App& app) {
     app.add_option_function<double>(
            "--speed", [&speed](double factor) { speed = factor; },

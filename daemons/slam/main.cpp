@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   std::string checkpoint_out;
   pex::runtime::DaemonInfo info{"slam", "Rao-Blackwellized particle filter SLAM"};
   info.supports_replay = true;
+  info.load_options = [](auto& c) { (void)pex::slam_daemon::load_options(c); };
   info.add_options = [&](CLI::App& app) {
     app.add_option("--poses", poses_path, "offline: write the best trajectory, one `t x y theta` per scan");
     app.add_option("--checkpoint-out", checkpoint_out, "offline: write the filter's checkpoint at the end of the log");

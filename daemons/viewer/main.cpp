@@ -30,7 +30,9 @@ extern const char* const kPage;  // index.html, built in (viewer_page.cpp)
 
 int main(int argc, char** argv) {
   return pex::runtime::run_daemon(
-      argc, argv, {"viewer", "live web view of the mission: map, robot, scan, plan, health; mission buttons"},
+      argc, argv, {.name = "viewer",
+       .description = "live web view of the mission: map, robot, scan, plan, health; mission buttons",
+       .load_options = [](auto& c) { (void)pex::viewer::load_options(c); }},
       [](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
         const auto options = pex::viewer::load_options(config);
         auto state = std::make_shared<pex::viewer::ViewerState>(options.state);

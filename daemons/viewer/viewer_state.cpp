@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "map_files.hpp"
+#include "runtime/daemon_state.hpp"
 
 namespace pex::viewer {
 
@@ -32,10 +33,7 @@ const char* phase_name(int phase) {
   return phase >= 0 && phase < static_cast<int>(std::size(kNames)) ? kNames[phase] : "UNKNOWN";
 }
 
-const char* daemon_state_name(int state) {
-  static constexpr const char* kNames[] = {"STARTING", "OK", "DEGRADED", "ERROR", "STOPPING"};
-  return state >= 0 && state < static_cast<int>(std::size(kNames)) ? kNames[state] : "UNKNOWN";
-}
+const char* daemon_state_name(int state) { return pex::runtime::daemon_state_name(state); }
 
 ViewerState::ViewerState(ViewerStateOptions options) : options_(options) {}
 

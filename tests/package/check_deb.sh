@@ -21,8 +21,12 @@ field() { dpkg-deb -f "$deb" "$1"; }
 [ "$(field Package)" = polyexplore ] || fail "Package: $(field Package)"
 [ "$(field Version)" = "$version" ] || fail "Version: $(field Version)"
 depends=$(field Depends)
-for d in liblcm1 liblcm-bin libsystemd0 libspdlog adduser iproute2; do
+for d in liblcm1 liblcm-bin libsystemd0 libspdlog libcairo2 adduser iproute2; do
   [[ ", $depends" == *", $d"* ]] || fail "Depends lacks $d: $depends"
+done
+recommends=$(field Recommends)  # pex-spy: lcm.jar, jchart2d, a JRE with Swing
+for d in liblcm-java libjchart2d-java default-jre; do
+  [[ ", $recommends" == *", $d"* ]] || fail "Recommends lacks $d: $recommends"
 done
 dpkg-deb -e "$deb" "$tmp/control" || exit 1
 for s in postinst prerm postrm; do
@@ -89,6 +93,11 @@ if need /usr/share/java/pex_types.jar; then
     grep -qx "pex/$n.class" <<<"$classes" || fail "pex_types.jar lacks pex/$n.class"
   done
 fi
+
+# the launchers name the installed types jar
+for s in pex-spy pex-logplayer-gui; do
+  grep -q '/usr/share/java/pex_types.jar' "$root/usr/bin/$s" 2>/dev/null || fail "/usr/bin/$s does not use /usr/share/java/pex_types.jar"
+done
 
 # --- the installed units, verified against the scratch root's programs ---
 mkdir "$tmp/units"

@@ -1,14 +1,18 @@
 // pex-render-map --log IN.lcm [--channel MAP] --svg OUT.svg --png OUT.png
 // pex-render-map --map IN.geojson --svg OUT.svg --png OUT.png
-// Draws the last MAP message of an LCM log, or a saved map file (pex-map save),
-// free space filled, obstacle edges black, frontier edges orange, with the
-// robot path from every MAP's pose (a map file: its one pose).
+// Draws the last MAP message of an LCM log, or a saved map file (pex-map save), with
+// cairo: free space filled, obstacle edges black, frontier edges orange, the robot
+// path from every MAP's pose (a map file: its one pose), legend and scale bar;
+// --align turns the map so its dominant wall direction lies along the picture's axes.
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
 #ifndef PEX_VERSION
@@ -31,13 +35,17 @@ int main(int argc, char** argv) {
   app.add_option("--channel", channel, "channel of the pex.polygon_map_t messages");
   app.add_option("--svg", svg_path, "SVG output");
   app.add_option("--png", png_path, "PNG output");
-  app.add_option("--pixels-per-m", options.pixels_per_m, "scale (shrinks for large maps)");
+  app.add_option("--pixels-per-m", options.pixels_per_m, "scale (shrinks for large maps)")->check(CLI::PositiveNumber);
+  app.add_flag("--align", options.align, "rotate the map so its dominant wall direction lies along the axes");
+  bool no_legend = false;
+  app.add_flag("--no-legend", no_legend, "no footer (legend, scale bar)");
   app.set_version_flag("--version", std::string("pex-render-map ") + PEX_VERSION);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
   }
+  options.legend = !no_legend;
   if (svg_path.empty() && png_path.empty()) {
     std::fprintf(stderr, "pex-render-map: give --svg and/or --png\n");
     return EX_USAGE;
@@ -62,20 +70,34 @@ int main(int argc, char** argv) {
   const pex::polygon_map_t& last = *maps.last;
   const pex::render_map::Path& path = maps.robot_path;
   const long rejected = maps.rejected;
+  std::string svg;
+  std::vector<std::uint8_t> png;
+  try {
+    if (!svg_path.empty()) svg = pex::render_map::to_svg(last, path, options);
+    if (!png_path.empty()) png = pex::render_map::to_png(last, path, options);
+  } catch (const std::exception& e) {  // cairo: a picture too large for memory
+    std::fprintf(stderr, "pex-render-map: %s\n", e.what());
+    return cannot_write(png_path.empty() ? svg_path : png_path);
+  }
   if (!svg_path.empty()) {
-    std::ofstream svg(svg_path);
-    svg << pex::render_map::to_svg(last, path, options);
-    svg.close();
-    if (!svg) return cannot_write(svg_path);
+    std::ofstream out(svg_path);
+    out << svg;
+    out.close();
+    if (!out) return cannot_write(svg_path);
   }
   if (!png_path.empty()) {
-    const auto png = pex::render_map::encode_png(pex::render_map::rasterise(last, path, options));
     std::ofstream out(png_path, std::ios::binary);
     out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
     out.close();
     if (!out) return cannot_write(png_path);
   }
+  const pex::render_map::Layout layout = pex::render_map::layout_of(last, path, options);
   std::printf("rendered %d rings, %d vertices, %.1f m2 free, %zu path points (%ld messages rejected)\n",
               last.nrings, last.vertex_count, last.free_area_m2, path.size(), rejected);
+  std::printf("picture %d x %d px, %.2f px/m, rotated %.1f deg", layout.width, layout.height, layout.scale,
+              layout.rotation_rad * 180 / 3.14159265358979323846);
+  if (!svg_path.empty()) std::printf("; SVG %zu bytes", svg.size());
+  if (!png_path.empty()) std::printf("; PNG %zu bytes", png.size());
+  std::printf("\n");
   return 0;
 }

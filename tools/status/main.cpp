@@ -20,19 +20,9 @@
 
 #include "planning/mission.hpp"
 #include "runtime/channels.hpp"
+#include "runtime/daemon_state.hpp"
 
 namespace {
-
-const char* state_name(int8_t s) {
-  switch (s) {
-    case pex::daemon_status_t::STATE_STARTING: return "STARTING";
-    case pex::daemon_status_t::STATE_OK: return "OK";
-    case pex::daemon_status_t::STATE_DEGRADED: return "DEGRADED";
-    case pex::daemon_status_t::STATE_ERROR: return "ERROR";
-    case pex::daemon_status_t::STATE_STOPPING: return "STOPPING";
-    default: return "?";
-  }
-}
 
 void on_status(const lcm::ReceiveBuffer* rb, const std::string&,
                std::map<std::string, pex::daemon_status_t>* latest) {
@@ -139,7 +129,7 @@ int main(int argc, char** argv) {
   std::printf("%-16s %-9s %7s %9s %9s %8s %7s  %s\n", "daemon", "state", "pid", "in", "out",
               "rejected", "errors", "last error");
   for (const auto& [name, s] : latest) {
-    std::printf("%-16s %-9s %7d %9lld %9lld %8lld %7lld  %s\n", name.c_str(), state_name(s.state),
+    std::printf("%-16s %-9s %7d %9lld %9lld %8lld %7lld  %s\n", name.c_str(), pex::runtime::daemon_state_name(s.state),
                 s.pid, static_cast<long long>(s.msgs_in), static_cast<long long>(s.msgs_out),
                 static_cast<long long>(s.msgs_rejected), static_cast<long long>(s.errors),
                 s.last_error.c_str());
