@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <vector>
 
 namespace pex::explorer {
 
@@ -46,6 +47,21 @@ std::string ExplorerNode::restore(const std::string& text) {
 
 std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime) {
   if (msg.nranges <= 0 || static_cast<std::size_t>(msg.nranges) != msg.ranges.size()) return "scan without ranges";
+  if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) || !std::isfinite(msg.sensor_x) ||
+      !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
+    return "scan geometry is not finite";
+  // Returns in the robot's frame (the laser's mounting), for the guard.
+  std::vector<mapping::Point> points;
+  points.reserve(msg.ranges.size());
+  const double c = std::cos(msg.sensor_theta), s = std::sin(msg.sensor_theta);
+  for (std::size_t i = 0; i < msg.ranges.size(); ++i) {
+    const double r = msg.ranges[i];
+    if (!std::isfinite(r) || r < msg.range_min || r >= msg.range_max) continue;  // no return
+    const double a = msg.angle_min + static_cast<double>(i) * msg.angle_increment;
+    const double x = r * std::cos(a), y = r * std::sin(a);
+    points.emplace_back(msg.sensor_x + c * x - s * y, msg.sensor_y + s * x + c * y);
+  }
+  free_ahead_m_ = planning::free_distance_ahead(points, options_.guard.body_radius_m);
   mission_.on_scan(now_utime);
   return {};
 }
@@ -86,6 +102,13 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   pex::velocity_cmd_t cmd = stop_command(now_utime);
   cmd.v = last_.command.v_mps;
   cmd.omega = last_.command.omega_radps;
+  if (options_.scan_guard && cmd.v > 0.0) {
+    const double safe = planning::max_safe_speed(free_ahead_m_, options_.guard);
+    if (cmd.v > safe) {
+      cmd.v = safe;
+      ++counters_.guard_limited_steps;
+    }
+  }
   return cmd;
 }
 

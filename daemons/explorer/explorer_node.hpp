@@ -3,6 +3,7 @@
 // (planning/mission.hpp): checked inputs in, BASE_CMD and EXPLORE_STATE out,
 // plans on a worker thread (or inline, for tests). No LCM calls here, so
 // tests can drive it without a bus.
+#include <limits>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -22,6 +23,7 @@
 namespace pex::explorer {
 
 struct ExplorerCounters {
+  std::int64_t guard_limited_steps = 0;  // control steps whose forward speed the scan guard cut
   std::int64_t maps_accepted = 0;
   std::int64_t map_polygons_dropped = 0;
   std::int64_t map_rings_reoriented = 0;
@@ -37,7 +39,8 @@ class ExplorerNode {
   // message was refused (the caller counts it as bad input).
   std::string on_map(const pex::polygon_map_t& msg, std::int64_t now_utime);
   std::string on_pose(const pex::pose_t& msg, std::int64_t now_utime);
-  // A LIDAR_SCAN: only that the laser is alive (the mission stops without scans).
+  // A LIDAR_SCAN: the laser is alive (the mission stops without scans), and
+  // the free distance ahead of the robot's body for the scan guard.
   std::string on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime);
   // A MISSION_CMD. Returns "" when applied or already in effect; "refused: ..."
   // for a command that is not a command (bad input); other text: why it does
@@ -74,6 +77,9 @@ class ExplorerNode {
   ExplorerCounters counters_;
   LatencyStats plan_ms_;
   LatencyStats control_ms_;
+  // From the newest scan; none yet: no bound (the mission itself stands
+  // without scans when scan_timeout_ms watches them).
+  double free_ahead_m_ = std::numeric_limits<double>::infinity();
 };
 
 }  // namespace pex::explorer

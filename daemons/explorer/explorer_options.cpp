@@ -100,6 +100,10 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   m.look_tolerance_rad = config.get<double>("look_tolerance_rad", m.look_tolerance_rad, in_range(0.0, 3.2));
   m.max_travel_step_m = config.get<double>("max_travel_step_m", m.max_travel_step_m, positive<double>());
   m.tight_fallback = config.get<bool>("tight_fallback", m.tight_fallback);
+  o.scan_guard = config.get<bool>("scan_guard", o.scan_guard);
+  o.guard.body_radius_m = config.get<double>("guard_body_radius_m", o.guard.body_radius_m, in_range(0.01, 5.0));
+  o.guard.margin_m = config.get<double>("guard_margin_m", o.guard.margin_m, in_range(0.0, 1.0));
+  o.guard.max_decel_mps2 = config.get<double>("guard_decel_mps2", o.guard.max_decel_mps2, in_range(0.01, 20.0));
   return o;
 }
 

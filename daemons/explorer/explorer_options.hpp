@@ -5,6 +5,7 @@
 
 #include "map_message.hpp"
 #include "planning/mission.hpp"
+#include "planning/scan_guard.hpp"
 
 namespace pex::runtime {
 class ConfigReader;
@@ -22,6 +23,9 @@ struct ExplorerOptions {
   double checkpoint_period_s = 2.0;
   MapDecodeOptions map;
   planning::MissionOptions mission;
+  // The live scan bounds the forward speed (planning/scan_guard.hpp); off: the map alone.
+  bool scan_guard = true;
+  planning::ScanGuardOptions guard;
 };
 
 // Reads and validates every key; throws runtime::ConfigError on a bad value.

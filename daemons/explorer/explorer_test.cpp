@@ -211,5 +211,48 @@ TEST(ExplorerNode, StopsWithoutLaserScans) {
   EXPECT_FALSE(node.last_output().degraded);
 }
 
+// Something the map does not show (or SLAM puts elsewhere) right in front of
+// the robot: the scan guard holds the forward speed to what can stop before it.
+TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
+  auto scan_of_wall_ahead = [](double distance_m) {
+    pex::laser_scan_t scan{};
+    scan.angle_min = -0.5f;
+    scan.angle_increment = 0.01f;
+    scan.range_min = 0.05f;
+    scan.range_max = 20.0f;
+    for (int i = 0; i <= 100; ++i) {
+      const double a = scan.angle_min + i * scan.angle_increment;
+      scan.ranges.push_back(static_cast<float>(distance_m / std::cos(a)));
+    }
+    scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
+    return scan;
+  };
+  auto drive = [&](ExplorerOptions options, double wall_m) {
+    ExplorerNode node(options);
+    pex::pose_t pose{};
+    pose.x = 10;
+    pose.y = 1.5;
+    EXPECT_EQ(node.on_map(corridor(), 0), "");
+    double v = 0.0;
+    for (std::int64_t t = 0; t <= 2'000'000; t += 100'000) {
+      EXPECT_EQ(node.on_pose(pose, t), "");
+      EXPECT_EQ(node.on_scan(scan_of_wall_ahead(wall_m), t), "");
+      v = node.step(t).v;
+    }
+    return std::pair{v, node.counters().guard_limited_steps};
+  };
+  ExplorerOptions options;
+  const auto [far_v, far_limited] = drive(options, 5.0);
+  EXPECT_GT(far_v, 0.3);  // 4.75 m free: full speed
+  EXPECT_EQ(far_limited, 0);
+  const auto [near_v, near_limited] = drive(options, 0.30);  // 5 cm between body and wall
+  EXPECT_LE(near_v, std::sqrt(2.0 * options.guard.max_decel_mps2 * (0.05 - options.guard.margin_m)) + 1e-6);  // float ranges
+  EXPECT_GT(near_limited, 0);
+  const auto [touch_v, touch_limited] = drive(options, 0.26);
+  EXPECT_EQ(touch_v, 0.0);
+  options.scan_guard = false;
+  EXPECT_GT(drive(options, 0.26).first, 0.0);  // the map alone would drive on
+}
+
 }  // namespace
 }  // namespace pex::explorer

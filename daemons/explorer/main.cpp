@@ -87,6 +87,7 @@ int main(int argc, char** argv) {
           const auto& c = explorer->counters();
           const auto& out = explorer->last_output();
           node.counter("maps_accepted") = c.maps_accepted;
+          node.counter("guard_limited_steps") = c.guard_limited_steps;
           node.counter("map_polygons_dropped") = c.map_polygons_dropped;
           node.counter("commands_applied") = c.commands_applied;
           node.counter("plans") = out.plans;
