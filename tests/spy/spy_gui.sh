@@ -98,8 +98,16 @@ xdotool mousemove --window "$spy" 60 $((27 + 16 * row + 8)) click --repeat 2 --d
 view=$(timeout 15 xdotool search --sync --name '^MAP$' | head -n 1)
 [ -n "$view" ] || fail "no message view 'MAP' within 15 s after a double click on row $row"
 # beside the spy's window (800 px wide), so the table stays clickable and both are in the picture
-timeout 10 xdotool windowmove --sync "$view" 810 0 windowsize --sync "$view" 780 880
-xdotool getwindowgeometry "$view" | grep -q 'Position: 810,0' || fail "could not move the MAP view: $(xdotool getwindowgeometry "$view")"
+# Without a window manager the move lands when the X server and Java have both
+# handled it, which under load can be after xdotool's --sync gave up: ask again
+# until the geometry says so (a state, bounded in time), never a single look.
+moved=0
+for _ in $(seq 50); do
+  timeout 5 xdotool windowmove "$view" 810 0 windowsize "$view" 780 880 2>/dev/null
+  xdotool getwindowgeometry "$view" 2>/dev/null | grep -q 'Position: 810,0' && { moved=1; break; }
+  sleep 0.2
+done
+((moved)) || fail "could not move the MAP view in 10 s: $(xdotool getwindowgeometry "$view")"
 # MAPs published while the view is open, as polygon_mapper counts them (MAP and MAP_FREE:
 # 2 a map). Read from DAEMON_STATUS: with no window manager the spy's table cannot take
 # the keyboard back from the view for another copy.
