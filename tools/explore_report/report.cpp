@@ -115,6 +115,8 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.plan_ms_p50 = us_to_ms(counter(*st, "plan_us_p50"));
     r.plan_ms_p99 = us_to_ms(counter(*st, "plan_us_p99"));
     r.control_ms_p99 = us_to_ms(counter(*st, "control_us_p99"));
+    r.plan_cpu_ms_p50 = us_to_ms(counter(*st, "plan_cpu_us_p50"));
+    r.plan_cpu_ms_p99 = us_to_ms(counter(*st, "plan_cpu_us_p99"));
   }
   const bool free_space = options.scored_map == ScoredMap::kFreeSpace ||
                           (options.scored_map == ScoredMap::kAuto && log.free_space.has_value());
@@ -208,6 +210,8 @@ std::string to_json(const Report& r) {
   j.number("plan_ms_p50", r.plan_ms_p50, 3);
   j.number("plan_ms_p99", r.plan_ms_p99, 3);
   j.number("control_ms_p99", r.control_ms_p99, 3);
+  j.number("plan_cpu_ms_p50", r.plan_cpu_ms_p50, 3);
+  j.number("plan_cpu_ms_p99", r.plan_cpu_ms_p99, 3);
   j.string("scored_map", r.scored_map);
   return j.str();
 }

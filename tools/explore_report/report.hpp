@@ -62,6 +62,7 @@ struct Report {
   std::optional<double> sim_time_s, path_m, explored_m2, reachable_m2, coverage, iou, obstacle_on_wall;
   std::optional<std::int64_t> collisions, goals, plans;
   std::optional<double> plan_ms_p50, plan_ms_p99, control_ms_p99;
+  std::optional<double> plan_cpu_ms_p50, plan_cpu_ms_p99;  // the planner thread's CPU time
   // Not in the line (stderr): how the map decoded.
   int map_polygons_dropped = 0;
   std::string map_error;  // the last MAP did not decode at all

@@ -102,7 +102,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   log.add_raw(ch::kMap, {1, 2, 3});  // garbage: counted, skipped
   log.add(ch::kExploreState, state);
   log.add(ch::kSimClock, clock);
-  log.add(ch::kDaemonStatus, status("explorer", {{"plan_us_p50", 1500}, {"plan_us_p99", 12000}}));
+  log.add(ch::kDaemonStatus,
+          status("explorer", {{"plan_us_p50", 1500}, {"plan_us_p99", 12000}, {"plan_cpu_us_p99", 9000}}));
   log.add(ch::kDaemonStatus, status("slam", {{"plan_us_p50", 99}}));  // not the explorer's
   log.write();
 
@@ -145,7 +146,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
       << json;
   EXPECT_NE(json.find("\"coverage\":0.50000,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"collisions\":1,\"goals\":4,\"plans\":7,\"plan_ms_p50\":1.500,\"plan_ms_p99\":12.000,"
-                      "\"control_ms_p99\":null,\"scored_map\":\"MAP\"}"),
+                      "\"control_ms_p99\":null,\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":9.000,"
+                      "\"scored_map\":\"MAP\"}"),
             std::string::npos)
       << json;
 
@@ -222,7 +224,7 @@ TEST(ExploreReport, MissingChannelsGiveNulls) {
                             reachable_m2 +
                             ",\"coverage\":null,\"iou\":null,\"obstacle_on_wall\":null,\"collisions\":null,"
                             "\"goals\":0,\"plans\":0,\"plan_ms_p50\":null,\"plan_ms_p99\":null,\"control_ms_p99\":null,"
-                            "\"scored_map\":null}");
+                            "\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":null,\"scored_map\":null}");
 }
 
 TEST(ExploreReport, UnreadableLogsAreErrors) {
