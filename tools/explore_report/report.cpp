@@ -94,7 +94,7 @@ std::string phase_name(std::int8_t phase) {
 
 Report make_report(const std::string& world_name, const LogContents& log, const sim::World& world,
                    const MultiPolygon& reachable, const ReportOptions& options,
-                   mapping::TypedMultiPolygon* map_world) {
+                   mapping::TypedMultiPolygon* map_world, const MultiPolygon* world_free) {
   Report r;
   r.world = world_name;
   r.reachable_m2 = bg::area(reachable);
@@ -138,7 +138,18 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
       r.coverage = finite(score.coverage);
       r.iou = finite(score.iou);
       r.obstacle_on_wall = finite(score.obstacle_on_wall);
-      if (map_world) *map_world = evaluation::to_world(decoded.polygons, options.map_in_world);
+      if (map_world || world_free) {
+        auto typed_world = evaluation::to_world(decoded.polygons, options.map_in_world);
+        if (world_free) {
+          const MultiPolygon map_free = mapping::geometry_of(typed_world);
+          if (const auto outside = evaluation::checked_overlay(map_free, *world_free, mapping::OverlayOp::kDifference)) {
+            r.map_outside_free_m2 = bg::area(*outside);
+            r.map_unreachable_free_m2 =
+                std::max(0.0, score.explored_m2 - *r.map_outside_free_m2 - score.mapped_reachable_m2);
+          }
+        }
+        if (map_world) *map_world = std::move(typed_world);
+      }
     }
   }
   return r;
@@ -212,6 +223,8 @@ std::string to_json(const Report& r) {
   j.number("control_ms_p99", r.control_ms_p99, 3);
   j.number("plan_cpu_ms_p50", r.plan_cpu_ms_p50, 3);
   j.number("plan_cpu_ms_p99", r.plan_cpu_ms_p99, 3);
+  j.number("map_outside_free_m2", r.map_outside_free_m2, 3);
+  j.number("map_unreachable_free_m2", r.map_unreachable_free_m2, 3);
   j.string("scored_map", r.scored_map);
   return j.str();
 }

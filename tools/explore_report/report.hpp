@@ -63,6 +63,13 @@ struct Report {
   std::optional<std::int64_t> collisions, goals, plans;
   std::optional<double> plan_ms_p50, plan_ms_p99, control_ms_p99;
   std::optional<double> plan_cpu_ms_p50, plan_cpu_ms_p99;  // the planner thread's CPU time
+  // Where the map's free space that is not reachable lies (with world_free):
+  // outside the world's free region holding the start (beyond a wall, inside
+  // a solid: the map is wrong there), or inside it where the robot's disk
+  // cannot sweep (room corners, notches of ragged walls, space seen through a
+  // gap narrower than the robot: the map is right there, the IoU counts it
+  // against the map all the same).
+  std::optional<double> map_outside_free_m2, map_unreachable_free_m2;
   // Not in the line (stderr): how the map decoded.
   int map_polygons_dropped = 0;
   std::string map_error;  // the last MAP did not decode at all
@@ -71,9 +78,13 @@ struct Report {
 // Fills the report from the log and the world's reachable free space
 // (evaluation::reachable_free_space, computed by the caller). `map_world`,
 // if given, receives the decoded map moved into the world frame.
+// `world_free`, if given, is the world's free region holding the start
+// (evaluation::configuration_free_component with a radius of a millimetre or
+// two): it splits the map's unreachable free space in two (Report above).
 Report make_report(const std::string& world_name, const LogContents& log, const sim::World& world,
                    const mapping::MultiPolygon& reachable, const ReportOptions& options,
-                   mapping::TypedMultiPolygon* map_world = nullptr);
+                   mapping::TypedMultiPolygon* map_world = nullptr,
+                   const mapping::MultiPolygon* world_free = nullptr);
 
 // The JSON line (no trailing newline), keys in the benchmark's order.
 std::string to_json(const Report& report);
