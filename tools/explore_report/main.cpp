@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
   app.add_option("--start-pose", start_pose, "X_M Y_M THETA_RAD: the start pose, if not the world's START line")
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
-  app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed) to this SVG");
+  app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed, violet: not reachable, gold: beyond the walls) to this SVG");
   app.set_version_flag("--version", std::string("pex-explore-report ") + PEX_VERSION);
   try {
     app.parse(argc, argv);
@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
   if (!svg_out.empty()) {
     std::ofstream out(svg_out);
     out << pex::explore_report::to_svg(world, reachable, map_world, start, options.robot_radius_m,
-                                                options.wall_tolerance_m);
+                                       options.wall_tolerance_m, &world_free);
     if (!out) return fail(73, "cannot write " + svg_out);
   }
   return 0;

@@ -253,7 +253,8 @@ std::string path_of(const MultiPolygon& polygons, const ToPx& px) {
 }  // namespace
 
 std::string to_svg(const sim::World& world, const MultiPolygon& reachable, const mapping::TypedMultiPolygon& map_world,
-                   const kinematics::Pose2& start, double robot_radius_m, double wall_tolerance_m) {
+                   const kinematics::Pose2& start, double robot_radius_m, double wall_tolerance_m,
+                   const MultiPolygon* world_free) {
   const MultiPolygon map_free = mapping::geometry_of(map_world);
   // Frame: the walls' box and the map, a 1 m margin.
   double min_x = world.min_x, min_y = world.min_y, max_x = world.max_x, max_y = world.max_y;
@@ -281,6 +282,10 @@ std::string to_svg(const sim::World& world, const MultiPolygon& reachable, const
   s << "<path fill=\"#4a78c8\" fill-opacity=\"0.55\" fill-rule=\"evenodd\" d=\"" << path_of(map_free, px) << "\"/>\n";
   if (missed) s << "<path fill=\"#e03030\" fill-rule=\"evenodd\" d=\"" << path_of(*missed, px) << "\"/>\n";
   if (outside) s << "<path fill=\"#a040c0\" fill-rule=\"evenodd\" d=\"" << path_of(*outside, px) << "\"/>\n";
+  if (world_free) {
+    if (const auto beyond = evaluation::checked_overlay(map_free, *world_free, mapping::OverlayOp::kDifference))
+      s << "<path fill=\"#e0a000\" fill-rule=\"evenodd\" d=\"" << path_of(*beyond, px) << "\"/>\n";
+  }
   const double edge_px = std::max(10.0, 0.05 * scale * 10);
   // Map edges: obstacle edges on a wall (within wall_tolerance_m for at
   // least 99 % of their length) dark blue, off the walls magenta; frontiers orange.

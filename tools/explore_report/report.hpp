@@ -94,8 +94,10 @@ std::string to_json(const Report& report);
 // reachable, map obstacle edges dark blue (magenta where more than 1 % of
 // an edge is farther than wall_tolerance_m from every wall), frontier edges
 // orange, world walls black, the robot's disk at the start green; y up.
+// With world_free (make_report), the map's free space outside the world's
+// free region (beyond a wall) is drawn gold over the violet.
 std::string to_svg(const sim::World& world, const mapping::MultiPolygon& reachable,
                    const mapping::TypedMultiPolygon& map_world, const kinematics::Pose2& start,
-                   double robot_radius_m, double wall_tolerance_m);
+                   double robot_radius_m, double wall_tolerance_m, const mapping::MultiPolygon* world_free = nullptr);
 
 }  // namespace pex::explore_report
