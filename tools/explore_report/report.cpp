@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <iterator>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include <lcm/lcm-cpp.hpp>
+#include <pex/pose_t.hpp>
 
 #include "map_message.hpp"
 #include "runtime/channels.hpp"
@@ -39,6 +43,37 @@ std::optional<double> finite(double v) {
   return v;
 }
 
+// SLAM_POSE against the truth nearest in time (Report's slam_error_*).
+void audit_poses(const LogContents& log, const kinematics::Pose2& map_in_world, Report& r) {
+  if (log.slam_poses.empty() || log.truth.empty()) return;
+  std::vector<StampedPose> truth = log.truth;
+  std::stable_sort(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
+  const double c = std::cos(map_in_world.theta_rad), s = std::sin(map_in_world.theta_rad);
+  double sum = 0.0, worst = 0.0, heading_sum = 0.0;
+  std::int64_t n = 0;
+  for (const auto& slam : log.slam_poses) {
+    auto it = std::lower_bound(truth.begin(), truth.end(), slam.utime,
+                               [](const StampedPose& p, std::int64_t t) { return p.utime < t; });
+    const StampedPose* nearest = nullptr;
+    if (it != truth.end()) nearest = &*it;
+    if (it != truth.begin() && (!nearest || slam.utime - std::prev(it)->utime < nearest->utime - slam.utime))
+      nearest = &*std::prev(it);
+    if (!nearest || std::llabs(nearest->utime - slam.utime) > 20'000) continue;
+    const auto& p = slam.pose;
+    const double wx = map_in_world.x_m + c * p.x_m - s * p.y_m, wy = map_in_world.y_m + s * p.x_m + c * p.y_m;
+    const double e = std::hypot(wx - nearest->pose.x_m, wy - nearest->pose.y_m);
+    if (!std::isfinite(e)) continue;
+    sum += e;
+    worst = std::max(worst, e);
+    heading_sum += std::abs(kinematics::normalize_angle(map_in_world.theta_rad + p.theta_rad - nearest->pose.theta_rad));
+    ++n;
+  }
+  if (n == 0) return;
+  r.slam_error_mean_m = sum / static_cast<double>(n);
+  r.slam_error_max_m = worst;
+  r.slam_heading_error_mean_deg = heading_sum / static_cast<double>(n) * 180.0 / std::numbers::pi;
+}
+
 }  // namespace
 
 std::optional<LogContents> read_log(const std::string& path, std::string* error) {
@@ -61,6 +96,11 @@ std::optional<LogContents> read_log(const std::string& path, std::string* error)
     } else if (event->channel == ch::kSimClock) {
       pex::sim_clock_t msg;
       if (decode(*event, msg)) out.sim_clock = msg; else ++out.rejected;
+    } else if (event->channel == ch::kSlamPose || event->channel == ch::kSimTruth) {
+      pex::pose_t msg;
+      if (!decode(*event, msg)) ++out.rejected;
+      else (event->channel == ch::kSlamPose ? out.slam_poses : out.truth)
+          .push_back({msg.utime, kinematics::Pose2{msg.x, msg.y, msg.theta}});
     } else if (event->channel == ch::kDaemonStatus) {
       pex::daemon_status_t msg;
       if (!decode(*event, msg)) ++out.rejected;
@@ -118,6 +158,7 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.plan_cpu_ms_p50 = us_to_ms(counter(*st, "plan_cpu_us_p50"));
     r.plan_cpu_ms_p99 = us_to_ms(counter(*st, "plan_cpu_us_p99"));
   }
+  audit_poses(log, options.map_in_world, r);
   const bool free_space = options.scored_map == ScoredMap::kFreeSpace ||
                           (options.scored_map == ScoredMap::kAuto && log.free_space.has_value());
   const auto& scored = free_space ? log.free_space : log.map;
@@ -225,6 +266,9 @@ std::string to_json(const Report& r) {
   j.number("plan_cpu_ms_p99", r.plan_cpu_ms_p99, 3);
   j.number("map_outside_free_m2", r.map_outside_free_m2, 3);
   j.number("map_unreachable_free_m2", r.map_unreachable_free_m2, 3);
+  j.number("slam_error_mean_m", r.slam_error_mean_m, 3);
+  j.number("slam_error_max_m", r.slam_error_max_m, 3);
+  j.number("slam_heading_error_mean_deg", r.slam_heading_error_mean_deg, 2);
   j.string("scored_map", r.scored_map);
   return j.str();
 }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <pex/daemon_status_t.hpp>
 #include <pex/explore_state_t.hpp>
@@ -15,8 +16,16 @@
 
 namespace pex::explore_report {
 
-// The last decodable message of each channel the report needs.
+struct StampedPose {
+  std::int64_t utime = 0;
+  kinematics::Pose2 pose;
+};
+
+// The last decodable message of each channel the report needs, and the
+// poses SLAM published and the simulator's truth, for the pose audit.
 struct LogContents {
+  std::vector<StampedPose> slam_poses;  // SLAM_POSE (MAP frame), in log order
+  std::vector<StampedPose> truth;       // SIM_TRUTH (world frame), in log order
   std::optional<pex::polygon_map_t> map;              // MAP (the planning map)
   std::optional<pex::polygon_map_t> free_space;       // MAP_FREE (the explored free space)
   std::optional<pex::explore_state_t> explore_state;  // EXPLORE_STATE
@@ -70,6 +79,12 @@ struct Report {
   // gap narrower than the robot: the map is right there, the IoU counts it
   // against the map all the same).
   std::optional<double> map_outside_free_m2, map_unreachable_free_m2;
+  // SLAM_POSE against SIM_TRUTH at the same time (within 20 ms), the MAP
+  // frame placed in the world as the map is: how far the published pose was
+  // from the truth, on average and at worst, and its heading error. The map
+  // inherits these errors: scans inserted at wrong poses draw walls off the
+  // world's (map_outside_free_m2).
+  std::optional<double> slam_error_mean_m, slam_error_max_m, slam_heading_error_mean_deg;
   // Not in the line (stderr): how the map decoded.
   int map_polygons_dropped = 0;
   std::string map_error;  // the last MAP did not decode at all
