@@ -12,6 +12,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Below this curvature (a radius of 1000 km) the arc is a straight line: the
 // circle's formulas lose their digits there.
 constexpr double kStraightCurvature = 1e-6;
+// A point the body already overlaps may come this much nearer while the robot
+// drives along it (sliding off a wall it grazed).
+constexpr double kTouchingSlackM = 0.005;
 
 double straight_free_distance(double x, double y, double r) {
   if (x <= 0.0 || std::abs(y) >= r) return kInf;  // behind or beside the swept band
@@ -52,7 +55,15 @@ double free_distance_along_arc(std::span<const mapping::Point> points_robot_fram
   for (const auto& p : points_robot_frame) {
     const double x = p.x(), y = p.y();
     if (!std::isfinite(x) || !std::isfinite(y)) continue;
-    if (x * x + y * y < r * r) return 0.0;  // touching already
+    if (x * x + y * y < r * r) {
+      // Touching already. Driving on closes in on the point only when it lies
+      // ahead of the centre (the way starts along +x whatever the curvature),
+      // and then by |p| - |y| at most: a point behind or beside the centre
+      // must not hold the robot where it is, or a robot that grazed a wall
+      // could never drive away from it.
+      if (x > 0.0 && std::sqrt(x * x + y * y) - std::abs(y) > kTouchingSlackM) return 0.0;
+      continue;
+    }
     free = std::min(free, straight ? straight_free_distance(x, y, r) : arc_free_distance(x, y, curvature_per_m, r));
   }
   return free;

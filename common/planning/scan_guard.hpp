@@ -23,8 +23,10 @@ struct ScanGuardOptions {
 // The arc length the robot (a disk of body_radius_m centred at the origin,
 // heading along +x) can drive forward on the circle of signed curvature
 // curvature_per_m (positive: to the left; 0: straight ahead) before it touches
-// one of the points (robot frame); +infinity when it never does, 0 when it
-// touches already. Non-finite points are ignored.
+// one of the points (robot frame); +infinity when it never does. A point the
+// body overlaps already gives 0 when it lies ahead of the centre (driving on
+// would press into it by more than 5 mm) and is ignored otherwise (driving on
+// moves away from it). Non-finite points are ignored.
 double free_distance_along_arc(std::span<const mapping::Point> points_robot_frame, double curvature_per_m,
                                double body_radius_m);
 

@@ -43,10 +43,27 @@ TEST(ScanGuard, ACornerAtTheBodysEdgeCountsWhereTheDiskMeetsIt) {
   // Touching already: no forward speed at all.
   const std::vector<Point> touching{Point(0.2, 0.0)};
   EXPECT_EQ(free_distance_ahead(touching, 0.25), 0.0);
+  EXPECT_EQ(free_distance_along_arc(touching, 1.5, 0.25), 0.0);
   EXPECT_EQ(max_safe_speed(0.0, {}), 0.0);
   EXPECT_EQ(max_safe_speed(0.02, {}), 0.0);  // within the margin
 }
 
+
+// A robot that grazed a wall behind or beside it must be able to drive away:
+// an intel mission ended FAILED with the robot 0.24 m from a wall at its
+// left rear, every forward arc refused, five goals given up in a row.
+TEST(ScanGuard, AWallTouchedBehindOrBesideDoesNotHoldTheRobot) {
+  const std::vector<Point> left_rear{Point(-0.14, 0.19)};  // 0.236 m away, bearing 126 deg
+  EXPECT_TRUE(std::isinf(free_distance_ahead(left_rear, 0.25)));
+  EXPECT_TRUE(std::isinf(free_distance_along_arc(left_rear, -1.0, 0.25)));
+  const std::vector<Point> beside{Point(0.0, 0.24)};  // sliding along it
+  EXPECT_TRUE(std::isinf(free_distance_ahead(beside, 0.25)));
+  // Driving into it, though, stays refused.
+  const std::vector<Point> ahead_left{Point(0.15, 0.15)};
+  EXPECT_EQ(free_distance_ahead(ahead_left, 0.25), 0.0);
+  const auto cmd = guard_command(left_rear, 0.3, 0.0, 0.0, {});
+  EXPECT_FALSE(cmd.limited);
+}
 
 // The oracle: walk the centre along the arc in 0.5 mm steps and stop at the
 // first position within the body's radius of a point.

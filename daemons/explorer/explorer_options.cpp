@@ -81,6 +81,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   m.autostart = config.get<bool>("autostart", m.autostart);
   planner.strategy = *planning::parse_goal_strategy(config.get<std::string>(
       "goal_strategy", planning::to_string(planner.strategy), runtime::one_of({"greedy", "tour"})));
+  planner.tour.horizon_candidates =
+      config.get<int>("tour_horizon_candidates", planner.tour.horizon_candidates, runtime::in_range(0, 1000));
   m.plan_timeout_us =
       us_from_ms(config.get<int>("plan_timeout_ms", static_cast<int>(m.plan_timeout_us / 1000), in_range(100, 600'000)));
   m.replan_period_us =
