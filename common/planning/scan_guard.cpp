@@ -77,7 +77,8 @@ double max_safe_speed(double free_distance_m, const ScanGuardOptions& options) {
   const double room = free_distance_m - options.margin_m;
   if (!(room > 0.0)) return 0.0;
   if (std::isinf(room)) return kInf;
-  return std::sqrt(2.0 * options.max_decel_mps2 * room);
+  const double a = options.max_decel_mps2, t = std::max(0.0, options.latency_s);
+  return a * (std::sqrt(t * t + 2.0 * room / a) - t);
 }
 
 GuardedCommand guard_command(std::span<const mapping::Point> points_robot_frame, double v_mps, double omega_radps,

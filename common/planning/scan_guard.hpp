@@ -18,6 +18,13 @@ struct ScanGuardOptions {
   double body_radius_m = 0.25;     // the robot's disk itself, no margin
   double margin_m = 0.03;          // kept between the body and a return when stopped
   double max_decel_mps2 = 0.5;     // braking the guard may count on
+  // How long the robot keeps its speed after a command before it brakes: the
+  // control period, the base driver and the drives. An intel mission touched
+  // a wall at its side while the guard's commands went 0.38 -> 0.14 -> 0 m/s
+  // in 0.4 s and the robot, 0.18 m/s a tenth of a second after the zero, went
+  // on into it (simulated time at x10, where a loaded machine's few ms of
+  // delay are tens of ms).
+  double latency_s = 0.2;
 };
 
 // The arc length the robot (a disk of body_radius_m centred at the origin,
@@ -33,8 +40,9 @@ double free_distance_along_arc(std::span<const mapping::Point> points_robot_fram
 // free_distance_along_arc for straight motion.
 double free_distance_ahead(std::span<const mapping::Point> points_robot_frame, double body_radius_m);
 
-// The largest forward speed from which the robot stops margin_m short of the
-// first point in its way: sqrt(2 a (d - margin)), 0 within the margin.
+// The largest forward speed v from which the robot stops margin_m short of the
+// first point in its way, driving on at v for latency_s before braking at a:
+// v t + v^2 / (2 a) = d - margin; 0 within the margin.
 double max_safe_speed(double free_distance_m, const ScanGuardOptions& options);
 
 struct GuardedCommand {

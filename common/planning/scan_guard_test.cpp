@@ -19,10 +19,17 @@ TEST(ScanGuard, AWallAheadLimitsTheSpeedToWhatCanStopBeforeIt) {
   const double free = free_distance_ahead(wall, 0.25);
   EXPECT_NEAR(free, 0.75, 1e-3);
   ScanGuardOptions o;
+  o.latency_s = 0.0;
   const double v = max_safe_speed(free, o);
   EXPECT_NEAR(v, std::sqrt(2.0 * 0.5 * (0.75 - 0.03)), 1e-3);
   // Braking from v at the guard's deceleration ends margin_m short of the wall.
   EXPECT_NEAR(v * v / (2.0 * o.max_decel_mps2), free - o.margin_m, 1e-3);
+  // With a delay before the brakes bite, v for that long and then the braking
+  // distance end margin_m short of the wall too: a lower speed.
+  o.latency_s = 0.2;
+  const double late = max_safe_speed(free, o);
+  EXPECT_NEAR(late * o.latency_s + late * late / (2.0 * o.max_decel_mps2), free - o.margin_m, 1e-9);
+  EXPECT_LT(late, v);
 }
 
 TEST(ScanGuard, ReturnsBesideOrBehindTheBodyDoNotStopIt) {
