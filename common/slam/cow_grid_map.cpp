@@ -165,16 +165,43 @@ PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints&
   PoseEvaluation result;
   double score = 0.0;
   double log_likelihood = 0.0;
-  for (std::size_t i = 0; i < scan.beams.size(); i += step) {
-    const BeamPoint& beam = scan.beams[i];
-    const float hx = px + c * beam.hit_x_m - s * beam.hit_y_m;
-    const float hy = py + s * beam.hit_x_m + c * beam.hit_y_m;
-    if (!(std::abs(hx * inv_res) < 1e8f && std::abs(hy * inv_res) < 1e8f)) {
+  // The end points and their cells are computed a chunk of beams at a time in
+  // a loop the compiler vectorises (the same float operations per lane), then
+  // the windows are read beam by beam.
+  constexpr std::size_t kChunk = 64;
+  alignas(16) float chunk_x[kChunk], chunk_y[kChunk];
+  alignas(16) int chunk_ix[kChunk], chunk_iy[kChunk], chunk_valid[kChunk];
+  const std::size_t beam_count = (scan.beams.size() + step - 1) / step;
+  const BeamPoint* beams = scan.beams.data();
+  for (std::size_t begin = 0; begin < beam_count; begin += kChunk) {
+    const std::size_t count = std::min(kChunk, beam_count - begin);
+    for (std::size_t k = 0; k < count; ++k) {
+      const BeamPoint& beam = beams[(begin + k) * step];
+      const float hx = px + c * beam.hit_x_m - s * beam.hit_y_m;
+      const float hy = py + s * beam.hit_x_m + c * beam.hit_y_m;
+      const float fx = hx * inv_res;
+      const float fy = hy * inv_res;
+      // Guard the float -> int conversion against absurd poses.
+      const int valid = static_cast<int>(std::abs(fx) < 1e8f) & static_cast<int>(std::abs(fy) < 1e8f);
+      chunk_x[k] = hx;
+      chunk_y[k] = hy;
+      const float safe_x = valid ? fx : 0.0f;
+      const float safe_y = valid ? fy : 0.0f;
+      const int ix = static_cast<int>(safe_x);
+      const int iy = static_cast<int>(safe_y);
+      chunk_ix[k] = ix - static_cast<int>(safe_x < static_cast<float>(ix));
+      chunk_iy[k] = iy - static_cast<int>(safe_y < static_cast<float>(iy));
+      chunk_valid[k] = valid;
+    }
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!chunk_valid[k]) {
       log_likelihood += no_hit;
       continue;
     }
-    const int hix = floor_to_int(hx * inv_res);
-    const int hiy = floor_to_int(hy * inv_res);
+    const float hx = chunk_x[k];
+    const float hy = chunk_y[k];
+    const int hix = chunk_ix[k];
+    const int hiy = chunk_iy[k];
     float best_d2 = std::numeric_limits<float>::max();
     auto consider = [&](const Cell& hit) {
       const float ex = hit.mean_x_m - hx;
@@ -229,6 +256,7 @@ PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints&
     } else {
       log_likelihood += no_hit;
     }
+  }
   }
   result.score = score;
   result.log_likelihood = log_likelihood;
