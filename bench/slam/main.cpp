@@ -23,6 +23,7 @@
 #include <string>
 #include <filesystem>
 #include <sstream>
+#include <unordered_set>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -53,9 +54,14 @@ std::vector<pex::evaluation::Relation> load_relations(const std::string& path) {
 
 int run_once(int argc, char** argv) {
   bool raw_odometry = false;
-  for (int i = 7; i < argc; ++i) raw_odometry = raw_odometry || std::strcmp(argv[i], "raw_odometry=1") == 0;
-  const auto log = load_log(argv[2], raw_odometry);
-  const auto relations = load_relations(argv[3]);
+  int laps = 1;
+  for (int i = 7; i < argc; ++i) {
+    raw_odometry = raw_odometry || std::strcmp(argv[i], "raw_odometry=1") == 0;
+    if (std::strncmp(argv[i], "laps=", 5) == 0) laps = std::stoi(argv[i] + 5);
+  }
+  const auto logged = load_log(argv[2], raw_odometry);
+  const auto log = pex::evaluation::lap_log(logged, laps, 1.0);
+  const auto relations = pex::evaluation::lap_relations(load_relations(argv[3]), pex::evaluation::lap_timing(logged, 1.0), laps);
   pex::slam::ParticleFilterOptions options;
   if (argc > 5) options.particle_count = std::stoi(argv[5]);
   if (argc > 6) options.seed = std::stoull(argv[6]);
@@ -103,7 +109,7 @@ int run_once(int argc, char** argv) {
     else if (key == "str") options.motion.str = v;
     else if (key == "stt") options.motion.stt = v;
     else if (key == "odometry_from_laser") odometry_from_laser = v != 0.0;
-    else if (key == "raw_odometry") continue;  // read before the log was loaded
+    else if (key == "raw_odometry" || key == "laps") continue;  // read before the log was loaded
     else if (key == "odometry_lead_s") sync.odometry_lead_us = std::llround(v * 1e6);
     else if (key == "estimate_lead") sync.estimate_lead = v != 0.0;
     else if (key == "resample_threshold") options.resample_threshold = v;
@@ -135,13 +141,32 @@ int run_once(int argc, char** argv) {
           << filter.last_update().effective_sample_size << ' ' << filter.last_update().resampled << ' '
           << ancestors(10) << ' ' << ancestors(50) << ' ' << ancestors(200) << ' ' << best.pose.x_m << ' '
           << best.pose.y_m << ' ' << best.pose.theta_rad << ' ' << filter.last_update().odometry_scale << ' '
-          << filter.last_update().odometry_check_ratio << '\n';
+          << filter.last_update().odometry_check_ratio;
+    // Every 50 updates, what the particles hold: distinct map tiles (shared
+    // ones once) and trajectory nodes.
+    if (filter.generation() % 50 == 0) {
+      std::unordered_set<const void*> tiles, nodes;
+      for (const auto& p : filter.particles()) {
+        for (const auto* tile : dynamic_cast<const pex::slam::CowGridMap&>(*p.map).tiles()) tiles.insert(tile);
+        for (const pex::slam::TrajectoryNode* n = p.trajectory.get(); n && nodes.insert(n).second; n = n->parent.get()) {
+        }
+      }
+      trace << " tiles " << tiles.size() << " best_map_tiles "
+            << dynamic_cast<const pex::slam::CowGridMap&>(*best.map).tile_count() << " nodes " << nodes.size();
+    }
+    trace << '\n';
   };
   auto run = pex::bench::run_filter_on_carmen(log, options, odometry_from_laser, sync, after_update);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::stable_sort(run.poses.begin(), run.poses.end(),
                    [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
   const auto metric = pex::evaluation::evaluate_relations(run.poses, relations);
+  std::stable_sort(run.spread_poses.begin(), run.spread_poses.end(),
+                   [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
+  pex::evaluation::MetricOptions split;
+  split.split_gap_s = 100.0;
+  const auto spread = pex::evaluation::evaluate_relations(run.spread_poses, relations, split);
+  std::printf("spread %s", pex::evaluation::to_json_line(spread).c_str());
   if (argc > 4 && std::strcmp(argv[4], "-") != 0) {
     std::ofstream out(argv[4]);
     out.precision(17);

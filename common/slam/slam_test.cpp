@@ -352,6 +352,51 @@ TEST(ParticleFilter, CorrectsOdometryDriftInASyntheticRoom) {
   EXPECT_LT(est_error, 0.1);
 }
 
+// Offline, the next update's correction is spread over the scans before it:
+// the update poses stay, and the motion between consecutive scans follows
+// the truth where the carried-forward odometry (5 % long, drifting) jumps at
+// every update.
+TEST(TrajectoryRecorder, SpreadCorrectionsFollowTheTruthBetweenUpdates) {
+  const Drive d = drive(3);
+  ParticleFilterOptions options = small_filter(2);
+  options.linear_update_m = 0.5;  // an update every 5 scans
+  ParticleFilter filter(options);
+  TrajectoryRecorder recorder;
+  std::vector<std::int64_t> generation;
+  for (std::size_t i = 0; i < d.truth.size(); ++i) {
+    filter.process(scan_from(d.truth[i], static_cast<std::int64_t>(i)), d.odometry[i]);
+    recorder.record(static_cast<std::int64_t>(i), filter, d.odometry[i]);
+    generation.push_back(filter.generation());
+  }
+  const auto carried = recorder.resolve(filter);
+  const auto spread = recorder.resolve(filter, true);
+  ASSERT_EQ(carried.size(), d.truth.size());
+  ASSERT_EQ(spread.size(), d.truth.size());
+  auto step_error = [&](const std::vector<TimedPose>& poses) {
+    double sum = 0.0;
+    for (std::size_t i = 1; i < poses.size(); ++i) {
+      const Pose2 estimated = relative(poses[i - 1].pose, poses[i].pose);
+      const Pose2 truth = relative(d.truth[i - 1], d.truth[i]);
+      sum += std::hypot(estimated.x_m - truth.x_m, estimated.y_m - truth.y_m) +
+             std::abs(normalize_angle(estimated.theta_rad - truth.theta_rad));
+    }
+    return sum / static_cast<double>(poses.size() - 1);
+  };
+  int updates = 0;
+  for (std::size_t i = 0; i < spread.size(); ++i) {
+    EXPECT_EQ(spread[i].utime, carried[i].utime);
+    if (i == 0 || generation[i] != generation[i - 1]) {  // the scan that made an update keeps its pose
+      ++updates;
+      EXPECT_NEAR(spread[i].pose.x_m, carried[i].pose.x_m, 1e-12) << i;
+      EXPECT_NEAR(spread[i].pose.theta_rad, carried[i].pose.theta_rad, 1e-12) << i;
+    }
+  }
+  EXPECT_GT(updates, 15);
+  const double carried_error = step_error(carried), spread_error = step_error(spread);
+  std::cout << "per-scan motion error: carried forward " << carried_error << ", spread " << spread_error << '\n';
+  EXPECT_LT(spread_error, 0.6 * carried_error);
+}
+
 TEST(ParticleFilter, SameSeedSameResultDifferentSeedDifferent) {
   const Drive d = drive(3);
   auto run = [&](std::uint64_t seed) {

@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
     app.add_option("--checkpoint-out", checkpoint_out, "offline: write the filter's checkpoint at the end of the log");
   };
   return pex::runtime::run_daemon(argc, argv, info, [&](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
-    const auto options = pex::slam_daemon::load_options(config);
+    auto options = pex::slam_daemon::load_options(config);
+    options.record_trajectory = !poses_path.empty();
     pex::slam_daemon::SlamOutputs outputs;
     outputs.publish_update = [&node](const pex::slam_update_t& msg) {
       pex::slam_update_t stamped = msg;  // publication time: wall clock live, log time in replay

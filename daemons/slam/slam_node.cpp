@@ -60,7 +60,7 @@ void SlamNode::process(std::vector<slam::PairedScan> ready) {
     if (paired.odometry_stale) continue;  // no motion prior: an update would put the scan anywhere (counted by sync_)
     const bool updated = filter_.process(paired.scan, paired.odometry);
     if (updated) sync_.observe_update(paired.scan.utime, filter_.best_turn_at_last_update());
-    recorder_.record(paired.scan.utime, filter_, paired.odometry);
+    if (options_.record_trajectory) recorder_.record(paired.scan.utime, filter_, paired.odometry);
     ++scans_processed_;
     if (!outputs_.publish_update || !filter_.initialized()) continue;
     const auto period_us = static_cast<std::int64_t>(options_.republish_period_s * 1e6);
