@@ -28,7 +28,8 @@ class TrajectoryRecorder {
   // correction of that carried-forward pose (where the odometry says the
   // robot got to against where the update put it) is spread over the scans
   // in between, in proportion to the odometry's progress (path length, and
-  // turn at linear_per_rad m per rad), instead of landing at once at the
+  // turn at linear_per_rad m per rad: the update gate's ratio, 0.5 m to
+  // 0.25 rad, weighs them alike), instead of landing at once at the
   // update. The carried-forward poses then no longer accumulate the
   // odometry's error over an update interval (0.5 m, 0.25 rad) and jump.
   std::vector<TimedPose> resolve(const ParticleFilter& filter, bool spread_corrections = false,

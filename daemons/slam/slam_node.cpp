@@ -110,7 +110,13 @@ slam_update_t SlamNode::update_message(std::int64_t scan_utime) const {
   return msg;
 }
 
-std::string SlamNode::trajectory_text() const { return slam::trajectory_text(recorder_.resolve(filter_)); }
+std::string SlamNode::trajectory_text() const {
+  // Progress between updates weighs a turn as the update gate does (0.5 m or 0.25 rad: 2 m per rad).
+  const double linear_per_rad = options_.filter.angular_update_rad > 0.0
+                                   ? options_.filter.linear_update_m / options_.filter.angular_update_rad
+                                   : 2.0;
+  return slam::trajectory_text(recorder_.resolve(filter_, options_.spread_corrections, linear_per_rad));
+}
 
 namespace {
 constexpr std::string_view kCheckpointMagic = "PEXSLAMN";

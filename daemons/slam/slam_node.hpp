@@ -50,6 +50,10 @@ struct SlamNodeOptions {
   // the offline pose file (`pex-slam --log --poses`). Live it is off: it grows
   // with the run's length (18 MB for 8 hours of a 10 Hz laser) for nothing.
   bool record_trajectory = false;
+  // trajectory_text(): the next update's correction spread over the scans
+  // before it (TrajectoryRecorder::resolve), or (false) every scan's pose its
+  // update's carried forward by odometry, as the robot knew it at the scan.
+  bool spread_corrections = true;
 };
 
 struct SlamOutputs {
