@@ -380,7 +380,7 @@ int main(int argc, char** argv) {
     try {
       // --laps N [--logs DIR]: every log driven N times (forwards, back, ...):
       // memory and accuracy over run length.
-      const int laps = std::strcmp(argv[1], "--laps") == 0 ? std::stoi(argv[2]) : 1;
+      const int laps = argc > 1 && std::strcmp(argv[1], "--laps") == 0 ? std::stoi(argv[2]) : 1;
       if (laps < 1) throw std::runtime_error("--laps must be at least 1");
       std::string dir = std::string(PEX_SHARED_DIR) + "/data";
       if (argc == 3 && std::strcmp(argv[1], "--logs") == 0) dir = argv[2];
