@@ -126,17 +126,21 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   return cmd;
 }
 
-std::shared_ptr<const mapping::TypedMultiPolygon> ExplorerNode::live_view_at(const planning::Pose2& robot) const {
-  if (!last_scan_ || !(options_.live_view.range_m > 0.0)) return nullptr;
-  const auto& scan = *last_scan_;
+std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
+                                                               const planning::Pose2& robot,
+                                                               const planning::LiveViewOptions& options) {
+  if (!(options.range_m > 0.0)) return nullptr;
   // The sensor's pose in the map frame: the robot's, composed with the mounting.
   const double c = std::cos(robot.theta), s = std::sin(robot.theta);
   const mapping::Pose2 sensor{robot.x + c * scan.sensor_x - s * scan.sensor_y,
                               robot.y + s * scan.sensor_x + c * scan.sensor_y, robot.theta + scan.sensor_theta};
-  auto view = planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor,
-                                  options_.live_view);
+  auto view = planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor, options);
   if (view.empty()) return nullptr;
   return std::make_shared<const mapping::TypedMultiPolygon>(std::move(view));
+}
+
+std::shared_ptr<const mapping::TypedMultiPolygon> ExplorerNode::live_view_at(const planning::Pose2& robot) const {
+  return last_scan_ ? live_view_of(*last_scan_, robot, options_.live_view) : nullptr;
 }
 
 pex::velocity_cmd_t ExplorerNode::stop_command(std::int64_t now_utime) {

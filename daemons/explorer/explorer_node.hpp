@@ -31,6 +31,12 @@ struct ExplorerCounters {
   std::int64_t commands_applied = 0;
 };
 
+// The live view (planning/live_view.hpp) of a LIDAR_SCAN taken at `robot`
+// (the laser's mounting applied); null when off or when it gives no polygon.
+std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
+                                                               const planning::Pose2& robot,
+                                                               const planning::LiveViewOptions& options);
+
 class ExplorerNode {
  public:
   enum class Planning { kWorkerThread, kInline };
