@@ -151,11 +151,11 @@ int Plan::reachable_count() const {
 }
 
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
-                      const PlannerOptions& options) {
+                      const PlannerOptions& options, const TypedMultiPolygon* passable) {
   Plan plan;
   // 1. The C-space, the robot's own node, and the C-space piece it is in: a
   // polygon of the C-space is one connected piece, so only its points are reachable.
-  auto setup = set_up(map, robot, options, plan);
+  auto setup = set_up(passable ? *passable : map, robot, options, plan);
   if (!setup) return plan;
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;

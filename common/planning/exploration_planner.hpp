@@ -108,9 +108,13 @@ struct Plan {
 // Plans on `map` (the planning map: free space whose edges are typed obstacle
 // or frontier) from `robot`. Candidates near a point of `blacklist` are kept
 // in the plan (so a caller can still recognise them) but never chosen.
-// Pure and deterministic.
+// `passable`, if given, is where the robot may drive instead of `map` (the
+// map opened by the newest scan: live_view.hpp): the C-space is built from
+// it, while the frontiers and what is in view of them still come from `map`
+// (a live view covers frontiers it has not mapped yet, and its own edges are
+// no walls to see through). Pure and deterministic.
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
-                      const PlannerOptions& options);
+                      const PlannerOptions& options, const TypedMultiPolygon* passable = nullptr);
 
 // A path from `robot` to `target` (e.g. the mission's start pose) in the
 // C-space of `map`: the plan's one candidate is `target` moved into the

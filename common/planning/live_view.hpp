@@ -8,9 +8,11 @@
 // live view is that scan's free polygon, near the robot only, minus the band
 // of its own returns: united into the planning map it reopens what the laser
 // sees open now, as a navigation stack's obstacle layer is cleared by the
-// beams of the newest scan. Every edge of it is an obstacle edge: it opens
-// passages and adds no frontiers. The scan guard stays in charge of what the
-// laser sees in the way. Pure: no clock, no I/O.
+// beams of the newest scan. It only says where the robot may drive (the
+// C-space, plan_exploration's `passable`): the frontiers stay the map's, or
+// a frontier edge the view covers before the mapper has the scan would
+// vanish and the mission could end early. The scan guard stays in charge of
+// what the laser sees in the way. Pure: no clock, no I/O.
 #include <span>
 
 #include "mapping/scan_polygon.hpp"

@@ -60,11 +60,12 @@ PlanResult compute_plan(const PlanRequest& request) {
     result.plan.error = "no map";
     return result;
   }
+  // The newest scan opens where the robot may drive; the frontiers stay the map's.
   const bool live = request.live_view && !request.live_view->empty();
   const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
-  const TypedMultiPolygon& map = live ? opened : *request.map;
-  result.plan = request.home ? plan_path_to(map, request.pose, *request.home, request.options)
-                             : plan_exploration(map, request.pose, request.blacklist, request.options);
+  result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options)
+                             : plan_exploration(*request.map, request.pose, request.blacklist, request.options,
+                                                live ? &opened : nullptr);
   return result;
 }
 

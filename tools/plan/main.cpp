@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
   // As the explorer plans: the newest scan's live view united in (live_view_range_m).
   const auto live = scan ? pex::explorer::live_view_of(*scan, robot, options.live_view) : nullptr;
   const auto planned_on = live ? pex::planning::with_live_view(decoded.polygons, *live) : decoded.polygons;
-  const auto plan = pex::planning::plan_exploration(planned_on, robot, {}, planner);
+  const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner, live ? &planned_on : nullptr);
   pex::planning::ConfigurationSpace cspace;
   cspace.build(planned_on, planner.cspace);
   std::printf("live view: %s\n", live ? "united into the map (newest LIDAR_SCAN)"
