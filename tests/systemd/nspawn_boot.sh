@@ -176,13 +176,18 @@ done
 for u in pex-sim $daemons; do
   wait_for 60 '[[ "$(prop $u StatusText)" == OK* ]]' || fail "$u never OK: '$(prop $u StatusText)'"
 done
-run "systemctl status pex-slam --no-pager -n 0"
+run "systemctl status pex-slam"
 grep -q 'Status: "OK' "$tmp/out" || fail "systemctl status pex-slam shows no health word"
 log=$tmp/root/var/log/polyexplore/pex.lcm.0
 speed_now() {  # SIM_TRUTH's largest speed in the last second of the capture
   local t; t=$(now_us); "$truth_motion" "$log" $((t - 1000000)) "$t" | sed -n 's/.*max_speed_mps \([0-9.]*\).*/\1/p'
 }
 moving() { awk -v v="$(speed_now)" 'BEGIN { exit !(v > 0.2) }'; }
+# The wheels turned in the half second before `t`: the robot moved or turned.
+turning_before() {
+  "$truth_motion" "$log" $(($1 - 500000)) "$1" \
+    | awk '{ for (i = 1; i < NF; i++) v[$i] = $(i + 1) } END { exit !(v["max_speed_mps"] > 0.1 || v["max_omega_radps"] > 0.2) }'
+}
 wait_for 120 moving || fail "the robot never drove faster than 0.2 m/s (explorer: $(prop pex-explorer StatusText))"
 pid=$(prop pex-base-driver MainPID)
 c systemctl kill -s KILL pex-base-driver   # returns once the signal is sent
@@ -200,7 +205,8 @@ awk -v d="$dead_s" 'BEGIN { exit !(d >= 9.5) }' || fail "restarted $dead_s s aft
 # which it holds while SLAM_POSE lags (pacing: with no odometry SLAM stops, until
 # pace_silence_s of wall time): so the stop is checked on SIM_TRUTH's clock, and the
 # robot must stand from then until the new driver starts.
-read -r _ n _ moved _ vmax _ stood_wall _ stood_sim < <("$truth_motion" "$log" "$t_kill" "$restart_us")
+turning_before "$t_kill" || fail "the robot was standing when pex-base-driver was killed: $("$truth_motion" "$log" $((t_kill - 500000)) "$t_kill")"
+read -r _ n _ moved _ vmax _ _ _ stood_wall _ stood_sim < <("$truth_motion" "$log" "$t_kill" "$restart_us")
 echo "pex-base-driver killed, restarted by systemd $dead_s s later; the robot stood ${stood_sim} ms of simulated time after the kill (${stood_wall} ms of wall time; $n SIM_TRUTH poses) until then"
 ((n > 100)) || fail "only $n SIM_TRUTH poses captured while the driver was dead"
 ((stood_sim >= 0 && stood_sim <= 300)) \
@@ -213,16 +219,16 @@ grep -Eq -- '-rw-r----- +1 polyexplore polyexplore .* pex\.lcm\.0' "$tmp/out" ||
 # --- 4. ssh -X robot pex-spy ---
 echo "== 4. ssh -X robot pex-spy"
 if command -v Xvfb >/dev/null && command -v xdotool >/dev/null && command -v ssh >/dev/null; then
-  for d in $(seq 90 130); do [ -e /tmp/.X11-unix/X$d ] || [ -e /tmp/.X$d-lock ] || break; done
-  Xvfb :$d -screen 0 1280x800x24 -nolisten tcp >"$tmp/xvfb.log" 2>&1 &
+  Xvfb -displayfd 3 -screen 0 1280x800x24 -nolisten tcp 3>"$tmp/display" 2>"$tmp/xvfb.log" &  # a free display
   xvfb=$!
-  wait_for 10 "[ -e /tmp/.X11-unix/X$d ]" || fail "Xvfb :$d did not start"
+  wait_for 10 '[ -s "$tmp/display" ]' || fail "Xvfb did not start: $(cat "$tmp/xvfb.log")"
+  d=$(cat "$tmp/display")
   ssh-keygen -q -t ed25519 -N '' -f "$tmp/key"
   mkdir -p -m 700 "$tmp/root/root/.ssh"
   cp "$tmp/key.pub" "$tmp/root/root/.ssh/authorized_keys"
   wait_for 20 '[ "$(prop ssh ActiveState)" = active ]' || fail "sshd not running in the container"
   # This machine's ssh, in the container's network (its loopback is the robot's).
-  DISPLAY=:$d nsenter -t "$leader" -n -- ssh -X -i "$tmp/key" -o StrictHostKeyChecking=no \
+  DISPLAY=:$d nsenter -t "$leader" -n -- ssh -v -X -i "$tmp/key" -o StrictHostKeyChecking=no \
     -o UserKnownHostsFile=/dev/null -o BatchMode=yes -o HostName=127.0.0.1 -l root robot pex-spy >"$tmp/spy.log" 2>&1 &
   ssh_pid=$!
   if DISPLAY=:$d wait_for 60 'xdotool search --name "LCM Spy" >/dev/null 2>&1'; then
@@ -232,10 +238,12 @@ if command -v Xvfb >/dev/null && command -v xdotool >/dev/null && command -v ssh
       DISPLAY=:$d import -window root "$shots/pex-spy-over-ssh.png" && echo "screenshot: $shots/pex-spy-over-ssh.png"
     fi
   else
-    fail "no LCM Spy window over ssh -X: $(cat "$tmp/spy.log")"
+    fail "no LCM Spy window over ssh -X (ssh -v and pex-spy, then sshd's journal):
+$(grep -v '^debug1: \(Reading\|Applying\|kex\|Will attempt\|Offering\|Server accepts\|SSH2_MSG\|expecting\|rekey\|Local version\|Remote protocol\|compat\|Authenticating\|Connecting\|Connection established\|identity file\|load_hostkeys\|Host\|channel 0\|pledge\|Sending env\|Next authentication\|Authentications\|get_agent\|Skipping\|Found key\|hostkeys\|ssh_packet\|send_pubkey\|sign_and\|Requesting no-more\|Entering\|client_input_global\|Remote: \)' "$tmp/spy.log")
+$(c journalctl -u ssh --no-pager -n 20)"
   fi
   kill "$ssh_pid" 2>/dev/null; wait "$ssh_pid" 2>/dev/null
-  grep -E 'Exception|Error' "$tmp/spy.log" | grep -v '^Warning' | head -n 5 | while read -r l; do fail "pex-spy: $l"; done
+  grep -E 'Exception|Error' "$tmp/spy.log" | grep -v '^\(Warning\|debug\)' | head -n 5 | while read -r l; do fail "pex-spy: $l"; done
 else
   echo "not run: Xvfb, xdotool or ssh missing here"
 fi
