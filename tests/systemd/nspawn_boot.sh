@@ -18,7 +18,9 @@
 #      capture, read by TRUTH_MOTION) until systemd restarts it RestartSec later, and
 #      then the robot drives on;
 #   4. `ssh -X robot pex-spy` from this machine (its ssh in the container's network, an
-#      Xvfb screen here): lcm-spy's window opens with no exception; screenshot in SHOT_DIR.
+#      Xvfb screen here): lcm-spy's window opens with our types, its table (copied with
+#      the keys, tests/spy/spy_table.sh) lists the set's channels decoded, no exception;
+#      a screenshot in SHOT_DIR.
 # Exit 0 when every check passed, 1 otherwise, 77 (skipped) when this machine cannot run
 # it: not root, no systemd-nspawn, no prepared root (the message says how to make one:
 # about 4 min, once), or the container does not boot.
@@ -200,17 +202,29 @@ wait_for 30 '[ "$(prop pex-base-driver NRestarts)" -ge 1 ] && [ "$(prop pex-base
 restart_us=$(date -d "$(c systemctl show -P ExecMainStartTimestamp --timestamp=us+utc pex-base-driver | cut -d' ' -f2-)" +%s%6N)
 dead_s=$(awk -v a="$t_kill" -v b="$restart_us" 'BEGIN { printf "%.1f", (b - a) / 1e6 }')
 awk -v d="$dead_s" 'BEGIN { exit !(d >= 9.5) }' || fail "restarted $dead_s s after the kill (RestartSec=10s)"
-# The drives stop the wheels by themselves 300 ms of their time after the driver's last
-# heartbeat (docs/can.md; ctest -L faults measures it). Their time is pex-sim's clock,
-# which it holds while SLAM_POSE lags (pacing: with no odometry SLAM stops, until
-# pace_silence_s of wall time): so the stop is checked on SIM_TRUTH's clock, and the
-# robot must stand from then until the new driver starts.
-turning_before "$t_kill" || fail "the robot was standing when pex-base-driver was killed: $("$truth_motion" "$log" $((t_kill - 500000)) "$t_kill")"
+# The drives stop the wheels by themselves: drive_heartbeat_consumer_ms after the
+# driver's last heartbeat (at most master_heartbeat_period_ms before the kill), then a
+# quick stop ramp of quick_stop_decel_mps2 at the wheel from the fastest wheel's speed
+# (v + omega * wheel_base / 2) before the kill (docs/can.md; ctest -L faults measures
+# it driving straight). Those times are pex-sim's clock, which it holds while SLAM_POSE
+# lags (pacing: with no odometry SLAM stops, until pace_silence_s of wall time): so the
+# stop is read on SIM_TRUTH's clock, and the robot must stand from then until the new
+# driver starts. The values are the installed configuration's.
+cfg() { c sh -c "$1 --print-config --config /usr/share/polyexplore/config/$2.toml --config /etc/polyexplore/$2.toml" \
+          | sed -n "s/^$3 = \([0-9.]*\) .*/\1/p"; }
+consumer_ms=$(cfg pex-base-driver base_driver drive_heartbeat_consumer_ms)
+period_ms=$(cfg pex-base-driver base_driver master_heartbeat_period_ms)
+decel=$(cfg pex-base-driver base_driver quick_stop_decel_mps2)
+wheel_base=$(cfg pex-sim sim base.wheel_base_m)
+read -r _ _ _ _ _ v_kill _ w_kill _ < <("$truth_motion" "$log" $((t_kill - 500000)) "$t_kill")
+limit_ms=$(awk -v c="$consumer_ms" -v p="$period_ms" -v d="$decel" -v b="$wheel_base" -v v="$v_kill" -v w="$w_kill" \
+  'BEGIN { printf "%d", c + p + 1000 * (v + w * b / 2) / d }')
 read -r _ n _ moved _ vmax _ _ _ stood_wall _ stood_sim < <("$truth_motion" "$log" "$t_kill" "$restart_us")
-echo "pex-base-driver killed, restarted by systemd $dead_s s later; the robot stood ${stood_sim} ms of simulated time after the kill (${stood_wall} ms of wall time; $n SIM_TRUTH poses) until then"
+echo "pex-base-driver killed at $v_kill m/s, $w_kill rad/s; restarted by systemd $dead_s s later; the robot stood ${stood_sim} ms of simulated time after the kill (limit $limit_ms ms: $consumer_ms + $period_ms + the ramp; ${stood_wall} ms of wall time; $n SIM_TRUTH poses) until then"
 ((n > 100)) || fail "only $n SIM_TRUTH poses captured while the driver was dead"
-((stood_sim >= 0 && stood_sim <= 300)) \
-  || fail "the wheels did not stand within 300 ms (simulated) of the kill until the restart: from +$stood_sim ms (moved $moved m, max $vmax m/s)"
+[ -n "$consumer_ms" ] && [ -n "$period_ms" ] && [ -n "$decel" ] && [ -n "$wheel_base" ] || fail "could not read the drive watchdog's settings"
+((stood_sim >= 0 && stood_sim <= limit_ms)) \
+  || fail "the wheels did not stand within $limit_ms ms (simulated) of the kill until the restart: from +$stood_sim ms (moved $moved m, max $vmax m/s)"
 wait_for 60 moving || fail "the robot did not drive again after the driver's restart"
 c journalctl -u pex-base-driver -o cat --no-pager | grep -m 1 'restart counter' || fail "the journal does not show the scheduled restart"
 run "ls -l /var/log/polyexplore"
@@ -218,24 +232,38 @@ grep -Eq -- '-rw-r----- +1 polyexplore polyexplore .* pex\.lcm\.0' "$tmp/out" ||
 
 # --- 4. ssh -X robot pex-spy ---
 echo "== 4. ssh -X robot pex-spy"
-if command -v Xvfb >/dev/null && command -v xdotool >/dev/null && command -v ssh >/dev/null; then
+if command -v Xvfb >/dev/null && command -v xdotool >/dev/null && command -v xclip >/dev/null && command -v ssh >/dev/null; then
   Xvfb -displayfd 3 -screen 0 1280x800x24 -nolisten tcp 3>"$tmp/display" 2>"$tmp/xvfb.log" &  # a free display
   xvfb=$!
   wait_for 10 '[ -s "$tmp/display" ]' || fail "Xvfb did not start: $(cat "$tmp/xvfb.log")"
-  d=$(cat "$tmp/display")
+  export DISPLAY=:$(cat "$tmp/display")
   ssh-keygen -q -t ed25519 -N '' -f "$tmp/key"
   mkdir -p -m 700 "$tmp/root/root/.ssh"
   cp "$tmp/key.pub" "$tmp/root/root/.ssh/authorized_keys"
   wait_for 20 '[ "$(prop ssh ActiveState)" = active ]' || fail "sshd not running in the container"
   # This machine's ssh, in the container's network (its loopback is the robot's).
-  DISPLAY=:$d nsenter -t "$leader" -n -- ssh -v -X -i "$tmp/key" -o StrictHostKeyChecking=no \
+  nsenter -t "$leader" -n -- ssh -v -X -i "$tmp/key" -o StrictHostKeyChecking=no \
     -o UserKnownHostsFile=/dev/null -o BatchMode=yes -o HostName=127.0.0.1 -l root robot pex-spy >"$tmp/spy.log" 2>&1 &
   ssh_pid=$!
-  if DISPLAY=:$d wait_for 60 'xdotool search --name "LCM Spy" >/dev/null 2>&1'; then
-    echo "lcm-spy's window is open on this machine's screen :$d"
+  spy=$(timeout 60 xdotool search --sync --name '^LCM Spy$' 2>/dev/null | head -n 1)
+  if [ -n "$spy" ]; then
+    echo "lcm-spy's window is open on this machine's screen $DISPLAY"
+    types=$(ls "$src"/lcmtypes/*.lcm | wc -l)
+    wait_for 10 'grep -q "Found $types LCM types" "$tmp/spy.log"' || fail "pex-spy on the robot did not load our $types types"
+    # Its table, copied as a person would: the simulator's set, every row decoded.
+    . "$src/tests/spy/spy_table.sh"
+    expected="LIDAR_SCAN ODOMETRY SLAM_UPDATE SLAM_POSE MAP EXPLORE_STATE DAEMON_STATUS SIM_TRUTH SIM_CLOCK BASE_CMD"
+    listed() { tab=$(spy_table "$spy") || return 1; for ch in $expected; do grep -q "^$ch	" <<<"$tab" || return 1; done; }
+    wait_for 60 listed || fail "lcm-spy over ssh -X does not list every channel of the set: $(tr '\t\n' ' |' <<<"${tab:-}")"
+    echo "lcm-spy's table over ssh -X:"; sed 's/^/    /' <<<"${tab:-}"
+    while IFS=$'\t' read -r channel type _ _ _ _ _ undecodable; do
+      [ -n "$channel" ] && [ "$channel" != LCM_SELF_TEST ] || continue  # LCM's own start-up test, not ours
+      [[ "$type" =~ ^[a-z0-9_]+_t$ ]] || fail "$channel not decoded over ssh -X: type '$type'"
+      [ "${undecodable// /}" = 0 ] || fail "$channel: $undecodable undecodable messages"
+    done <<<"${tab:-}"
     if [ -n "$shots" ] && command -v import >/dev/null; then
       mkdir -p "$shots"
-      DISPLAY=:$d import -window root "$shots/pex-spy-over-ssh.png" && echo "screenshot: $shots/pex-spy-over-ssh.png"
+      import -window root "$shots/pex-spy-over-ssh.png" && echo "screenshot: $shots/pex-spy-over-ssh.png"
     fi
   else
     fail "no LCM Spy window over ssh -X (ssh -v and pex-spy, then sshd's journal):
@@ -245,7 +273,7 @@ $(c journalctl -u ssh --no-pager -n 20)"
   kill "$ssh_pid" 2>/dev/null; wait "$ssh_pid" 2>/dev/null
   grep -E 'Exception|Error' "$tmp/spy.log" | grep -v '^\(Warning\|debug\)' | head -n 5 | while read -r l; do fail "pex-spy: $l"; done
 else
-  echo "not run: Xvfb, xdotool or ssh missing here"
+  echo "not run: Xvfb, xdotool, xclip or ssh missing here"
 fi
 
 if ((fails)); then
