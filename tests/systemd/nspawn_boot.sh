@@ -254,7 +254,11 @@ if command -v Xvfb >/dev/null && command -v xdotool >/dev/null && command -v xcl
     . "$src/tests/spy/spy_table.sh"
     expected="LIDAR_SCAN ODOMETRY SLAM_UPDATE SLAM_POSE MAP EXPLORE_STATE DAEMON_STATUS SIM_TRUTH SIM_CLOCK BASE_CMD"
     listed() { tab=$(spy_table "$spy") || return 1; for ch in $expected; do grep -q "^$ch	" <<<"$tab" || return 1; done; }
-    wait_for 60 listed || fail "lcm-spy over ssh -X does not list every channel of the set: $(tr '\t\n' ' |' <<<"${tab:-}")"
+    # One copy a second: two clicks on the table closer than AWT's double-click interval
+    # (500 ms) would open a message view, which then takes the keys.
+    ok=0
+    for _ in $(seq 60); do listed && { ok=1; break; }; sleep 1; done
+    ((ok)) || fail "lcm-spy over ssh -X does not list every channel of the set: $(tr '\t\n' ' |' <<<"${tab:-}")"
     echo "lcm-spy's table over ssh -X:"; sed 's/^/    /' <<<"${tab:-}"
     while IFS=$'\t' read -r channel type _ _ _ _ _ undecodable; do
       [ -n "$channel" ] && [ "$channel" != LCM_SELF_TEST ] || continue  # LCM's own start-up test, not ours
