@@ -8,11 +8,13 @@
 // truth (no SLAM), so the maps are those of a perfect localisation; the map
 // grows, frontiers come and go, and the planner sees every map size of a
 // mission. Deterministic: fixed seeds.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <functional>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <variant>
@@ -33,7 +35,9 @@ struct MissionSnapshot {
 
 struct MissionMaps {
   std::vector<MissionSnapshot> snapshots;  // in mission order
-  int goals = 0;
+  int goals = 0;       // goals taken (reached, or seen on the way with replan_on_the_way)
+  int goals_seen = 0;  // ... of which left on the way because their frontier was seen
+  int plans = 0;
   double travelled_m = 0.0;
   bool done = false;  // no reachable candidate left before max_goals
   std::string error;
@@ -44,6 +48,19 @@ struct MissionMapsOptions {
   double scan_step_m = 0.25;    // the mapper inserts after 0.2 m; 0.25 keeps set-up time down
   double replan_step_m = 2.0;   // a snapshot every this much travel (0.4 m/s, 1 s replans: 0.4)
   double max_travel_m = 1e9;
+  // As the explorer's mission does: plan again at every snapshot on the way,
+  // and leave the goal for the new plan's best when no candidate of it lies
+  // within goal_match_radius_m of the goal (its frontier has been seen).
+  // Off: every goal is driven to its end (the planning benchmark's maps).
+  bool replan_on_the_way = false;
+  double goal_match_radius_m = 1.5;
+  // Snapshots are kept (the planning benchmark plans on them again); off for
+  // long runs that only want the outcome.
+  bool keep_snapshots = true;
+  // The scans and the map as the mapper makes them (range_max_m is capped
+  // at the laser's).
+  mapping::ScanPolygonOptions scan;
+  mapping::PolygonMapOptions map;
 };
 
 // `plan` is the planner the emulated robot follows (the goal order and so the
@@ -68,9 +85,9 @@ inline MissionMaps emulate_mission(
   const sim::World world = std::get<sim::World>(std::move(parsed));
   const sim::RayCaster caster(world);
   sim::Laser laser(sim::LaserOptions{}, 11);
-  mapping::ScanPolygonOptions scan_options;
-  scan_options.range_max_m = laser.options().max_range_m;
-  mapping::PolygonMap map;
+  mapping::ScanPolygonOptions scan_options = options.scan;
+  scan_options.range_max_m = std::min(scan_options.range_max_m, laser.options().max_range_m);
+  mapping::PolygonMap map(options.map);
 
   auto insert_at = [&](double x, double y, double theta) {
     const auto ranges = laser.scan(caster, sim::Pose2{x, y, theta});
@@ -82,12 +99,17 @@ inline MissionMaps emulate_mission(
   planning::Pose2 pose{world.start.x_m, world.start.y_m, world.start.theta_rad};
   insert_at(pose.x, pose.y, pose.theta);
   std::vector<mapping::Point> blacklist;
+  MissionSnapshot latest;
   auto snapshot = [&]() -> const MissionSnapshot* {
     auto merged = map.planning_map();
     if (!merged.ok) return nullptr;
-    out.snapshots.push_back({std::move(merged.polygons), pose, blacklist});
+    latest = {std::move(merged.polygons), pose, blacklist};
+    if (!options.keep_snapshots) return &latest;
+    out.snapshots.push_back(latest);
     return &out.snapshots.back();
   };
+  // The plan to follow next, when one made on the way already chose it.
+  std::optional<planning::Plan> next_plan;
   double since_replan = 0.0;
   while (out.goals < options.max_goals && out.travelled_m < options.max_travel_m) {
     const MissionSnapshot* s = snapshot();
@@ -95,12 +117,15 @@ inline MissionMaps emulate_mission(
       out.error = "planning map failed";
       return out;
     }
-    const planning::Plan p = plan(s->map, s->pose, s->blacklist);
+    const planning::Plan p = next_plan ? std::move(*next_plan) : plan(s->map, s->pose, s->blacklist);
+    if (!next_plan) ++out.plans;
+    next_plan.reset();
     const planning::GoalCandidate* goal = p.best_candidate();
     if (!goal) {
       out.done = true;
       break;
     }
+    bool seen = false;
     // Along the path: a scan every scan_step_m, a snapshot every replan_step_m.
     const auto& path = goal->path;
     for (std::size_t k = 1; k < path.size(); ++k) {
@@ -115,14 +140,34 @@ inline MissionMaps emulate_mission(
         since_replan += options.scan_step_m;
         if (since_replan >= options.replan_step_m) {
           since_replan = 0.0;
-          if (!snapshot()) {
+          const MissionSnapshot* on_the_way = snapshot();
+          if (!on_the_way) {
             out.error = "planning map failed";
             return out;
+          }
+          if (options.replan_on_the_way) {
+            planning::Plan again = plan(on_the_way->map, on_the_way->pose, on_the_way->blacklist);
+            ++out.plans;
+            bool still_there = false;
+            for (const auto& c : again.candidates)
+              still_there = still_there || boost::geometry::distance(c.position, goal->position) <= options.goal_match_radius_m;
+            if (!still_there) {
+              seen = true;
+              out.travelled_m += s_m;
+              next_plan = std::move(again);
+              break;
+            }
           }
         }
         if (s_m >= length) break;
       }
+      if (seen) break;
       out.travelled_m += length;
+    }
+    if (seen) {
+      ++out.goals;
+      ++out.goals_seen;
+      continue;
     }
     // At the goal: look at the frontier, then never choose that goal again.
     pose.theta = std::atan2(goal->frontier_point.y() - pose.y, goal->frontier_point.x() - pose.x);

@@ -61,6 +61,8 @@ CarmenRunResult run_filter_on_carmen(const evaluation::CarmenLog& log,
   feed(sync.flush());
   for (const slam::TimedPose& p : recorder.resolve(filter))
     result.poses.push_back({static_cast<double>(p.utime) * 1e-6, p.pose});
+  for (const slam::TimedPose& p : recorder.resolve(filter, true))
+    result.spread_poses.push_back({static_cast<double>(p.utime) * 1e-6, p.pose});
   result.log_duration_s = last - first;
   result.odometry_lead_us = sync.lead_us();
   result.corrected_odometry_steps = filter.corrected_odometry_steps();

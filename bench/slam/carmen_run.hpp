@@ -14,6 +14,7 @@ namespace pex::bench {
 
 struct CarmenRunResult {
   std::vector<evaluation::StampedPose> poses;  // one per scan after the first update
+  std::vector<evaluation::StampedPose> spread_poses;  // the same with the corrections spread between updates
   std::int64_t updates = 0;
   std::int64_t resamplings = 0;
   std::int64_t matcher_evaluations = 0;

@@ -5,6 +5,8 @@
 //   pex-bench-slam [--logs DIR]           per CARMEN log with relations in DIR (default
 //                                         ../shared/data): pex-carmen2lcm, then pex-slam --log
 //                                         with config/slam.toml, one JSON line each
+//   pex-bench-slam --laps N [--logs DIR]  the same with every log driven N times (forwards,
+//                                         back, ...): memory and accuracy over run length
 //   pex-bench-slam --gbench [gbench args] Google Benchmark run (full log once + micro)
 //   pex-bench-slam --run CLF RELATIONS [POSES_OUT] [PARTICLES] [SEED]
 //                                         one run, one JSON line
@@ -21,11 +23,13 @@
 #include <string>
 #include <filesystem>
 #include <sstream>
+#include <unordered_set>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include "carmen_run.hpp"
+#include "evaluation/laps.hpp"
 #include "evaluation/odometry_direction.hpp"
 
 namespace {
@@ -50,9 +54,14 @@ std::vector<pex::evaluation::Relation> load_relations(const std::string& path) {
 
 int run_once(int argc, char** argv) {
   bool raw_odometry = false;
-  for (int i = 7; i < argc; ++i) raw_odometry = raw_odometry || std::strcmp(argv[i], "raw_odometry=1") == 0;
-  const auto log = load_log(argv[2], raw_odometry);
-  const auto relations = load_relations(argv[3]);
+  int laps = 1;
+  for (int i = 7; i < argc; ++i) {
+    raw_odometry = raw_odometry || std::strcmp(argv[i], "raw_odometry=1") == 0;
+    if (std::strncmp(argv[i], "laps=", 5) == 0) laps = std::stoi(argv[i] + 5);
+  }
+  const auto logged = load_log(argv[2], raw_odometry);
+  const auto log = pex::evaluation::lap_log(logged, laps, 1.0);
+  const auto relations = pex::evaluation::lap_relations(load_relations(argv[3]), pex::evaluation::lap_timing(logged, 1.0), laps);
   pex::slam::ParticleFilterOptions options;
   if (argc > 5) options.particle_count = std::stoi(argv[5]);
   if (argc > 6) options.seed = std::stoull(argv[6]);
@@ -100,7 +109,7 @@ int run_once(int argc, char** argv) {
     else if (key == "str") options.motion.str = v;
     else if (key == "stt") options.motion.stt = v;
     else if (key == "odometry_from_laser") odometry_from_laser = v != 0.0;
-    else if (key == "raw_odometry") continue;  // read before the log was loaded
+    else if (key == "raw_odometry" || key == "laps") continue;  // read before the log was loaded
     else if (key == "odometry_lead_s") sync.odometry_lead_us = std::llround(v * 1e6);
     else if (key == "estimate_lead") sync.estimate_lead = v != 0.0;
     else if (key == "resample_threshold") options.resample_threshold = v;
@@ -132,25 +141,45 @@ int run_once(int argc, char** argv) {
           << filter.last_update().effective_sample_size << ' ' << filter.last_update().resampled << ' '
           << ancestors(10) << ' ' << ancestors(50) << ' ' << ancestors(200) << ' ' << best.pose.x_m << ' '
           << best.pose.y_m << ' ' << best.pose.theta_rad << ' ' << filter.last_update().odometry_scale << ' '
-          << filter.last_update().odometry_check_ratio << '\n';
+          << filter.last_update().odometry_check_ratio;
+    // Every 50 updates, what the particles hold: distinct map tiles (shared
+    // ones once) and trajectory nodes.
+    if (filter.generation() % 50 == 0) {
+      std::unordered_set<const void*> tiles, nodes;
+      for (const auto& p : filter.particles()) {
+        for (const auto* tile : dynamic_cast<const pex::slam::CowGridMap&>(*p.map).tiles()) tiles.insert(tile);
+        for (const pex::slam::TrajectoryNode* n = p.trajectory.get(); n && nodes.insert(n).second; n = n->parent.get()) {
+        }
+      }
+      trace << " tiles " << tiles.size() << " best_map_tiles "
+            << dynamic_cast<const pex::slam::CowGridMap&>(*best.map).tile_count() << " nodes " << nodes.size();
+    }
+    trace << '\n';
   };
   auto run = pex::bench::run_filter_on_carmen(log, options, odometry_from_laser, sync, after_update);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::stable_sort(run.poses.begin(), run.poses.end(),
                    [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
-  const auto metric = pex::evaluation::evaluate_relations(run.poses, relations);
+  // The trajectory as pex-slam --poses writes it: each update's correction
+  // spread over the scans before it; the carried-forward one's error beside.
+  const auto carried = pex::evaluation::evaluate_relations(run.poses, relations);
+  std::stable_sort(run.spread_poses.begin(), run.spread_poses.end(),
+                   [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
+  pex::evaluation::MetricOptions split;
+  split.split_gap_s = 100.0;
+  const auto metric = pex::evaluation::evaluate_relations(run.spread_poses, relations, split);
   if (argc > 4 && std::strcmp(argv[4], "-") != 0) {
     std::ofstream out(argv[4]);
     out.precision(17);
-    for (const auto& p : run.poses)
+    for (const auto& p : run.spread_poses)
       out << p.timestamp_s << ' ' << p.pose.x_m << ' ' << p.pose.y_m << ' ' << p.pose.theta_rad << '\n';
   }
   if (trace.is_open())
     for (const std::int64_t lead : run.odometry_lead_us_per_update) trace << "# lead_us " << lead << '\n';
   std::string json = pex::evaluation::to_json_line(metric);
   json.pop_back();
-  std::printf("%s,\"odometry_lead_s\":%.3f,\"corrected_odometry_steps\":%lld,\"updates\":%lld,\"resamplings\":%lld,\"evaluations\":%lld,\"seconds\":%.3f,\"realtime_factor\":%.1f}\n",
-              json.c_str(), static_cast<double>(run.odometry_lead_us) * 1e-6,
+  std::printf("%s,\"carried_forward_trans_mean_m\":%.6f,\"carried_forward_rot_mean_deg\":%.6f,\"odometry_lead_s\":%.3f,\"corrected_odometry_steps\":%lld,\"updates\":%lld,\"resamplings\":%lld,\"evaluations\":%lld,\"seconds\":%.3f,\"realtime_factor\":%.1f}\n",
+              json.c_str(), carried.trans_mean_m, carried.rot_mean_deg, static_cast<double>(run.odometry_lead_us) * 1e-6,
               static_cast<long long>(run.corrected_odometry_steps), static_cast<long long>(run.updates),
               static_cast<long long>(run.resamplings),
               static_cast<long long>(run.matcher_evaluations), seconds, run.log_duration_s / seconds);
@@ -170,9 +199,9 @@ void BM_IntelFullLog(benchmark::State& state) {
     run = pex::bench::run_filter_on_carmen(log, options);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
-  std::stable_sort(run.poses.begin(), run.poses.end(),
+  std::stable_sort(run.spread_poses.begin(), run.spread_poses.end(),
                    [](const auto& a, const auto& b) { return a.timestamp_s < b.timestamp_s; });
-  const auto metric = pex::evaluation::evaluate_relations(run.poses, relations);
+  const auto metric = pex::evaluation::evaluate_relations(run.spread_poses, relations);
   state.counters["trans_mean_m"] = metric.trans_mean_m;
   state.counters["trans_std_m"] = metric.trans_std_m;
   state.counters["rot_mean_deg"] = metric.rot_mean_deg;
@@ -235,6 +264,7 @@ struct ChildRun {
   int status = -1;
   double peak_mb = 0.0;
   double wall_s = 0.0;
+  double cpu_s = 0.0;  // user + system
 };
 ChildRun run_child(const std::vector<std::string>& args, const std::string& stdout_path) {
   std::vector<char*> argv;
@@ -253,17 +283,76 @@ ChildRun run_child(const std::vector<std::string>& args, const std::string& stdo
   if (pid > 0 && wait4(pid, &status, 0, &usage) == pid) {
     r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KB on Linux
+    auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); };
+    r.cpu_s = seconds(usage.ru_utime) + seconds(usage.ru_stime);
   }
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
 
-// scripts/bench.sh slam: every log of the data folder through the shipped
-// pipeline (pex-carmen2lcm, pex-slam --log with config/slam.toml), scored by
-// the relations metric; one JSON line per log (issue 13's fields).
-int run_logs(const std::string& dir) {
+// One CARMEN log through the shipped pipeline (pex-carmen2lcm [--laps N],
+// pex-slam --log with config/slam.toml), scored by the relations metric (in
+// every lap for N > 1). The JSON line's fields, or "" when a step failed.
+std::string run_log(const std::filesystem::path& clf, const std::filesystem::path& relations_path, int laps,
+                    const std::filesystem::path& work) {
   namespace fs = std::filesystem;
   const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
+  const std::string name = clf.stem().string();
+  const fs::path lcm = work / (name + ".lcm"), poses = work / (name + ".poses");
+  if (run_child({(bin / "pex-carmen2lcm").string(), clf.string(), lcm.string(), "--laps", std::to_string(laps)},
+                "/dev/null")
+          .status != 0) {
+    std::fprintf(stderr, "pex-bench-slam: pex-carmen2lcm failed on %s\n", clf.c_str());
+    return "";
+  }
+  const ChildRun slam = run_child({(bin / "pex-slam").string(), "--config",
+                                   std::string(PEX_SOURCE_DIR) + "/config/slam.toml", "--log", lcm.string(),
+                                   "--poses", poses.string(), "--log-level", "warn"},
+                                  "/dev/null");
+  fs::remove(lcm);
+  if (slam.status != 0) {
+    std::fprintf(stderr, "pex-bench-slam: pex-slam failed on %s\n", clf.c_str());
+    return "";
+  }
+  std::ifstream poses_in(poses);
+  const auto estimated = pex::evaluation::read_poses(poses_in);
+  fs::remove(poses);
+  const auto log = load_log(clf.string());
+  const auto timing = pex::evaluation::lap_timing(log, 1.0);  // pex-carmen2lcm's default gap
+  const auto relations = load_relations(relations_path.string());
+  const auto lapped = pex::evaluation::lap_relations(relations, timing, laps);  // grouped by lap
+  const auto metric = pex::evaluation::evaluate_relations(estimated.poses, lapped);
+  const double lap_s = timing.last_s - timing.first_s;
+  const double log_s = laps * lap_s + (laps - 1) * timing.gap_s;
+  char fields[1024];
+  std::snprintf(fields, sizeof fields,
+                "\"log\":\"%s\",\"relations\":%zu,\"trans_mean_m\":%.6f,\"trans_std_m\":%.6f,"
+                "\"rot_mean_deg\":%.6f,\"rot_std_deg\":%.6f,\"wall_s\":%.2f,\"log_s\":%.1f,\"rtf\":%.1f,"
+                "\"peak_mb\":%.1f,\"cpu_s\":%.2f",
+                name.c_str(), metric.relations, metric.trans_mean_m, metric.trans_std_m, metric.rot_mean_deg,
+                metric.rot_std_deg, slam.wall_s, log_s, slam.wall_s > 0 ? log_s / slam.wall_s : 0.0, slam.peak_mb,
+                slam.cpu_s);
+  std::string json = fields;
+  if (laps > 1) {
+    // Each lap's relations alone: does the filter stay as good lap after lap?
+    json += ",\"laps\":" + std::to_string(laps) + ",\"lap_trans_mean_m\":[";
+    for (int lap = 0; lap < laps; ++lap) {
+      const auto first = lapped.begin() + static_cast<std::ptrdiff_t>(lap * relations.size());
+      const std::vector<pex::evaluation::Relation> one(first, first + static_cast<std::ptrdiff_t>(relations.size()));
+      char value[32];
+      std::snprintf(value, sizeof value, "%s%.4f", lap == 0 ? "" : ",",
+                    pex::evaluation::evaluate_relations(estimated.poses, one).trans_mean_m);
+      json += value;
+    }
+    json += "]";
+  }
+  return json;
+}
+
+// scripts/bench.sh slam: every log of the data folder through the shipped
+// pipeline, one JSON line per log (issue 13's fields, and the CPU time).
+int run_logs(const std::string& dir, int laps) {
+  namespace fs = std::filesystem;
   const fs::path work = fs::temp_directory_path() / ("pex-bench-slam-" + std::to_string(getpid()));
   fs::create_directories(work);
   std::vector<fs::path> logs;
@@ -273,45 +362,30 @@ int run_logs(const std::string& dir) {
   std::sort(logs.begin(), logs.end());
   int failures = 0;
   for (const fs::path& clf : logs) {
-    const std::string name = clf.stem().string();
-    const fs::path lcm = work / (name + ".lcm"), poses = work / (name + ".poses");
-    const fs::path relations_path = fs::path(clf).replace_extension(".relations");
-    if (run_child({(bin / "pex-carmen2lcm").string(), clf.string(), lcm.string()}, "/dev/null").status != 0) {
-      std::fprintf(stderr, "pex-bench-slam: pex-carmen2lcm failed on %s\n", clf.c_str());
+    const std::string fields = run_log(clf, fs::path(clf).replace_extension(".relations"), laps, work);
+    if (fields.empty()) {
       ++failures;
       continue;
     }
-    const ChildRun slam = run_child({(bin / "pex-slam").string(), "--config",
-                                     std::string(PEX_SOURCE_DIR) + "/config/slam.toml", "--log", lcm.string(),
-                                     "--poses", poses.string(), "--log-level", "warn"},
-                                    "/dev/null");
-    if (slam.status != 0) {
-      std::fprintf(stderr, "pex-bench-slam: pex-slam failed on %s\n", clf.c_str());
-      ++failures;
-      continue;
-    }
-    std::ifstream poses_in(poses);
-    const auto estimated = pex::evaluation::read_poses(poses_in);
-    const auto metric = pex::evaluation::evaluate_relations(estimated.poses, load_relations(relations_path.string()));
-    const auto log = load_log(clf.string());
-    const double log_s = log.lasers.empty() ? 0.0 : log.lasers.back().timestamp_s - log.lasers.front().timestamp_s;
-    std::printf("{\"log\":\"%s\",\"relations\":%zu,\"trans_mean_m\":%.6f,\"trans_std_m\":%.6f,"
-                "\"rot_mean_deg\":%.6f,\"rot_std_deg\":%.6f,\"wall_s\":%.2f,\"log_s\":%.1f,\"rtf\":%.1f,"
-                "\"peak_mb\":%.1f}\n",
-                name.c_str(), metric.relations, metric.trans_mean_m, metric.trans_std_m, metric.rot_mean_deg,
-                metric.rot_std_deg, slam.wall_s, log_s, slam.wall_s > 0 ? log_s / slam.wall_s : 0.0, slam.peak_mb);
+    std::printf("{%s}\n", fields.c_str());
     std::fflush(stdout);
-    fs::remove(lcm);
-    fs::remove(poses);
   }
   fs::remove_all(work);
   return failures == 0 ? 0 : 1;
 }
 
 int main(int argc, char** argv) {
-  if (argc == 1 || (argc == 3 && std::strcmp(argv[1], "--logs") == 0)) {
+  if (argc == 1 || (argc == 3 && std::strcmp(argv[1], "--logs") == 0) ||
+      ((argc == 3 || argc == 5) && std::strcmp(argv[1], "--laps") == 0)) {
     try {
-      return run_logs(argc == 3 ? argv[2] : std::string(PEX_SHARED_DIR) + "/data");
+      // --laps N [--logs DIR]: every log driven N times (forwards, back, ...):
+      // memory and accuracy over run length.
+      const int laps = argc > 1 && std::strcmp(argv[1], "--laps") == 0 ? std::stoi(argv[2]) : 1;
+      if (laps < 1) throw std::runtime_error("--laps must be at least 1");
+      std::string dir = std::string(PEX_SHARED_DIR) + "/data";
+      if (argc == 3 && std::strcmp(argv[1], "--logs") == 0) dir = argv[2];
+      if (argc == 5 && std::strcmp(argv[3], "--logs") == 0) dir = argv[4];
+      return run_logs(dir, laps);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "pex-bench-slam: %s\n", e.what());
       return 2;

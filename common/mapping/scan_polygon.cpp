@@ -142,7 +142,8 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
     return fail("angle_min / angle_increment not finite or increment zero");
   if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta))
     return fail("pose not finite");
-  if (!(o.free_range_m > 0.0) || !(o.range_max_m > o.range_min_m) || !(o.obstacle_range_m >= 0.0))
+  if (!(o.free_range_m > 0.0) || !(o.range_max_m > o.range_min_m) || !(o.obstacle_range_m >= 0.0) ||
+      !(o.return_margin_m >= 0.0))
     return fail("bad range options");
 
   // Beams in counter-clockwise order; at most one turn (a 360-degree scanner
@@ -172,7 +173,8 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
       ++result.beams_beyond_obstacle_range;
     } else if (returned) {
       beam[k] = Beam::kReturn;
-      sensor_points[k] = Point(r * std::cos(angle_at(k)), r * std::sin(angle_at(k)));
+      const double taken = std::max(o.range_min_m, r - o.return_margin_m);
+      sensor_points[k] = Point(taken * std::cos(angle_at(k)), taken * std::sin(angle_at(k)));
       ++result.beams_returned;
     } else {
       beam[k] = Beam::kNoReturn;

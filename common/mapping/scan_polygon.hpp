@@ -39,6 +39,13 @@ struct ScanPolygonOptions {
   // return sideways by range x error. 0: every return below range_max_m is
   // an obstacle (the paper's polygon). docs/mapping.md has what it measured.
   double obstacle_range_m = 0.0;
+  // Every return is taken this much nearer the sensor along its beam. The
+  // map is a union of scans, so at every wall it keeps the farthest of all
+  // the noisy returns ever seen there: with the LMS1xx's ~12 mm range noise
+  // that envelope lies 3-4 cm beyond the wall after a few hundred scans
+  // (docs/mapping.md). Free space that ends a couple of sigma short of each
+  // return puts the envelope back on the wall. 0: the returns as measured.
+  double return_margin_m = 0.0;
   // Successive Edge Following with the adaptive breakpoint of Borges & Aldon
   // (2004): beams i-1 and i belong to one cluster when their points are at
   // most r[i-1] * sin(dphi) / sin(lambda - dphi) + 3 sigma apart, so the

@@ -256,6 +256,17 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     std::vector<double> first_leg(plan.candidates.size(), std::numeric_limits<double>::infinity());
     for (std::size_t i = 0; i < plan.candidates.size(); ++i)
       if (plan.candidates[i].reachable && !plan.candidates[i].blacklisted) first_leg[i] = plan.candidates[i].cost;
+    if (options.tour.horizon_candidates > 0) {
+      // Only the nearest horizon_candidates (ties by index) take part.
+      std::vector<std::size_t> order;
+      for (std::size_t i = 0; i < first_leg.size(); ++i)
+        if (std::isfinite(first_leg[i])) order.push_back(i);
+      const auto keep = static_cast<std::size_t>(options.tour.horizon_candidates);
+      if (order.size() > keep) {
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return first_leg[a] < first_leg[b]; });
+        for (std::size_t k = keep; k < order.size(); ++k) first_leg[order[k]] = std::numeric_limits<double>::infinity();
+      }
+    }
     std::vector<double> between = matrix.between_m;
     const std::size_t n = plan.candidates.size();
     for (std::size_t i = 0; i < n; ++i)  // keep the matrix finite where the solver needs it (reachable rows)

@@ -30,6 +30,13 @@ struct TourOptions {
   // passes. A pass tries every move once and applies each that shortens the
   // path by more than 1e-9 m.
   int max_passes = 50;
+  // The tour runs over the this many candidates nearest by path only (0: over
+  // all). Exploration moves its frontiers as it goes: most goals are seen from
+  // the way before they are reached, and far candidates are gone or elsewhere
+  // by the time the robot gets near, so the order among them is guesswork that
+  // still pulls the first goal. A receding horizon plans the order where it
+  // will hold.
+  int horizon_candidates = 0;
 };
 
 struct OpenTour {

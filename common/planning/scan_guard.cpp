@@ -3,26 +3,101 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace pex::planning {
+namespace {
 
-double free_distance_ahead(std::span<const mapping::Point> points_robot_frame, double body_radius_m) {
-  double free = std::numeric_limits<double>::infinity();
-  const double r2 = body_radius_m * body_radius_m;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Below this curvature (a radius of 1000 km) the arc is a straight line: the
+// circle's formulas lose their digits there.
+constexpr double kStraightCurvature = 1e-6;
+// A point the body already overlaps may come this much nearer while the robot
+// drives along it (sliding off a wall it grazed).
+constexpr double kTouchingSlackM = 0.005;
+
+double straight_free_distance(double x, double y, double r) {
+  if (x <= 0.0 || std::abs(y) >= r) return kInf;  // behind or beside the swept band
+  // The disk's front meets (x, y) after it moved x - sqrt(r^2 - y^2).
+  return std::max(0.0, x - std::sqrt(r * r - y * y));
+}
+
+// The disk's centre runs on the circle of radius |R| about C = (0, R),
+// R = 1 / kappa, starting at the origin. A point p at distance rho from C is
+// within r of the centre where the angle at C between the centre and p is at
+// most D, cos D = (R^2 + rho^2 - r^2) / (2 |R| rho); the centre turns by
+// kappa per metre, so it meets p after turning (angle to p) - D.
+double arc_free_distance(double x, double y, double kappa, double r) {
+  const double radius = 1.0 / kappa;  // signed
+  const double abs_radius = std::abs(radius);
+  const double dx = x, dy = y - radius;
+  const double rho = std::hypot(dx, dy);
+  if (std::abs(rho - abs_radius) >= r) return kInf;  // outside the swept annulus
+  if (rho < 1e-12) return kInf;                      // the centre of turning, not within r (caller checked)
+  const double cos_d = std::clamp((radius * radius + rho * rho - r * r) / (2.0 * abs_radius * rho), -1.0, 1.0);
+  const double half_width = std::acos(cos_d);
+  // Angles about C, counted in the direction of travel from the robot's own.
+  const double sign = kappa > 0.0 ? 1.0 : -1.0;
+  const double start = std::atan2(-radius, 0.0);
+  double to_point = sign * (std::atan2(dy, dx) - start);
+  to_point = std::fmod(to_point, 2.0 * std::numbers::pi);
+  if (to_point < 0.0) to_point += 2.0 * std::numbers::pi;
+  return std::max(0.0, to_point - half_width) * abs_radius;
+}
+
+}  // namespace
+
+double free_distance_along_arc(std::span<const mapping::Point> points_robot_frame, double curvature_per_m,
+                               double body_radius_m) {
+  double free = kInf;
+  const double r = body_radius_m;
+  const bool straight = !(std::abs(curvature_per_m) >= kStraightCurvature);
   for (const auto& p : points_robot_frame) {
     const double x = p.x(), y = p.y();
-    if (!std::isfinite(x) || !std::isfinite(y) || x <= 0.0 || std::abs(y) >= body_radius_m) continue;
-    // The disk's front meets (x, y) after it moved x - sqrt(r^2 - y^2).
-    free = std::min(free, std::max(0.0, x - std::sqrt(r2 - y * y)));
+    if (!std::isfinite(x) || !std::isfinite(y)) continue;
+    if (x * x + y * y < r * r) {
+      // Touching already. Driving on closes in on the point only when it lies
+      // ahead of the centre (the way starts along +x whatever the curvature),
+      // and then by |p| - |y| at most: a point behind or beside the centre
+      // must not hold the robot where it is, or a robot that grazed a wall
+      // could never drive away from it.
+      if (x > 0.0 && std::sqrt(x * x + y * y) - std::abs(y) > kTouchingSlackM) return 0.0;
+      continue;
+    }
+    free = std::min(free, straight ? straight_free_distance(x, y, r) : arc_free_distance(x, y, curvature_per_m, r));
   }
   return free;
+}
+
+double free_distance_ahead(std::span<const mapping::Point> points_robot_frame, double body_radius_m) {
+  return free_distance_along_arc(points_robot_frame, 0.0, body_radius_m);
 }
 
 double max_safe_speed(double free_distance_m, const ScanGuardOptions& options) {
   const double room = free_distance_m - options.margin_m;
   if (!(room > 0.0)) return 0.0;
-  if (std::isinf(room)) return std::numeric_limits<double>::infinity();
-  return std::sqrt(2.0 * options.max_decel_mps2 * room);
+  if (std::isinf(room)) return kInf;
+  const double a = options.max_decel_mps2, t = std::max(0.0, options.latency_s);
+  return a * (std::sqrt(t * t + 2.0 * room / a) - t);
+}
+
+GuardedCommand guard_command(std::span<const mapping::Point> points_robot_frame, double v_mps, double omega_radps,
+                             double travelled_since_scan_m, const ScanGuardOptions& options) {
+  GuardedCommand out{v_mps, omega_radps, false};
+  if (!(v_mps > 0.0)) return out;
+  const double curvature = omega_radps / v_mps;
+  const double free = free_distance_along_arc(points_robot_frame, curvature, options.body_radius_m) -
+                      std::max(0.0, travelled_since_scan_m);
+  const double safe = max_safe_speed(free, options);
+  if (v_mps <= safe) return out;
+  out.limited = true;
+  if (safe > 0.0) {
+    out.v_mps = safe;
+    out.omega_radps = curvature * safe;  // the same arc, slower
+  } else {
+    out.v_mps = 0.0;  // blocked: turn on the spot (omega kept)
+  }
+  return out;
 }
 
 }  // namespace pex::planning

@@ -68,7 +68,7 @@ void CowGridMap::grow_to_include(int tx, int ty) {
   tiles_h_ = y1 - y0;
 }
 
-CowGridMap::Cell& CowGridMap::mutable_cell(int ix, int iy) {
+CowGridMap::Tile& CowGridMap::mutable_tile(int ix, int iy, int& index) {
   const int tx = ix >> kTileBits;
   const int ty = iy >> kTileBits;
   grow_to_include(tx, ty);
@@ -77,15 +77,17 @@ CowGridMap::Cell& CowGridMap::mutable_cell(int ix, int iy) {
     slot = std::make_shared<Tile>();
   else if (slot.use_count() > 1)
     slot = std::make_shared<Tile>(*slot);  // copy on write
-  return slot->cells[((iy & (kTileSize - 1)) << kTileBits) | (ix & (kTileSize - 1))];
+  index = ((iy & (kTileSize - 1)) << kTileBits) | (ix & (kTileSize - 1));
+  slot->occupied |= std::uint64_t{1} << index;  // the caller adds a hit
+  return *slot;
 }
 
-void CowGridMap::update_normal(Cell& cell) const {
+void CowGridMap::update_normal(Cell& cell, const Scatter& scatter) const {
   cell.normal_x = 0;
   cell.normal_y = 0;
   if (cell.hits < 3) return;
   // Eigen decomposition of the 2x2 scatter [sxx sxy; sxy syy].
-  const double a = cell.sxx, b = cell.sxy, c = cell.syy;
+  const double a = scatter.sxx, b = scatter.sxy, c = scatter.syy;
   const double half_trace = 0.5 * (a + c);
   const double root = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
   const double large = half_trace + root;
@@ -113,7 +115,10 @@ void CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
     const double fy = y * inverse_resolution_;
     // Far outside any building: refuse rather than allocate a huge tile table.
     if (!(std::abs(fx) < 1e8 && std::abs(fy) < 1e8)) continue;
-    Cell& cell = mutable_cell(static_cast<int>(std::floor(fx)), static_cast<int>(std::floor(fy)));
+    int index = 0;
+    Tile& tile = mutable_tile(static_cast<int>(std::floor(fx)), static_cast<int>(std::floor(fy)), index);
+    Cell& cell = tile.cells[static_cast<std::size_t>(index)];
+    Scatter& scatter = tile.scatter[static_cast<std::size_t>(index)];
     if (cell.hits < std::numeric_limits<std::uint16_t>::max()) ++cell.hits;
     const float inv = 1.0f / static_cast<float>(cell.hits);
     // Welford's update of the mean and the scatter.
@@ -123,19 +128,139 @@ void CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
     cell.mean_y_m += dy * inv;
     const float dx2 = static_cast<float>(x) - cell.mean_x_m;
     const float dy2 = static_cast<float>(y) - cell.mean_y_m;
-    cell.sxx += dx * dx2;
-    cell.sxy += dx * dy2;
-    cell.syy += dy * dy2;
-    update_normal(cell);
+    scatter.sxx += dx * dx2;
+    scatter.sxy += dx * dy2;
+    scatter.syy += dy * dy2;
+    update_normal(cell, scatter);
   }
 }
 
 PoseEvaluation CowGridMap::evaluate(const Pose2& pose, const ScanPoints& scan) const {
+  if (options_.kernel_radius_cells == 1 && !options_.check_free_before_hit) return evaluate_window3<true>(pose, scan);
   return evaluate_terms<true>(pose, scan);
 }
 
 double CowGridMap::log_likelihood(const Pose2& pose, const ScanPoints& scan) const {
+  if (options_.kernel_radius_cells == 1 && !options_.check_free_before_hit)
+    return evaluate_window3<false>(pose, scan).log_likelihood;
   return evaluate_terms<false>(pose, scan).log_likelihood;
+}
+
+template <bool kWithScore>
+PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints& scan) const {
+  // Every expression as in evaluate_terms, in the same order: the same floats.
+  const float c = static_cast<float>(std::cos(pose.theta_rad));
+  const float s = static_cast<float>(std::sin(pose.theta_rad));
+  const float px = static_cast<float>(pose.x_m);
+  const float py = static_cast<float>(pose.y_m);
+  const float inv_res = static_cast<float>(inverse_resolution_);
+  const float inv_score_sigma = static_cast<float>(1.0 / options_.score_sigma_m2);
+  const double inv_likelihood_sigma = 1.0 / options_.likelihood_sigma_m2;
+  const double no_hit = options_.null_log_likelihood * inv_likelihood_sigma;
+  const float along_weight = static_cast<float>(options_.along_line_weight);
+  const std::size_t step = static_cast<std::size_t>(std::max(1, options_.beam_step));
+  constexpr int kMask = kTileSize - 1;
+  // The 3x3 window's bits in a tile's mask, shifted down to its corner.
+  constexpr std::uint64_t kWindow = 0x7 | (0x7 << kTileSize) | (0x7ULL << (2 * kTileSize));
+  PoseEvaluation result;
+  double score = 0.0;
+  double log_likelihood = 0.0;
+  // The end points and their cells are computed a chunk of beams at a time in
+  // a loop the compiler vectorises (the same float operations per lane), then
+  // the windows are read beam by beam.
+  constexpr std::size_t kChunk = 64;
+  alignas(16) float chunk_x[kChunk], chunk_y[kChunk];
+  alignas(16) int chunk_ix[kChunk], chunk_iy[kChunk], chunk_valid[kChunk];
+  const std::size_t beam_count = (scan.beams.size() + step - 1) / step;
+  const BeamPoint* beams = scan.beams.data();
+  for (std::size_t begin = 0; begin < beam_count; begin += kChunk) {
+    const std::size_t count = std::min(kChunk, beam_count - begin);
+    for (std::size_t k = 0; k < count; ++k) {
+      const BeamPoint& beam = beams[(begin + k) * step];
+      const float hx = px + c * beam.hit_x_m - s * beam.hit_y_m;
+      const float hy = py + s * beam.hit_x_m + c * beam.hit_y_m;
+      const float fx = hx * inv_res;
+      const float fy = hy * inv_res;
+      // Guard the float -> int conversion against absurd poses.
+      const int valid = static_cast<int>(std::abs(fx) < 1e8f) & static_cast<int>(std::abs(fy) < 1e8f);
+      chunk_x[k] = hx;
+      chunk_y[k] = hy;
+      const float safe_x = valid ? fx : 0.0f;
+      const float safe_y = valid ? fy : 0.0f;
+      const int ix = static_cast<int>(safe_x);
+      const int iy = static_cast<int>(safe_y);
+      chunk_ix[k] = ix - static_cast<int>(safe_x < static_cast<float>(ix));
+      chunk_iy[k] = iy - static_cast<int>(safe_y < static_cast<float>(iy));
+      chunk_valid[k] = valid;
+    }
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!chunk_valid[k]) {
+      log_likelihood += no_hit;
+      continue;
+    }
+    const float hx = chunk_x[k];
+    const float hy = chunk_y[k];
+    const int hix = chunk_ix[k];
+    const int hiy = chunk_iy[k];
+    float best_d2 = std::numeric_limits<float>::max();
+    auto consider = [&](const Cell& hit) {
+      const float ex = hit.mean_x_m - hx;
+      const float ey = hit.mean_y_m - hy;
+      float d2 = ex * ex + ey * ey;
+      if (hit.normal_x != 0 || hit.normal_y != 0) {
+        const float across = (ex * hit.normal_x + ey * hit.normal_y) * (1.0f / 127.0f);
+        d2 = across * across + along_weight * (d2 - across * across);
+      }
+      if (d2 < best_d2) best_d2 = d2;
+    };
+    const int lx = hix & kMask;
+    const int ly = hiy & kMask;
+    if (lx >= 1 && lx < kTileSize - 1 && ly >= 1 && ly < kTileSize - 1) {
+      // The window lies in one tile (most beams): one lookup, its mask's bits
+      // name the occupied cells in row-major order (as the loops visit them).
+      const Tile* tile = tile_at(hix >> kTileBits, hiy >> kTileBits);
+      if (!tile) {
+        log_likelihood += no_hit;
+        continue;
+      }
+      const int corner = ((ly - 1) << kTileBits) + (lx - 1);
+      for (std::uint64_t bits = (tile->occupied >> corner) & kWindow; bits != 0; bits &= bits - 1)
+        consider(tile->cells[static_cast<std::size_t>(corner + std::countr_zero(bits))]);
+    } else {
+      // The window crosses tile borders: the (up to) 2 x 2 tiles it touches,
+      // and per row and column of the window which tile and which cell.
+      const int tx0 = (hix - 1) >> kTileBits;
+      const int ty0 = (hiy - 1) >> kTileBits;
+      const Tile* const tiles[2][2] = {{tile_at(tx0, ty0), tile_at(tx0 + 1, ty0)},
+                                       {tile_at(tx0, ty0 + 1), tile_at(tx0 + 1, ty0 + 1)}};
+      int column_tile[3], column_cell[3];
+      for (int d = 0; d < 3; ++d) {
+        column_tile[d] = ((hix - 1 + d) >> kTileBits) - tx0;
+        column_cell[d] = (hix - 1 + d) & kMask;
+      }
+      for (int dy = 0; dy < 3; ++dy) {
+        const int y = hiy - 1 + dy;
+        const Tile* const* row = tiles[(y >> kTileBits) - ty0];
+        const int row_cell = (y & kMask) << kTileBits;
+        for (int dx = 0; dx < 3; ++dx) {
+          const Tile* tile = row[column_tile[dx]];
+          const int index = row_cell | column_cell[dx];
+          if (tile && (tile->occupied >> index & 1)) consider(tile->cells[static_cast<std::size_t>(index)]);
+        }
+      }
+    }
+    if (best_d2 < std::numeric_limits<float>::max()) {
+      if constexpr (kWithScore) score += std::exp(-best_d2 * inv_score_sigma);
+      log_likelihood += -static_cast<double>(best_d2) * inv_likelihood_sigma;
+      ++result.matched_beams;
+    } else {
+      log_likelihood += no_hit;
+    }
+  }
+  }
+  result.score = score;
+  result.log_likelihood = log_likelihood;
+  return result;
 }
 
 template <bool kWithScore>
@@ -254,13 +379,14 @@ void CowGridMap::write_shared(archive::ByteWriter& out, const std::vector<const 
     for (std::size_t i = 0; i < tile->cells.size(); ++i)
       if (tile->cells[i].hits != 0) mask |= std::uint64_t{1} << i;
     out.put<std::uint64_t>(mask);
-    for (const Cell& c : tile->cells) {
+    for (std::size_t i = 0; i < tile->cells.size(); ++i) {
+      const Cell& c = tile->cells[i];
       if (c.hits == 0) continue;
       out.put<float>(c.mean_x_m);
       out.put<float>(c.mean_y_m);
-      out.put<float>(c.sxx);
-      out.put<float>(c.sxy);
-      out.put<float>(c.syy);
+      out.put<float>(tile->scatter[i].sxx);
+      out.put<float>(tile->scatter[i].sxy);
+      out.put<float>(tile->scatter[i].syy);
       out.put<std::int8_t>(c.normal_x);
       out.put<std::int8_t>(c.normal_y);
       out.put<std::uint16_t>(c.hits);
@@ -297,14 +423,15 @@ std::vector<std::unique_ptr<CowGridMap>> CowGridMap::read_shared(archive::ByteRe
       Cell& c = tile->cells[i];
       c.mean_x_m = in.get<float>();
       c.mean_y_m = in.get<float>();
-      c.sxx = in.get<float>();
-      c.sxy = in.get<float>();
-      c.syy = in.get<float>();
+      tile->scatter[i].sxx = in.get<float>();
+      tile->scatter[i].sxy = in.get<float>();
+      tile->scatter[i].syy = in.get<float>();
       c.normal_x = in.get<std::int8_t>();
       c.normal_y = in.get<std::int8_t>();
       c.hits = in.get<std::uint16_t>();
       if (c.hits == 0) throw archive::ArchiveError("tile " + std::to_string(t) + " lists a cell without hits");
     }
+    tile->occupied = mask;
     distinct.push_back(std::move(tile));
   }
   const std::uint64_t map_count = in.get_count(4 * sizeof(std::int32_t) + sizeof(std::uint64_t));

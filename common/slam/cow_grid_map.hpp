@@ -56,18 +56,29 @@ class CowGridMap final : public ParticleMap {
   static constexpr int kTileBits = 3;
   static constexpr int kTileSize = 1 << kTileBits;
 
+  // What the matcher reads of a cell (12 bytes: a 3x3 window's row is 36
+  // contiguous bytes, mostly one cache line).
   struct Cell {
     float mean_x_m = 0.0f;
     float mean_y_m = 0.0f;
-    // Scatter of the hits about their mean (sums of squared deviations, m^2).
-    float sxx = 0.0f, sxy = 0.0f, syy = 0.0f;
     // Unit normal of the line the hits lie on, times 127; (0, 0) while they
     // do not (yet) form a line. 8 bits are plenty for weighting distances.
     std::int8_t normal_x = 0, normal_y = 0;
     std::uint16_t hits = 0;  // saturates
   };
+  // What only insertion reads: the scatter of the hits about their mean
+  // (sums of squared deviations, m^2), from which the normal is derived.
+  struct Scatter {
+    float sxx = 0.0f, sxy = 0.0f, syy = 0.0f;
+  };
   struct Tile {
     std::array<Cell, kTileSize * kTileSize> cells{};
+    std::array<Scatter, kTileSize * kTileSize> scatter{};
+    // Bit (y << kTileBits | x) set: that cell has hits. The matcher reads a
+    // 3x3 window of cells per beam, most of them empty (a wall crosses a
+    // window in a line): the mask finds the occupied ones without touching
+    // the others.
+    std::uint64_t occupied = 0;
   };
 
   explicit CowGridMap(const CowGridMapOptions& options);
@@ -78,6 +89,11 @@ class CowGridMap final : public ParticleMap {
   // The likelihood alone: no exp() per beam for the score.
   double log_likelihood(const Pose2& robot_pose, const ScanPoints& scan) const override;
   std::size_t referenced_bytes() const override;
+  // evaluate() through the general window (any kernel radius, the free-cell
+  // test), which the shipped window's unrolled path must equal bit for bit.
+  PoseEvaluation evaluate_general(const Pose2& robot_pose, const ScanPoints& scan) const {
+    return evaluate_terms<true>(robot_pose, scan);
+  }
 
   // The cell containing world point (x, y), or nullptr when never written.
   const Cell* cell_at(double x_m, double y_m) const;
@@ -114,8 +130,23 @@ class CowGridMap final : public ParticleMap {
   }
   template <bool kWithScore>
   PoseEvaluation evaluate_terms(const Pose2& robot_pose, const ScanPoints& scan) const;
-  Cell& mutable_cell(int ix, int iy);
-  void update_normal(Cell& cell) const;
+  // The same for the shipped window (kernel_radius_cells 1, no free-cell
+  // test), unrolled and led by the tiles' occupancy masks: the same terms,
+  // bit for bit, in about half the instructions.
+  template <bool kWithScore>
+  PoseEvaluation evaluate_window3(const Pose2& robot_pose, const ScanPoints& scan) const;
+  const Tile* tile_at(int tx, int ty) const {
+    tx -= tile_x0_;
+    ty -= tile_y0_;
+    if (static_cast<unsigned>(tx) >= static_cast<unsigned>(tiles_w_) ||
+        static_cast<unsigned>(ty) >= static_cast<unsigned>(tiles_h_))
+      return nullptr;
+    return tiles_[static_cast<std::size_t>(ty) * tiles_w_ + tx].get();
+  }
+  // The tile holding cell (ix, iy), made and copied on write as needed, with
+  // the cell marked occupied (the caller adds a hit); `index` is the cell's.
+  Tile& mutable_tile(int ix, int iy, int& index);
+  void update_normal(Cell& cell, const Scatter& scatter) const;
   void grow_to_include(int tx, int ty);
 
   CowGridMapOptions options_;

@@ -89,7 +89,7 @@ void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry)
 }
 
 double ParticleFilter::check_odometry_step(const ScanPoints& match_points, const Pose2& odometry_step,
-                                           UpdateStats& stats) const {
+                                           UpdateStats& stats, std::optional<MatchResult>& measured_match) const {
   const OdometryCheckOptions& check = options_.odometry_check;
   if (!check.enabled || std::hypot(odometry_step.x_m, odometry_step.y_m) < check.min_translation_m) return 1.0;
   const Particle& best = particles_[best_index()];
@@ -100,7 +100,10 @@ double ParticleFilter::check_odometry_step(const ScanPoints& match_points, const
     return match_scan(*best.map, match_points, compose(compose(best.pose_at_update, step), noise), options_.matcher)
         .evaluation.score;
   };
-  const double measured = score(1.0);
+  // The measured step is the best particle's own pose: its match is the one
+  // the update makes for that particle when the step stays, so it is kept.
+  measured_match = match_scan(*best.map, match_points, best.pose, options_.matcher);
+  const double measured = measured_match->evaluation.score;
   double chosen = 1.0;
   double chosen_score = measured * (1.0 + check.margin);
   double best_other = 0.0;
@@ -122,8 +125,11 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   const ScanPoints match_points = matcher_beams(points, options_.matcher);
   const ScanPoints likelihood_points = proposal_beams(points, options_.proposal);
   Pose2 odometry_step = relative(odometry_at_update_, odometry);
-  stats.odometry_scale = check_odometry_step(match_points, odometry_step, stats);
+  std::optional<MatchResult> measured_match;
+  const std::size_t checked = best_index();
+  stats.odometry_scale = check_odometry_step(match_points, odometry_step, stats, measured_match);
   if (stats.odometry_scale != 1.0) {
+    measured_match.reset();  // the particles move: every one is matched again
     // Every particle keeps its own motion noise, moved onto the corrected step.
     const Pose2 corrected{stats.odometry_scale * odometry_step.x_m, stats.odometry_scale * odometry_step.y_m,
                           odometry_step.theta_rad};
@@ -143,7 +149,9 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
       Particle& p = particles_[i];
       std::mt19937_64 rng(mix(generation_seed + i));
       const Pose2 predicted = compose(p.pose_at_update, odometry_step);
-      const MatchResult match = match_scan(*p.map, match_points, p.pose, options_.matcher);
+      const MatchResult match = i == checked && measured_match
+                                    ? *measured_match
+                                    : match_scan(*p.map, match_points, p.pose, options_.matcher);
       evaluations[i] = match.evaluations;
       double increment = 0.0;
       if (match.evaluation.score > options_.matcher.minimum_score) {

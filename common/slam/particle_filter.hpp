@@ -164,8 +164,10 @@ class ParticleFilter {
   void update(const ScanPoints& points, const Pose2& odometry);
   void resample(const std::vector<double>& weights);
   // The odometry check (OdometryCheckOptions): the translation scale of this
-  // update's odometry step, 1.0 when the measured step matches best.
-  double check_odometry_step(const ScanPoints& match_points, const Pose2& odometry_step, UpdateStats& stats) const;
+  // update's odometry step, 1.0 when the measured step matches best. When it
+  // ran, `measured_match` is the best particle's match from its own pose.
+  double check_odometry_step(const ScanPoints& match_points, const Pose2& odometry_step, UpdateStats& stats,
+                             std::optional<MatchResult>& measured_match) const;
 
   ParticleFilterOptions options_;
   ParticleMapFactory map_factory_;

@@ -111,7 +111,7 @@ TEST(CowGridMap, ClonesShareTilesAndCopyOnWrite) {
   const CowGridMap::Cell* original = map.cell_at(6.0 + 0.01, 0.0);
   ASSERT_NE(original, nullptr);
   const std::uint32_t hits_before = original->hits;
-  static_assert(sizeof(CowGridMap::Cell) == 24);
+  static_assert(sizeof(CowGridMap::Cell) + sizeof(CowGridMap::Scatter) == 24);  // bytes per cell
   EXPECT_GT(hits_before, 0u);
   copy->insert(pose, points);
   // The copy's write did not reach the original...
@@ -192,6 +192,34 @@ TEST(CowGridMap, TheLikelihoodAloneEqualsEvaluatesBitForBit) {
   const ScanPoints points = to_scan_points(scan_from({0.33, 0.1, 0.05}), {});
   for (const Pose2 pose : {Pose2{0.3, 0.1, 0.05}, Pose2{0.36, 0.12, 0.04}, Pose2{5.0, 5.0, 1.0}})
     EXPECT_EQ(map.log_likelihood(pose, points), map.evaluate(pose, points).log_likelihood);
+}
+
+// The shipped 3x3 window runs an unrolled path led by the tiles' occupancy
+// masks (windows inside a tile, across a tile border in x, in y, at a
+// corner of four tiles, partly off the map); it must give what the general
+// window gives, bit for bit, or the filter's poses change.
+TEST(CowGridMap, TheUnrolledWindowEqualsTheGeneralOneBitForBit) {
+  CowGridMap map({});
+  for (int i = 0; i < 6; ++i) {
+    const Pose2 known{0.13 * i, -0.07 * i, 0.03 * i};
+    map.insert(known, to_scan_points(scan_from(known), {}));
+  }
+  const ScanPoints points = to_scan_points(scan_from({0.33, 0.1, 0.05}), {});
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> offset(-0.3, 0.3), turn(-0.2, 0.2);
+  std::size_t matched = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    // Far poses too: most beams then end off the map or in unknown tiles.
+    const double reach = trial % 10 == 0 ? 20.0 : 1.0;
+    const Pose2 pose{0.33 + reach * offset(rng), 0.1 + reach * offset(rng), 0.05 + turn(rng)};
+    const PoseEvaluation fast = map.evaluate(pose, points);
+    const PoseEvaluation general = map.evaluate_general(pose, points);
+    EXPECT_EQ(fast.score, general.score) << trial;
+    EXPECT_EQ(fast.log_likelihood, general.log_likelihood) << trial;
+    EXPECT_EQ(fast.matched_beams, general.matched_beams) << trial;
+    matched += fast.matched_beams;
+  }
+  EXPECT_GT(matched, 300u * 100u);  // the windows did find cells
 }
 
 TEST(ScanMatcher, BeamsAreDecimatedByAngleWhateverTheScanner) {
@@ -322,6 +350,51 @@ TEST(ParticleFilter, CorrectsOdometryDriftInASyntheticRoom) {
   const double odo_error = std::hypot(odo_motion.x_m - true_motion.x_m, odo_motion.y_m - true_motion.y_m);
   EXPECT_GT(odo_error, 0.3);
   EXPECT_LT(est_error, 0.1);
+}
+
+// Offline, the next update's correction is spread over the scans before it:
+// the update poses stay, and the motion between consecutive scans follows
+// the truth where the carried-forward odometry (5 % long, drifting) jumps at
+// every update.
+TEST(TrajectoryRecorder, SpreadCorrectionsFollowTheTruthBetweenUpdates) {
+  const Drive d = drive(3);
+  ParticleFilterOptions options = small_filter(2);
+  options.linear_update_m = 0.5;  // an update every 5 scans
+  ParticleFilter filter(options);
+  TrajectoryRecorder recorder;
+  std::vector<std::int64_t> generation;
+  for (std::size_t i = 0; i < d.truth.size(); ++i) {
+    filter.process(scan_from(d.truth[i], static_cast<std::int64_t>(i)), d.odometry[i]);
+    recorder.record(static_cast<std::int64_t>(i), filter, d.odometry[i]);
+    generation.push_back(filter.generation());
+  }
+  const auto carried = recorder.resolve(filter);
+  const auto spread = recorder.resolve(filter, true);
+  ASSERT_EQ(carried.size(), d.truth.size());
+  ASSERT_EQ(spread.size(), d.truth.size());
+  auto step_error = [&](const std::vector<TimedPose>& poses) {
+    double sum = 0.0;
+    for (std::size_t i = 1; i < poses.size(); ++i) {
+      const Pose2 estimated = relative(poses[i - 1].pose, poses[i].pose);
+      const Pose2 truth = relative(d.truth[i - 1], d.truth[i]);
+      sum += std::hypot(estimated.x_m - truth.x_m, estimated.y_m - truth.y_m) +
+             std::abs(normalize_angle(estimated.theta_rad - truth.theta_rad));
+    }
+    return sum / static_cast<double>(poses.size() - 1);
+  };
+  int updates = 0;
+  for (std::size_t i = 0; i < spread.size(); ++i) {
+    EXPECT_EQ(spread[i].utime, carried[i].utime);
+    if (i == 0 || generation[i] != generation[i - 1]) {  // the scan that made an update keeps its pose
+      ++updates;
+      EXPECT_NEAR(spread[i].pose.x_m, carried[i].pose.x_m, 1e-12) << i;
+      EXPECT_NEAR(spread[i].pose.theta_rad, carried[i].pose.theta_rad, 1e-12) << i;
+    }
+  }
+  EXPECT_GT(updates, 15);
+  const double carried_error = step_error(carried), spread_error = step_error(spread);
+  std::cout << "per-scan motion error: carried forward " << carried_error << ", spread " << spread_error << '\n';
+  EXPECT_LT(spread_error, 0.6 * carried_error);
 }
 
 TEST(ParticleFilter, SameSeedSameResultDifferentSeedDifferent) {

@@ -21,7 +21,19 @@ class TrajectoryRecorder {
   // Call after filter.process(scan, odometry); scans before the first update are ignored.
   void record(std::int64_t scan_utime, const ParticleFilter& filter, const Pose2& odometry);
   // One pose per recorded scan on the best particle's trajectory, in record order.
-  std::vector<TimedPose> resolve(const ParticleFilter& filter) const;
+  //
+  // spread_corrections = false: a scan's pose is its update's pose carried
+  // forward by the odometry since (what the robot knew at the scan).
+  // true (offline, the whole trajectory known): the next update's
+  // correction of that carried-forward pose (where the odometry says the
+  // robot got to against where the update put it) is spread over the scans
+  // in between, in proportion to the odometry's progress (path length, and
+  // turn at linear_per_rad m per rad: the update gate's ratio, 0.5 m to
+  // 0.25 rad, weighs them alike), instead of landing at once at the
+  // update. The carried-forward poses then no longer accumulate the
+  // odometry's error over an update interval (0.5 m, 0.25 rad) and jump.
+  std::vector<TimedPose> resolve(const ParticleFilter& filter, bool spread_corrections = false,
+                                 double linear_per_rad = 2.0) const;
   std::size_t size() const { return entries_.size(); }
 
  private:
@@ -29,6 +41,7 @@ class TrajectoryRecorder {
     std::int64_t utime;
     std::int64_t generation;
     Pose2 odometry_from_update;  // odometry at the scan in the frame of the odometry at the update
+    Pose2 odometry;              // the odometry at the scan
   };
   std::vector<Entry> entries_;
 };

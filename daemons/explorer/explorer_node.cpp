@@ -1,5 +1,6 @@
 #include "explorer_node.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <vector>
@@ -51,7 +52,8 @@ std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now
       !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
     return "scan geometry is not finite";
   // Returns in the robot's frame (the laser's mounting), for the guard.
-  std::vector<mapping::Point> points;
+  auto& points = scan_points_;
+  points.clear();
   points.reserve(msg.ranges.size());
   const double c = std::cos(msg.sensor_theta), s = std::sin(msg.sensor_theta);
   for (std::size_t i = 0; i < msg.ranges.size(); ++i) {
@@ -61,7 +63,7 @@ std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now
     const double x = r * std::cos(a), y = r * std::sin(a);
     points.emplace_back(msg.sensor_x + c * x - s * y, msg.sensor_y + s * x + c * y);
   }
-  free_ahead_m_ = planning::free_distance_ahead(points, options_.guard.body_radius_m);
+  scan_utime_ = now_utime;
   mission_.on_scan(now_utime);
   return {};
 }
@@ -79,6 +81,7 @@ void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
   if (!worker_) return;
   if (auto timed = worker_->take_result()) {
     plan_ms_.add(timed->compute_ms);
+    plan_cpu_ms_.add(timed->compute_cpu_ms);
     mission_.on_plan(timed->result, now_utime);
   }
 }
@@ -92,8 +95,10 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
     // Inline: the plan runs here (tests); its time is measured apart.
     last_ = planning::step_with_inline_planning(mission_, now_utime, [this](const planning::PlanRequest& request) {
       const auto plan_started = std::chrono::steady_clock::now();
+      const double cpu_started = thread_cpu_ms();
       auto result = planning::compute_plan(request);
       plan_ms_.add(ms_since(plan_started));
+      plan_cpu_ms_.add(thread_cpu_ms() - cpu_started);
       return result;
     });
   }
@@ -102,13 +107,17 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   pex::velocity_cmd_t cmd = stop_command(now_utime);
   cmd.v = last_.command.v_mps;
   cmd.omega = last_.command.omega_radps;
-  if (options_.scan_guard && cmd.v > 0.0) {
-    const double safe = planning::max_safe_speed(free_ahead_m_, options_.guard);
-    if (cmd.v > safe) {
-      cmd.v = safe;
-      ++counters_.guard_limited_steps;
-    }
+  if (options_.scan_guard && scan_utime_ && cmd.v > 0.0) {
+    // The robot drove on since the scan came in (at most the last command's
+    // speed): that much of the free arc is gone already.
+    const double since_scan_s = std::max<std::int64_t>(0, now_utime - *scan_utime_) * 1e-6;
+    const auto guarded =
+        planning::guard_command(scan_points_, cmd.v, cmd.omega, last_v_mps_ * since_scan_s, options_.guard);
+    if (guarded.limited) ++counters_.guard_limited_steps;
+    cmd.v = guarded.v_mps;
+    cmd.omega = guarded.omega_radps;
   }
+  last_v_mps_ = cmd.v;
   return cmd;
 }
 

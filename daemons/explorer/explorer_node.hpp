@@ -3,10 +3,11 @@
 // (planning/mission.hpp): checked inputs in, BASE_CMD and EXPLORE_STATE out,
 // plans on a worker thread (or inline, for tests). No LCM calls here, so
 // tests can drive it without a bus.
-#include <limits>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <pex/explore_state_t.hpp>
 #include <pex/laser_scan_t.hpp>
@@ -40,7 +41,7 @@ class ExplorerNode {
   std::string on_map(const pex::polygon_map_t& msg, std::int64_t now_utime);
   std::string on_pose(const pex::pose_t& msg, std::int64_t now_utime);
   // A LIDAR_SCAN: the laser is alive (the mission stops without scans), and
-  // the free distance ahead of the robot's body for the scan guard.
+  // its returns bound the command (the scan guard, planning/scan_guard.hpp).
   std::string on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime);
   // A MISSION_CMD. Returns "" when applied or already in effect; "refused: ..."
   // for a command that is not a command (bad input); other text: why it does
@@ -67,6 +68,7 @@ class ExplorerNode {
   const ExplorerCounters& counters() const { return counters_; }
   const ExplorerOptions& options() const { return options_; }
   const LatencyStats& plan_ms() const { return plan_ms_; }
+  const LatencyStats& plan_cpu_ms() const { return plan_cpu_ms_; }
   const LatencyStats& control_ms() const { return control_ms_; }
 
  private:
@@ -76,10 +78,14 @@ class ExplorerNode {
   planning::MissionOutput last_;
   ExplorerCounters counters_;
   LatencyStats plan_ms_;
+  LatencyStats plan_cpu_ms_;
   LatencyStats control_ms_;
-  // From the newest scan; none yet: no bound (the mission itself stands
-  // without scans when scan_timeout_ms watches them).
-  double free_ahead_m_ = std::numeric_limits<double>::infinity();
+  // The newest scan's returns in the robot's frame and when it came; none
+  // yet: no bound (the mission itself stands without scans when
+  // scan_timeout_ms watches them).
+  std::vector<mapping::Point> scan_points_;
+  std::optional<std::int64_t> scan_utime_;
+  double last_v_mps_ = 0.0;  // the forward speed last commanded
 };
 
 }  // namespace pex::explorer

@@ -81,6 +81,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   m.autostart = config.get<bool>("autostart", m.autostart);
   planner.strategy = *planning::parse_goal_strategy(config.get<std::string>(
       "goal_strategy", planning::to_string(planner.strategy), runtime::one_of({"greedy", "tour"})));
+  planner.tour.horizon_candidates =
+      config.get<int>("tour_horizon_candidates", planner.tour.horizon_candidates, runtime::in_range(0, 1000));
   m.plan_timeout_us =
       us_from_ms(config.get<int>("plan_timeout_ms", static_cast<int>(m.plan_timeout_us / 1000), in_range(100, 600'000)));
   m.replan_period_us =
@@ -104,6 +106,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.guard.body_radius_m = config.get<double>("guard_body_radius_m", o.guard.body_radius_m, in_range(0.01, 5.0));
   o.guard.margin_m = config.get<double>("guard_margin_m", o.guard.margin_m, in_range(0.0, 1.0));
   o.guard.max_decel_mps2 = config.get<double>("guard_decel_mps2", o.guard.max_decel_mps2, in_range(0.01, 20.0));
+  o.guard.latency_s = config.get<double>("guard_latency_ms", o.guard.latency_s * 1e3, in_range(0.0, 2000.0)) * 1e-3;
   return o;
 }
 

@@ -99,6 +99,8 @@ int main(int argc, char** argv) {
           node.counter("plan_us_p50") = us_of_ms(explorer->plan_ms().quantile(0.5));
           node.counter("plan_us_p99") = us_of_ms(explorer->plan_ms().quantile(0.99));
           node.counter("plan_us_max") = us_of_ms(explorer->plan_ms().quantile(1.0));
+          node.counter("plan_cpu_us_p50") = us_of_ms(explorer->plan_cpu_ms().quantile(0.5));
+          node.counter("plan_cpu_us_p99") = us_of_ms(explorer->plan_cpu_ms().quantile(0.99));
           node.counter("control_us_p99") = us_of_ms(explorer->control_ms().quantile(0.99));
           node.counter("control_us_max") = us_of_ms(explorer->control_ms().quantile(1.0));
         });

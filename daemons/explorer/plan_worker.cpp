@@ -1,6 +1,7 @@
 #include "plan_worker.hpp"
 
 #include <sys/eventfd.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -8,6 +9,12 @@
 #include <stdexcept>
 
 namespace pex::explorer {
+
+double thread_cpu_ms() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
 
 PlanWorker::PlanWorker() {
   event_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
@@ -53,6 +60,7 @@ void PlanWorker::run() {
       next_.reset();
     }
     const auto started = std::chrono::steady_clock::now();
+    const double cpu_started = thread_cpu_ms();
     TimedPlanResult timed;
     try {
       timed.result = planning::compute_plan(request);
@@ -62,6 +70,7 @@ void PlanWorker::run() {
       timed.result.plan.error = std::string("planner threw: ") + e.what();
     }
     timed.compute_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+    timed.compute_cpu_ms = thread_cpu_ms() - cpu_started;
     {
       std::lock_guard lock(mutex_);
       done_ = std::move(timed);

@@ -15,8 +15,13 @@ namespace pex::explorer {
 
 struct TimedPlanResult {
   planning::PlanResult result;
-  double compute_ms = 0.0;  // CPU-side duration of compute_plan (steady clock)
+  double compute_ms = 0.0;      // wall time of compute_plan (steady clock): the plan's latency
+  double compute_cpu_ms = 0.0;  // CPU time of the thread that ran it: the planner's own cost,
+                                // which a loaded machine does not inflate
 };
+
+// CPU time consumed by the calling thread so far, in ms.
+double thread_cpu_ms();
 
 class PlanWorker {
  public:

@@ -2,6 +2,7 @@
 // LIDAR_SCAN + ODOMETRY in; SLAM_UPDATE after every filter update, SLAM_POSE at
 // odometry rate. Offline: `pex-slam --log IN.lcm --poses OUT.txt` feeds the log
 // through the same handlers and writes one `timestamp_s x y theta` per scan
+// (each update's correction spread over the scans before it; docs/slam.md)
 // (and with --checkpoint-out the filter's checkpoint at the log's end).
 #include <cstdio>
 #include <fstream>
@@ -24,15 +25,21 @@ using pex::slam_daemon::SlamNode;
 int main(int argc, char** argv) {
   std::string poses_path;
   std::string checkpoint_out;
+  bool poses_carried_forward = false;
   pex::runtime::DaemonInfo info{"slam", "Rao-Blackwellized particle filter SLAM"};
   info.supports_replay = true;
   info.load_options = [](auto& c) { (void)pex::slam_daemon::load_options(c); };
   info.add_options = [&](CLI::App& app) {
     app.add_option("--poses", poses_path, "offline: write the best trajectory, one `t x y theta` per scan");
+    app.add_flag("--poses-carried-forward", poses_carried_forward,
+                 "offline: a scan between updates gets its update's pose carried forward by odometry (as the robot "
+                 "knew it then), not the next update's correction spread over the scans before it");
     app.add_option("--checkpoint-out", checkpoint_out, "offline: write the filter's checkpoint at the end of the log");
   };
   return pex::runtime::run_daemon(argc, argv, info, [&](pex::runtime::Node& node, pex::runtime::ConfigReader& config) {
-    const auto options = pex::slam_daemon::load_options(config);
+    auto options = pex::slam_daemon::load_options(config);
+    options.record_trajectory = !poses_path.empty();
+    options.spread_corrections = !poses_carried_forward;
     pex::slam_daemon::SlamOutputs outputs;
     outputs.publish_update = [&node](const pex::slam_update_t& msg) {
       pex::slam_update_t stamped = msg;  // publication time: wall clock live, log time in replay

@@ -60,7 +60,7 @@ void SlamNode::process(std::vector<slam::PairedScan> ready) {
     if (paired.odometry_stale) continue;  // no motion prior: an update would put the scan anywhere (counted by sync_)
     const bool updated = filter_.process(paired.scan, paired.odometry);
     if (updated) sync_.observe_update(paired.scan.utime, filter_.best_turn_at_last_update());
-    recorder_.record(paired.scan.utime, filter_, paired.odometry);
+    if (options_.record_trajectory) recorder_.record(paired.scan.utime, filter_, paired.odometry);
     ++scans_processed_;
     if (!outputs_.publish_update || !filter_.initialized()) continue;
     const auto period_us = static_cast<std::int64_t>(options_.republish_period_s * 1e6);
@@ -110,7 +110,13 @@ slam_update_t SlamNode::update_message(std::int64_t scan_utime) const {
   return msg;
 }
 
-std::string SlamNode::trajectory_text() const { return slam::trajectory_text(recorder_.resolve(filter_)); }
+std::string SlamNode::trajectory_text() const {
+  // Progress between updates weighs a turn as the update gate does (0.5 m or 0.25 rad: 2 m per rad).
+  const double linear_per_rad = options_.filter.angular_update_rad > 0.0
+                                   ? options_.filter.linear_update_m / options_.filter.angular_update_rad
+                                   : 2.0;
+  return slam::trajectory_text(recorder_.resolve(filter_, options_.spread_corrections, linear_per_rad));
+}
 
 namespace {
 constexpr std::string_view kCheckpointMagic = "PEXSLAMN";

@@ -46,6 +46,14 @@ struct SlamNodeOptions {
   // checkpoint_period_s (node clock) and on stop, read at start: "" = none.
   std::string checkpoint_file;
   double checkpoint_period_s = 2.0;
+  // Keep every scan's time and odometry (64 B a scan) for trajectory_text():
+  // the offline pose file (`pex-slam --log --poses`). Live it is off: it grows
+  // with the run's length (18 MB for 8 hours of a 10 Hz laser) for nothing.
+  bool record_trajectory = false;
+  // trajectory_text(): the next update's correction spread over the scans
+  // before it (TrajectoryRecorder::resolve), or (false) every scan's pose its
+  // update's carried forward by odometry, as the robot knew it at the scan.
+  bool spread_corrections = true;
 };
 
 struct SlamOutputs {
@@ -65,8 +73,10 @@ class SlamNode {
   // Processes scans still waiting for odometry (end of a log).
   void flush();
 
-  // `timestamp_s x y theta` for every scan processed so far, on the best
-  // particle's trajectory (scans between updates carried forward by odometry).
+  // `timestamp_s x y theta` for every scan processed so far (with
+  // record_trajectory; none without), on the best particle's trajectory, the
+  // next update's correction spread over the scans between updates
+  // (TrajectoryRecorder::resolve).
   std::string trajectory_text() const;
 
   const slam::ParticleFilter& filter() const { return filter_; }

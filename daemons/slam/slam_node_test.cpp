@@ -42,9 +42,10 @@ struct Published {
   std::vector<pose_t> poses;
 };
 
-SlamNode make_node(Published& out, int particles = 5) {
+SlamNode make_node(Published& out, int particles = 5, bool record_trajectory = true) {
   SlamNodeOptions options;
   options.filter.particle_count = particles;
+  options.record_trajectory = record_trajectory;
   SlamOutputs outputs;
   outputs.publish_update = [&out](const slam_update_t& m) { out.updates.push_back(m); };
   outputs.publish_pose = [&out](const pose_t& m) { out.poses.push_back(m); };
@@ -136,6 +137,20 @@ TEST(SlamNode, TrajectoryHasOneLinePerScan) {
   const std::string text = node.trajectory_text();
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 5);
   EXPECT_EQ(text.rfind("0.001000 ", 0), 0u);
+}
+
+// Live (no --poses) the per-scan record is not kept: it would grow with the
+// run's length.
+TEST(SlamNode, WithoutRecordingNoScanIsKept) {
+  Published out;
+  SlamNode node = make_node(out, 5, false);
+  for (int i = 0; i < 5; ++i) {
+    node.on_odometry(odometry(1000 * (i + 1), 0.02 * i));
+    node.on_scan(box_scan(1000 * (i + 1)));
+  }
+  node.flush();
+  EXPECT_EQ(node.scans_processed(), 5);
+  EXPECT_EQ(node.trajectory_text(), "");
 }
 
 // Odometry and a scan every 50 ms while driving along x at 0.4 m/s: a filter

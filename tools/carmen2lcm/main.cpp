@@ -18,6 +18,10 @@
 //
 // Time: message utime fields are the lines' ipc_timestamp (µs); the log events'
 // time stamps are the same but never decrease (lcm-logplayer paces by them).
+//
+// Laps: `--laps N` writes the log driven N times, alternately forwards and back
+// along the same path (evaluation::lap_log; laser lines' odometry only): a long
+// run of real data, to measure SLAM's memory over run length (docs/slam.md).
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
@@ -37,6 +41,7 @@
 #include <pex/odometry_t.hpp>
 
 #include "evaluation/carmen_log.hpp"
+#include "evaluation/laps.hpp"
 #include "evaluation/odometry_direction.hpp"
 #include "runtime/channels.hpp"
 
@@ -134,6 +139,14 @@ int main(int argc, char** argv) {
   app.add_option("--flaser-max-range-m", parse.flaser_max_range_m,
                  "FLASER readings at or beyond this are no return")
       ->capture_default_str();
+  int laps = 1;
+  double lap_gap_s = 1.0;
+  app.add_option("--laps", laps, "drive the log this many times, alternately forwards and backwards (laser lines' odometry)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  app.add_option("--lap-gap-s", lap_gap_s, "time between the end of a pass and the start of the next")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   app.set_version_flag("--version", std::string("pex-carmen2lcm ") + PEX_VERSION);
   try {
     app.parse(argc, argv);
@@ -159,6 +172,10 @@ int main(int argc, char** argv) {
     }
   }
   const bool odometry_from_laser = odometry_source == "laser" || !has_odom;
+  if (laps > 1 && !odometry_from_laser) {
+    std::fprintf(stderr, "pex-carmen2lcm: --laps needs the laser lines' odometry (not --odometry odom)\n");
+    return EX_USAGE;
+  }
   in.clear();
   in.seekg(0);
 
@@ -190,6 +207,7 @@ int main(int argc, char** argv) {
   }
   const ev::OdometryDirectionResult direction =
       raw_odometry ? ev::OdometryDirectionResult{} : ev::correct_odometry_direction(log);
+  if (laps > 1) log = ev::lap_log(log, laps, lap_gap_s);
 
   std::size_t scans = 0, odometry = 0;
   for (const ev::CarmenLog::Entry& entry : log.order) {
@@ -217,7 +235,8 @@ int main(int argc, char** argv) {
   if (direction.reversed_steps > 0)
     std::fprintf(stderr, "pex-carmen2lcm: %zu odometry steps driven backwards but logged forwards reversed (%zu laser poses moved)\n",
                  direction.reversed_steps, direction.changed_laser_poses);
-  std::fprintf(stderr, "pex-carmen2lcm: %zu scans, %zu odometry readings (%s), %zu malformed lines\n",
-               scans, odometry, odometry_from_laser ? "from laser lines" : "from ODOM lines", log.malformed_lines);
+  std::fprintf(stderr, "pex-carmen2lcm: %zu scans, %zu odometry readings (%s), %zu malformed lines%s\n",
+               scans, odometry, odometry_from_laser ? "from laser lines" : "from ODOM lines", log.malformed_lines,
+               laps > 1 ? (", " + std::to_string(laps) + " laps").c_str() : "");
   return scans > 0 ? 0 : 1;
 }

@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
   app.add_option("--start-pose", start_pose, "X_M Y_M THETA_RAD: the start pose, if not the world's START line")
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
-  app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed) to this SVG");
+  app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed, violet: not reachable, gold: beyond the walls) to this SVG");
   app.set_version_flag("--version", std::string("pex-explore-report ") + PEX_VERSION);
   try {
     app.parse(argc, argv);
@@ -87,9 +87,11 @@ int main(int argc, char** argv) {
   const auto log = pex::explore_report::read_log(log_path, &error);
   if (!log) return fail(error.rfind("cannot open", 0) == 0 ? 66 : 65, error);
 
-  pex::mapping::MultiPolygon reachable;
+  pex::mapping::MultiPolygon reachable, world_free;
   try {
     reachable = pex::evaluation::reachable_free_space(world, options.robot_radius_m, start);
+    // The free region holding the start: centres 1 mm clear of every wall.
+    world_free = pex::evaluation::configuration_free_component(world, 0.001, start);
   } catch (const std::exception& e) {
     return fail(70, std::string("reachable free space: ") + e.what());
   }
@@ -99,7 +101,7 @@ int main(int argc, char** argv) {
 
   const std::string world_name = std::filesystem::path(world_path).stem().string();
   pex::mapping::TypedMultiPolygon map_world;
-  const auto report = pex::explore_report::make_report(world_name, *log, world, reachable, options, &map_world);
+  const auto report = pex::explore_report::make_report(world_name, *log, world, reachable, options, &map_world, &world_free);
 
   std::fprintf(stderr,
                "pex-explore-report: %lld events (%lld undecodable); MAP %s, MAP_FREE %s (scored: %s), EXPLORE_STATE %s, SIM_CLOCK %s, "
@@ -126,7 +128,7 @@ int main(int argc, char** argv) {
   if (!svg_out.empty()) {
     std::ofstream out(svg_out);
     out << pex::explore_report::to_svg(world, reachable, map_world, start, options.robot_radius_m,
-                                                options.wall_tolerance_m);
+                                       options.wall_tolerance_m, &world_free);
     if (!out) return fail(73, "cannot write " + svg_out);
   }
   return 0;

@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <iterator>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include <lcm/lcm-cpp.hpp>
+#include <pex/pose_t.hpp>
 
 #include "map_message.hpp"
 #include "runtime/channels.hpp"
@@ -39,6 +43,37 @@ std::optional<double> finite(double v) {
   return v;
 }
 
+// SLAM_POSE against the truth nearest in time (Report's slam_error_*).
+void audit_poses(const LogContents& log, const kinematics::Pose2& map_in_world, Report& r) {
+  if (log.slam_poses.empty() || log.truth.empty()) return;
+  std::vector<StampedPose> truth = log.truth;
+  std::stable_sort(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
+  const double c = std::cos(map_in_world.theta_rad), s = std::sin(map_in_world.theta_rad);
+  double sum = 0.0, worst = 0.0, heading_sum = 0.0;
+  std::int64_t n = 0;
+  for (const auto& slam : log.slam_poses) {
+    auto it = std::lower_bound(truth.begin(), truth.end(), slam.utime,
+                               [](const StampedPose& p, std::int64_t t) { return p.utime < t; });
+    const StampedPose* nearest = nullptr;
+    if (it != truth.end()) nearest = &*it;
+    if (it != truth.begin() && (!nearest || slam.utime - std::prev(it)->utime < nearest->utime - slam.utime))
+      nearest = &*std::prev(it);
+    if (!nearest || std::llabs(nearest->utime - slam.utime) > 20'000) continue;
+    const auto& p = slam.pose;
+    const double wx = map_in_world.x_m + c * p.x_m - s * p.y_m, wy = map_in_world.y_m + s * p.x_m + c * p.y_m;
+    const double e = std::hypot(wx - nearest->pose.x_m, wy - nearest->pose.y_m);
+    if (!std::isfinite(e)) continue;
+    sum += e;
+    worst = std::max(worst, e);
+    heading_sum += std::abs(kinematics::normalize_angle(map_in_world.theta_rad + p.theta_rad - nearest->pose.theta_rad));
+    ++n;
+  }
+  if (n == 0) return;
+  r.slam_error_mean_m = sum / static_cast<double>(n);
+  r.slam_error_max_m = worst;
+  r.slam_heading_error_mean_deg = heading_sum / static_cast<double>(n) * 180.0 / std::numbers::pi;
+}
+
 }  // namespace
 
 std::optional<LogContents> read_log(const std::string& path, std::string* error) {
@@ -61,6 +96,11 @@ std::optional<LogContents> read_log(const std::string& path, std::string* error)
     } else if (event->channel == ch::kSimClock) {
       pex::sim_clock_t msg;
       if (decode(*event, msg)) out.sim_clock = msg; else ++out.rejected;
+    } else if (event->channel == ch::kSlamPose || event->channel == ch::kSimTruth) {
+      pex::pose_t msg;
+      if (!decode(*event, msg)) ++out.rejected;
+      else (event->channel == ch::kSlamPose ? out.slam_poses : out.truth)
+          .push_back({msg.utime, kinematics::Pose2{msg.x, msg.y, msg.theta}});
     } else if (event->channel == ch::kDaemonStatus) {
       pex::daemon_status_t msg;
       if (!decode(*event, msg)) ++out.rejected;
@@ -94,7 +134,7 @@ std::string phase_name(std::int8_t phase) {
 
 Report make_report(const std::string& world_name, const LogContents& log, const sim::World& world,
                    const MultiPolygon& reachable, const ReportOptions& options,
-                   mapping::TypedMultiPolygon* map_world) {
+                   mapping::TypedMultiPolygon* map_world, const MultiPolygon* world_free) {
   Report r;
   r.world = world_name;
   r.reachable_m2 = bg::area(reachable);
@@ -115,7 +155,10 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.plan_ms_p50 = us_to_ms(counter(*st, "plan_us_p50"));
     r.plan_ms_p99 = us_to_ms(counter(*st, "plan_us_p99"));
     r.control_ms_p99 = us_to_ms(counter(*st, "control_us_p99"));
+    r.plan_cpu_ms_p50 = us_to_ms(counter(*st, "plan_cpu_us_p50"));
+    r.plan_cpu_ms_p99 = us_to_ms(counter(*st, "plan_cpu_us_p99"));
   }
+  audit_poses(log, options.map_in_world, r);
   const bool free_space = options.scored_map == ScoredMap::kFreeSpace ||
                           (options.scored_map == ScoredMap::kAuto && log.free_space.has_value());
   const auto& scored = free_space ? log.free_space : log.map;
@@ -136,7 +179,18 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
       r.coverage = finite(score.coverage);
       r.iou = finite(score.iou);
       r.obstacle_on_wall = finite(score.obstacle_on_wall);
-      if (map_world) *map_world = evaluation::to_world(decoded.polygons, options.map_in_world);
+      if (map_world || world_free) {
+        auto typed_world = evaluation::to_world(decoded.polygons, options.map_in_world);
+        if (world_free) {
+          const MultiPolygon map_free = mapping::geometry_of(typed_world);
+          if (const auto outside = evaluation::checked_overlay(map_free, *world_free, mapping::OverlayOp::kDifference)) {
+            r.map_outside_free_m2 = bg::area(*outside);
+            r.map_unreachable_free_m2 =
+                std::max(0.0, score.explored_m2 - *r.map_outside_free_m2 - score.mapped_reachable_m2);
+          }
+        }
+        if (map_world) *map_world = std::move(typed_world);
+      }
     }
   }
   return r;
@@ -208,6 +262,13 @@ std::string to_json(const Report& r) {
   j.number("plan_ms_p50", r.plan_ms_p50, 3);
   j.number("plan_ms_p99", r.plan_ms_p99, 3);
   j.number("control_ms_p99", r.control_ms_p99, 3);
+  j.number("plan_cpu_ms_p50", r.plan_cpu_ms_p50, 3);
+  j.number("plan_cpu_ms_p99", r.plan_cpu_ms_p99, 3);
+  j.number("map_outside_free_m2", r.map_outside_free_m2, 3);
+  j.number("map_unreachable_free_m2", r.map_unreachable_free_m2, 3);
+  j.number("slam_error_mean_m", r.slam_error_mean_m, 3);
+  j.number("slam_error_max_m", r.slam_error_max_m, 3);
+  j.number("slam_heading_error_mean_deg", r.slam_heading_error_mean_deg, 2);
   j.string("scored_map", r.scored_map);
   return j.str();
 }
@@ -236,7 +297,8 @@ std::string path_of(const MultiPolygon& polygons, const ToPx& px) {
 }  // namespace
 
 std::string to_svg(const sim::World& world, const MultiPolygon& reachable, const mapping::TypedMultiPolygon& map_world,
-                   const kinematics::Pose2& start, double robot_radius_m, double wall_tolerance_m) {
+                   const kinematics::Pose2& start, double robot_radius_m, double wall_tolerance_m,
+                   const MultiPolygon* world_free) {
   const MultiPolygon map_free = mapping::geometry_of(map_world);
   // Frame: the walls' box and the map, a 1 m margin.
   double min_x = world.min_x, min_y = world.min_y, max_x = world.max_x, max_y = world.max_y;
@@ -264,6 +326,10 @@ std::string to_svg(const sim::World& world, const MultiPolygon& reachable, const
   s << "<path fill=\"#4a78c8\" fill-opacity=\"0.55\" fill-rule=\"evenodd\" d=\"" << path_of(map_free, px) << "\"/>\n";
   if (missed) s << "<path fill=\"#e03030\" fill-rule=\"evenodd\" d=\"" << path_of(*missed, px) << "\"/>\n";
   if (outside) s << "<path fill=\"#a040c0\" fill-rule=\"evenodd\" d=\"" << path_of(*outside, px) << "\"/>\n";
+  if (world_free) {
+    if (const auto beyond = evaluation::checked_overlay(map_free, *world_free, mapping::OverlayOp::kDifference))
+      s << "<path fill=\"#e0a000\" fill-rule=\"evenodd\" d=\"" << path_of(*beyond, px) << "\"/>\n";
+  }
   const double edge_px = std::max(10.0, 0.05 * scale * 10);
   // Map edges: obstacle edges on a wall (within wall_tolerance_m for at
   // least 99 % of their length) dark blue, off the walls magenta; frontiers orange.

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <pex/daemon_status_t.hpp>
 #include <pex/explore_state_t.hpp>
@@ -15,8 +16,16 @@
 
 namespace pex::explore_report {
 
-// The last decodable message of each channel the report needs.
+struct StampedPose {
+  std::int64_t utime = 0;
+  kinematics::Pose2 pose;
+};
+
+// The last decodable message of each channel the report needs, and the
+// poses SLAM published and the simulator's truth, for the pose audit.
 struct LogContents {
+  std::vector<StampedPose> slam_poses;  // SLAM_POSE (MAP frame), in log order
+  std::vector<StampedPose> truth;       // SIM_TRUTH (world frame), in log order
   std::optional<pex::polygon_map_t> map;              // MAP (the planning map)
   std::optional<pex::polygon_map_t> free_space;       // MAP_FREE (the explored free space)
   std::optional<pex::explore_state_t> explore_state;  // EXPLORE_STATE
@@ -62,6 +71,20 @@ struct Report {
   std::optional<double> sim_time_s, path_m, explored_m2, reachable_m2, coverage, iou, obstacle_on_wall;
   std::optional<std::int64_t> collisions, goals, plans;
   std::optional<double> plan_ms_p50, plan_ms_p99, control_ms_p99;
+  std::optional<double> plan_cpu_ms_p50, plan_cpu_ms_p99;  // the planner thread's CPU time
+  // Where the map's free space that is not reachable lies (with world_free):
+  // outside the world's free region holding the start (beyond a wall, inside
+  // a solid: the map is wrong there), or inside it where the robot's disk
+  // cannot sweep (room corners, notches of ragged walls, space seen through a
+  // gap narrower than the robot: the map is right there, the IoU counts it
+  // against the map all the same).
+  std::optional<double> map_outside_free_m2, map_unreachable_free_m2;
+  // SLAM_POSE against SIM_TRUTH at the same time (within 20 ms), the MAP
+  // frame placed in the world as the map is: how far the published pose was
+  // from the truth, on average and at worst, and its heading error. The map
+  // inherits these errors: scans inserted at wrong poses draw walls off the
+  // world's (map_outside_free_m2).
+  std::optional<double> slam_error_mean_m, slam_error_max_m, slam_heading_error_mean_deg;
   // Not in the line (stderr): how the map decoded.
   int map_polygons_dropped = 0;
   std::string map_error;  // the last MAP did not decode at all
@@ -70,9 +93,13 @@ struct Report {
 // Fills the report from the log and the world's reachable free space
 // (evaluation::reachable_free_space, computed by the caller). `map_world`,
 // if given, receives the decoded map moved into the world frame.
+// `world_free`, if given, is the world's free region holding the start
+// (evaluation::configuration_free_component with a radius of a millimetre or
+// two): it splits the map's unreachable free space in two (Report above).
 Report make_report(const std::string& world_name, const LogContents& log, const sim::World& world,
                    const mapping::MultiPolygon& reachable, const ReportOptions& options,
-                   mapping::TypedMultiPolygon* map_world = nullptr);
+                   mapping::TypedMultiPolygon* map_world = nullptr,
+                   const mapping::MultiPolygon* world_free = nullptr);
 
 // The JSON line (no trailing newline), keys in the benchmark's order.
 std::string to_json(const Report& report);
@@ -82,8 +109,10 @@ std::string to_json(const Report& report);
 // reachable, map obstacle edges dark blue (magenta where more than 1 % of
 // an edge is farther than wall_tolerance_m from every wall), frontier edges
 // orange, world walls black, the robot's disk at the start green; y up.
+// With world_free (make_report), the map's free space outside the world's
+// free region (beyond a wall) is drawn gold over the violet.
 std::string to_svg(const sim::World& world, const mapping::MultiPolygon& reachable,
                    const mapping::TypedMultiPolygon& map_world, const kinematics::Pose2& start,
-                   double robot_radius_m, double wall_tolerance_m);
+                   double robot_radius_m, double wall_tolerance_m, const mapping::MultiPolygon* world_free = nullptr);
 
 }  // namespace pex::explore_report

@@ -102,7 +102,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   log.add_raw(ch::kMap, {1, 2, 3});  // garbage: counted, skipped
   log.add(ch::kExploreState, state);
   log.add(ch::kSimClock, clock);
-  log.add(ch::kDaemonStatus, status("explorer", {{"plan_us_p50", 1500}, {"plan_us_p99", 12000}}));
+  log.add(ch::kDaemonStatus,
+          status("explorer", {{"plan_us_p50", 1500}, {"plan_us_p99", 12000}, {"plan_cpu_us_p99", 9000}}));
   log.add(ch::kDaemonStatus, status("slam", {{"plan_us_p50", 99}}));  // not the explorer's
   log.write();
 
@@ -145,7 +146,9 @@ TEST(ExploreReport, FullLogGivesEveryField) {
       << json;
   EXPECT_NE(json.find("\"coverage\":0.50000,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"collisions\":1,\"goals\":4,\"plans\":7,\"plan_ms_p50\":1.500,\"plan_ms_p99\":12.000,"
-                      "\"control_ms_p99\":null,\"scored_map\":\"MAP\"}"),
+                      "\"control_ms_p99\":null,\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":9.000,"
+                      "\"map_outside_free_m2\":null,\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,"
+                      "\"slam_error_max_m\":null,\"slam_heading_error_mean_deg\":null,\"scored_map\":\"MAP\"}"),
             std::string::npos)
       << json;
 
@@ -222,7 +225,60 @@ TEST(ExploreReport, MissingChannelsGiveNulls) {
                             reachable_m2 +
                             ",\"coverage\":null,\"iou\":null,\"obstacle_on_wall\":null,\"collisions\":null,"
                             "\"goals\":0,\"plans\":0,\"plan_ms_p50\":null,\"plan_ms_p99\":null,\"control_ms_p99\":null,"
-                            "\"scored_map\":null}");
+                            "\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":null,\"map_outside_free_m2\":null,"
+                            "\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,\"slam_error_max_m\":null,"
+                            "\"slam_heading_error_mean_deg\":null,\"scored_map\":null}");
+}
+
+// The map's free space that is not reachable, split: beyond the room's wall
+// (wrong) and in the room's corners, where a disk cannot sweep (right).
+TEST(ExploreReport, UnreachableMapSpaceIsSplitIntoBeyondTheWallsAndCornersTheDiskMisses) {
+  const auto world = room();
+  const auto reachable = evaluation::reachable_free_space(world, 0.25, world.start);
+  const auto world_free = evaluation::configuration_free_component(world, 0.001, world.start);
+  // The room's left half, reaching 0.5 m past its west wall (start frame).
+  mapping::Polygon left;
+  bg::read_wkt("POLYGON((-3.5 -2, 0 -2, 0 2, -3.5 2, -3.5 -2))", left);
+  bg::correct(left);
+  TempLog log;
+  log.add(ch::kMap, explorer::encode_map(mapping::with_uniform_type({left}, mapping::EdgeType::kObstacle), 5));
+  log.write();
+  std::string error;
+  const auto contents = read_log(log.path(), &error);
+  ASSERT_TRUE(contents) << error;
+  ReportOptions options;
+  options.map_in_world = world.start;
+  const auto r = make_report("room", *contents, world, reachable, options, nullptr, &world_free);
+  ASSERT_TRUE(r.map_outside_free_m2 && r.map_unreachable_free_m2);
+  EXPECT_NEAR(*r.map_outside_free_m2, 0.5 * 4.0, 0.01);  // the strip beyond the wall (1 mm of it inside)
+  // Two corners the 0.25 m disk cannot reach: r^2 (1 - pi / 4) each.
+  EXPECT_NEAR(*r.map_unreachable_free_m2, 2.0 * 0.0625 * (1.0 - std::numbers::pi / 4.0), 0.01);
+  EXPECT_NE(to_json(r).find("\"map_outside_free_m2\":2.0"), std::string::npos) << to_json(r);
+  // Without the world's free region the split is not made.
+  EXPECT_FALSE(make_report("room", *contents, world, reachable, options).map_outside_free_m2);
+}
+
+// SLAM's published pose against the simulator's truth at the same time,
+// the MAP frame placed at the start pose.
+TEST(ExploreReport, PoseAuditComparesSlamPosesWithTheTruthAtTheSameTime) {
+  const auto world = room();  // START 3 2 0
+  LogContents log;
+  log.events = 1;
+  log.slam_poses = {{1'000'000, {0.0, 0.0, 0.0}}, {2'000'000, {1.0, 0.0, 0.0}}, {5'000'000, {2.0, 0.0, 0.0}}};
+  log.truth = {{2'000'000, {4.0, 2.0, 0.1}}, {1'005'000, {3.0, 2.1, 0.0}},  // not in time order
+               {5'100'000, {9.0, 9.0, 0.0}}};                            // 100 ms off: no pair
+  ReportOptions options;
+  options.map_in_world = world.start;
+  const auto r = make_report("room", log, world, evaluation::reachable_free_space(world, 0.25, world.start), options);
+  ASSERT_TRUE(r.slam_error_mean_m && r.slam_error_max_m && r.slam_heading_error_mean_deg);
+  EXPECT_NEAR(*r.slam_error_mean_m, 0.05, 1e-9);
+  EXPECT_NEAR(*r.slam_error_max_m, 0.1, 1e-9);
+  EXPECT_NEAR(*r.slam_heading_error_mean_deg, 0.05 * 180.0 / std::numbers::pi, 1e-9);
+  // The same poses with the map frame at the world's origin are 2-3 m off.
+  options.map_in_world = {};
+  EXPECT_GT(*make_report("room", log, world, evaluation::reachable_free_space(world, 0.25, world.start), options)
+                 .slam_error_mean_m,
+            2.0);
 }
 
 TEST(ExploreReport, UnreadableLogsAreErrors) {

@@ -1,0 +1,124 @@
+// pex-bench-strategies: the goal strategies side by side on every world,
+// without the daemons and without SLAM: the robot follows each plan's path
+// exactly (bench/planning/mission_maps.hpp, replanning on the way and leaving
+// a goal whose frontier it has seen, as the explorer's mission does), with the
+// explorer's planner options from its config. One JSON line per world and
+// strategy, then the path summed per strategy over the worlds both finished.
+// Deterministic (fixed seeds, true poses): a strategy change can be judged on
+// every world in minutes, before the exploration benchmark (scripts/bench.sh
+// explore) runs the whole set with SLAM for the figures of record.
+//
+//   pex-bench-strategies [--config config/explorer.toml] [--strategies greedy,tour] [WORLD.wkt...]
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "explorer_options.hpp"
+#include "mapper.hpp"
+#include "mission_maps.hpp"
+#include "runtime/config.hpp"
+
+namespace {
+
+using pex::mapping::Point;
+using pex::mapping::TypedMultiPolygon;
+using pex::planning::GoalStrategy;
+using pex::planning::Plan;
+using pex::planning::PlannerOptions;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"The goal strategies side by side on every world (true poses, no daemons): one JSON line each"};
+  std::string config_path = std::string(PEX_SOURCE_DIR) + "/config/explorer.toml";
+  std::string mapper_config_path = std::string(PEX_SOURCE_DIR) + "/config/polygon_mapper.toml";
+  std::vector<std::string> strategies{"greedy", "tour"};
+  std::vector<std::string> worlds;
+  double max_travel_m = 4000.0;
+  app.add_option("--config", config_path, "explorer config (planner options)")->check(CLI::ExistingFile);
+  app.add_option("--mapper-config", mapper_config_path, "polygon_mapper config (scan polygons, map)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--strategies", strategies, "goal strategies to compare")->delimiter(',');
+  app.add_option("--max-travel-m", max_travel_m, "give a mission up after this much driving")->check(CLI::PositiveNumber);
+  app.add_option("worlds", worlds, "world files (default: every worlds/*.wkt)")->check(CLI::ExistingFile);
+  app.set_version_flag("--version", std::string("pex-bench-strategies ") + PEX_VERSION);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 64;
+  }
+  if (worlds.empty()) {
+    for (const auto& entry : std::filesystem::directory_iterator(std::string(PEX_SOURCE_DIR) + "/worlds"))
+      if (entry.path().extension() == ".wkt") worlds.push_back(entry.path().string());
+    std::sort(worlds.begin(), worlds.end());
+  }
+  pex::explorer::ExplorerOptions explorer;
+  pex::polygon_mapper::MapperOptions mapper;
+  try {
+    auto config = pex::runtime::ConfigReader::from_file(config_path);
+    explorer = pex::explorer::load_options(config);
+    auto mapper_config = pex::runtime::ConfigReader::from_file(mapper_config_path);
+    mapper = pex::polygon_mapper::load_options(mapper_config);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pex-bench-strategies: %s\n", e.what());
+    return 78;
+  }
+  std::map<std::string, std::map<std::string, double>> path_of;  // world -> strategy -> m
+  for (const auto& world : worlds) {
+    const std::string name = std::filesystem::path(world).stem().string();
+    for (const auto& strategy_name : strategies) {
+      const auto strategy = pex::planning::parse_goal_strategy(strategy_name);
+      if (!strategy) {
+        std::fprintf(stderr, "pex-bench-strategies: unknown strategy '%s'\n", strategy_name.c_str());
+        return 64;
+      }
+      PlannerOptions options = explorer.mission.planner;
+      options.strategy = *strategy;
+      PlannerOptions tight = options;
+      tight.cspace.clearance_margin_m = 0.0;
+      pex::bench::MissionMapsOptions mission;
+      mission.max_goals = 100000;
+      mission.max_travel_m = max_travel_m;
+      mission.replan_step_m = 0.4;  // 0.4 m/s, a plan a second
+      mission.replan_on_the_way = true;
+      mission.goal_match_radius_m = explorer.mission.goal_match_radius_m;
+      mission.keep_snapshots = false;
+      mission.scan = mapper.scan;
+      mission.map = mapper.map;
+      const bool fallback = explorer.mission.tight_fallback;
+      const auto maps = pex::bench::emulate_mission(
+          world, mission, [&](const TypedMultiPolygon& map, const pex::mapping::Pose2& pose, const std::vector<Point>& blacklist) {
+            Plan plan = pex::planning::plan_exploration(map, pose, blacklist, options);
+            return plan.best_candidate() || !fallback ? plan : pex::planning::plan_exploration(map, pose, blacklist, tight);
+          });
+      if (!maps.error.empty()) {
+        std::fprintf(stderr, "pex-bench-strategies: %s: %s\n", name.c_str(), maps.error.c_str());
+        return 70;
+      }
+      if (maps.done) path_of[name][strategy_name] = maps.travelled_m;
+      std::printf("{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"plans\":%d}\n",
+                  name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
+                  maps.goals_seen, maps.plans);
+      std::fflush(stdout);
+    }
+  }
+  // The path summed over the worlds every strategy finished, against the first strategy's.
+  std::map<std::string, double> sum;
+  int finished = 0;
+  for (const auto& [world, by_strategy] : path_of) {
+    if (by_strategy.size() != strategies.size()) continue;
+    ++finished;
+    for (const auto& [s, m] : by_strategy) sum[s] += m;
+  }
+  std::printf("# summed over %d worlds every strategy finished:", finished);
+  for (const auto& s : strategies)
+    std::printf(" %s %.1f m (%.3f of %s);", s.c_str(), sum[s], sum[strategies.front()] > 0 ? sum[s] / sum[strategies.front()] : 0.0,
+                strategies.front().c_str());
+  std::printf("\n");
+  return 0;
+}
