@@ -6,6 +6,8 @@
 #include <limits>
 #include <utility>
 
+#include "planning/live_view.hpp"
+
 namespace pex::planning {
 
 namespace {
@@ -57,8 +59,11 @@ PlanResult compute_plan(const PlanRequest& request) {
     result.plan.error = "no map";
     return result;
   }
-  result.plan = request.home ? plan_path_to(*request.map, request.pose, *request.home, request.options)
-                             : plan_exploration(*request.map, request.pose, request.blacklist, request.options);
+  const bool live = request.live_view && !request.live_view->empty();
+  const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
+  const TypedMultiPolygon& map = live ? opened : *request.map;
+  result.plan = request.home ? plan_path_to(map, request.pose, *request.home, request.options)
+                             : plan_exploration(map, request.pose, request.blacklist, request.options);
   return result;
 }
 

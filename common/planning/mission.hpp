@@ -144,6 +144,10 @@ struct PlanRequest {
   PlannerOptions options;      // clearance margin already dropped when tight
   bool tight = false;          // planned without the clearance margin
   std::optional<Point> home;   // set: a path to this point, not frontier goals
+  // The newest scan's free space near the robot (live_view.hpp), united into
+  // `map` before planning; null or empty: the map alone. The mission leaves it
+  // empty; the explorer adds it from the newest LIDAR_SCAN.
+  std::shared_ptr<const TypedMultiPolygon> live_view;
 };
 
 struct PlanResult {

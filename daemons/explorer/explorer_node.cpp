@@ -64,6 +64,7 @@ std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now
     points.emplace_back(msg.sensor_x + c * x - s * y, msg.sensor_y + s * x + c * y);
   }
   scan_utime_ = now_utime;
+  last_scan_ = msg;
   mission_.on_scan(now_utime);
   return {};
 }
@@ -90,10 +91,14 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   const auto started = std::chrono::steady_clock::now();
   if (worker_) {
     last_ = mission_.step(now_utime);
-    if (last_.plan_request) worker_->submit(std::move(*last_.plan_request));
+    if (last_.plan_request) {
+      last_.plan_request->live_view = live_view_at(last_.plan_request->pose);
+      worker_->submit(std::move(*last_.plan_request));
+    }
   } else {
     // Inline: the plan runs here (tests); its time is measured apart.
-    last_ = planning::step_with_inline_planning(mission_, now_utime, [this](const planning::PlanRequest& request) {
+    last_ = planning::step_with_inline_planning(mission_, now_utime, [this](planning::PlanRequest request) {
+      request.live_view = live_view_at(request.pose);
       const auto plan_started = std::chrono::steady_clock::now();
       const double cpu_started = thread_cpu_ms();
       auto result = planning::compute_plan(request);
@@ -119,6 +124,23 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   }
   last_v_mps_ = cmd.v;
   return cmd;
+}
+
+std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
+                                                               const planning::Pose2& robot,
+                                                               const planning::LiveViewOptions& options) {
+  if (!(options.range_m > 0.0)) return nullptr;
+  // The sensor's pose in the map frame: the robot's, composed with the mounting.
+  const double c = std::cos(robot.theta), s = std::sin(robot.theta);
+  const mapping::Pose2 sensor{robot.x + c * scan.sensor_x - s * scan.sensor_y,
+                              robot.y + s * scan.sensor_x + c * scan.sensor_y, robot.theta + scan.sensor_theta};
+  auto view = planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor, options);
+  if (view.empty()) return nullptr;
+  return std::make_shared<const mapping::TypedMultiPolygon>(std::move(view));
+}
+
+std::shared_ptr<const mapping::TypedMultiPolygon> ExplorerNode::live_view_at(const planning::Pose2& robot) const {
+  return last_scan_ ? live_view_of(*last_scan_, robot, options_.live_view) : nullptr;
 }
 
 pex::velocity_cmd_t ExplorerNode::stop_command(std::int64_t now_utime) {

@@ -31,6 +31,12 @@ struct ExplorerCounters {
   std::int64_t commands_applied = 0;
 };
 
+// The live view (planning/live_view.hpp) of a LIDAR_SCAN taken at `robot`
+// (the laser's mounting applied); null when off or when it gives no polygon.
+std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
+                                                               const planning::Pose2& robot,
+                                                               const planning::LiveViewOptions& options);
+
 class ExplorerNode {
  public:
   enum class Planning { kWorkerThread, kInline };
@@ -72,6 +78,10 @@ class ExplorerNode {
   const LatencyStats& control_ms() const { return control_ms_; }
 
  private:
+  // The newest scan's live view (planning/live_view.hpp) from `robot`; null
+  // when off or without a scan.
+  std::shared_ptr<const mapping::TypedMultiPolygon> live_view_at(const planning::Pose2& robot) const;
+
   ExplorerOptions options_;
   planning::Mission mission_;
   std::unique_ptr<PlanWorker> worker_;
@@ -84,6 +94,7 @@ class ExplorerNode {
   // yet: no bound (the mission itself stands without scans when
   // scan_timeout_ms watches them).
   std::vector<mapping::Point> scan_points_;
+  std::optional<pex::laser_scan_t> last_scan_;  // for the live view of the next plan
   std::optional<std::int64_t> scan_utime_;
   double last_v_mps_ = 0.0;  // the forward speed last commanded
 };

@@ -107,6 +107,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.guard.margin_m = config.get<double>("guard_margin_m", o.guard.margin_m, in_range(0.0, 1.0));
   o.guard.max_decel_mps2 = config.get<double>("guard_decel_mps2", o.guard.max_decel_mps2, in_range(0.01, 20.0));
   o.guard.latency_s = config.get<double>("guard_latency_ms", o.guard.latency_s * 1e3, in_range(0.0, 2000.0)) * 1e-3;
+  o.live_view.range_m = config.get<double>("live_view_range_m", o.live_view.range_m, in_range(0.0, 30.0));
   return o;
 }
 

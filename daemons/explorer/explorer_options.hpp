@@ -5,6 +5,7 @@
 
 #include "map_message.hpp"
 #include "planning/mission.hpp"
+#include "planning/live_view.hpp"
 #include "planning/scan_guard.hpp"
 
 namespace pex::runtime {
@@ -26,6 +27,8 @@ struct ExplorerOptions {
   // The live scan bounds the forward speed (planning/scan_guard.hpp); off: the map alone.
   bool scan_guard = true;
   planning::ScanGuardOptions guard;
+  // The newest scan opens the planning map near the robot (planning/live_view.hpp).
+  planning::LiveViewOptions live_view;
 };
 
 // Reads and validates every key; throws runtime::ConfigError on a bad value.

@@ -2,10 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
 #include "explorer_node.hpp"
 #include "explorer_options.hpp"
 #include "map_message.hpp"
+#include "mapping/test_support.hpp"
 #include "runtime/config.hpp"
 #include "runtime/daemon.hpp"
 
@@ -254,6 +256,53 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
   EXPECT_EQ(touch_v, 0.0);
   options.scan_guard = false;
   EXPECT_GT(drive(options, 0.26).first, 0.0);  // the map alone would drive on
+}
+
+// A band left across a door (a scan at a bad pose, a person in the doorway)
+// cuts the planning map in two; the laser sees through the door now. With the
+// live view the explorer plans through it, without it the far room's frontier
+// has no path.
+TEST(ExplorerNode, TheLiveViewOpensADoorTheMapHasClosed) {
+  // Room A [0,4] x [0,4], room B [4.2,8.2] x [0,4] with a frontier on its far
+  // side; the door at y = 1.5 .. 2.5 between them is not in the map.
+  const auto map = map_of({ring(0, false, {{0, 0}, {4, 0}, {4, 4}, {0, 4}}),
+                           ring(1, false, {{4.2, 0}, {8.2, 0}, {8.2, 4}, {4.2, 4}}, {0, 1, 0, 0})});
+  std::vector<mapping::testing::Wall> walls;
+  mapping::testing::add_box(walls, 0, 0, 8.2, 4);
+  for (const double x : {4.0, 4.2}) {
+    walls.push_back({Point(x, 0.0), Point(x, 1.5)});
+    walls.push_back({Point(x, 2.5), Point(x, 4.0)});
+  }
+  const mapping::testing::ScanSpec spec;
+  pex::laser_scan_t scan{};
+  scan.angle_min = static_cast<float>(spec.angle_min);
+  scan.angle_increment = static_cast<float>(spec.angle_increment);
+  scan.range_min = 0.05f;
+  scan.range_max = static_cast<float>(spec.range_max_m);
+  scan.ranges = mapping::testing::cast_scan(walls, mapping::Pose2{2.5, 2.0, 0.0}, spec);
+  scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
+  pex::pose_t pose{};
+  pose.x = 2.5;
+  pose.y = 2.0;
+  auto goal_after_a_while = [&](double live_range_m) {
+    ExplorerOptions options;
+    options.live_view.range_m = live_range_m;
+    options.mission.planner.approach_range_m = 0.0;  // the door itself, not a look from afar
+    ExplorerNode node(options);
+    std::optional<Point> goal;
+    for (std::int64_t t = 0; t <= 3'000'000 && !goal; t += 100'000) {
+      EXPECT_EQ(node.on_map(map, t), "");
+      EXPECT_EQ(node.on_pose(pose, t), "");
+      EXPECT_EQ(node.on_scan(scan, t), "");
+      node.step(t);
+      goal = node.last_output().goal;
+    }
+    return goal;
+  };
+  const auto with = goal_after_a_while(3.0);
+  ASSERT_TRUE(with.has_value());
+  EXPECT_GT(with->x(), 4.2);  // in room B, through the door
+  EXPECT_FALSE(goal_after_a_while(0.0).has_value());
 }
 
 }  // namespace

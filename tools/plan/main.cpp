@@ -19,12 +19,15 @@
 #endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/polygon_map_t.hpp>
+#include <pex/laser_scan_t.hpp>
 #include <pex/pose_t.hpp>
 
+#include "explorer_node.hpp"
 #include "explorer_options.hpp"
 #include "map_message.hpp"
 #include "plan_report.hpp"
 #include "planning/cspace.hpp"
+#include "planning/live_view.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/config.hpp"
 
@@ -66,8 +69,14 @@ int main(int argc, char** argv) {
   std::optional<pex::polygon_map_t> map;
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
+  std::optional<pex::laser_scan_t> scan, scan_pending;  // the same for LIDAR_SCAN (the live view)
   for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-    if (e->channel == pose_channel) {
+    if (e->channel == pex::runtime::channels::kLidarScan) {
+      pex::laser_scan_t s;
+      if (s.decode(e->data, 0, e->datalen) < 0) continue;
+      if (at_utime >= 0 && s.utime > at_utime) continue;
+      scan_pending = std::move(s);
+    } else if (e->channel == pose_channel) {
       pex::pose_t p;
       if (p.decode(e->data, 0, e->datalen) < 0) continue;
       if (at_utime >= 0 && p.utime > at_utime) continue;
@@ -78,6 +87,7 @@ int main(int argc, char** argv) {
       if (at_utime >= 0 && m.utime > at_utime) continue;
       map = std::move(m);
       pose = pose_pending;
+      scan = scan_pending;
     }
   }
   if (!map || !pose) {
@@ -91,13 +101,18 @@ int main(int argc, char** argv) {
     return EX_DATAERR;
   }
   const pex::mapping::Pose2 robot{pose->x, pose->y, pose->theta};
-  const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner);
+  // As the explorer plans: the newest scan's live view united in (live_view_range_m).
+  const auto live = scan ? pex::explorer::live_view_of(*scan, robot, options.live_view) : nullptr;
+  const auto planned_on = live ? pex::planning::with_live_view(decoded.polygons, *live) : decoded.polygons;
+  const auto plan = pex::planning::plan_exploration(planned_on, robot, {}, planner);
   pex::planning::ConfigurationSpace cspace;
-  cspace.build(decoded.polygons, planner.cspace);
+  cspace.build(planned_on, planner.cspace);
+  std::printf("live view: %s\n", live ? "united into the map (newest LIDAR_SCAN)"
+                                      : (scan ? "off (live_view_range_m = 0)" : "none (no LIDAR_SCAN)"));
   std::printf("%s", pex::plan_tool::describe(*map, *pose, cspace, plan).c_str());
   if (!svg_path.empty()) {
     std::ofstream svg(svg_path);
-    svg << pex::plan_tool::to_svg(decoded.polygons, robot, cspace, plan);
+    svg << pex::plan_tool::to_svg(planned_on, robot, cspace, plan);
     svg.close();
     if (!svg) {
       std::fprintf(stderr, "pex-plan: cannot write %s\n", svg_path.c_str());

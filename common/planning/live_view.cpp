@@ -1,0 +1,37 @@
+#include "planning/live_view.hpp"
+
+#include "mapping/obstacle_band.hpp"
+#include "mapping/typed_ops.hpp"
+
+namespace pex::planning {
+
+mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle_min, double angle_increment,
+                                     double range_min_m, const mapping::Pose2& sensor_pose,
+                                     const LiveViewOptions& options) {
+  if (!(options.range_m > 0.0)) return {};
+  mapping::ScanPolygonOptions scan;
+  scan.range_min_m = range_min_m;
+  scan.range_max_m = 1e3;  // every return counts; farther than range_m ends the view there
+  scan.free_range_m = options.range_m;
+  scan.obstacle_range_m = options.range_m;
+  const auto polygon = mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, scan);
+  if (!polygon.ok) return {};
+  const mapping::TypedMultiPolygon free{polygon.polygon};
+  const auto band = mapping::obstacle_band(polygon.polygon, options.obstacle_inner_m, options.obstacle_outer_m);
+  mapping::MultiPolygon open = mapping::geometry_of(free);
+  if (!band.empty()) {
+    const auto cut = mapping::typed_difference(free, mapping::with_uniform_type(band, mapping::EdgeType::kObstacle),
+                                               std::nullopt, mapping::EdgeType::kObstacle);
+    if (!cut.ok) return {};
+    open = mapping::geometry_of(cut.polygons);
+  }
+  return mapping::with_uniform_type(open, mapping::EdgeType::kObstacle);
+}
+
+mapping::TypedMultiPolygon with_live_view(const mapping::TypedMultiPolygon& map, const mapping::TypedMultiPolygon& live) {
+  if (live.empty()) return map;
+  const auto united = mapping::typed_union(map, live);
+  return united.ok ? united.polygons : map;
+}
+
+}  // namespace pex::planning

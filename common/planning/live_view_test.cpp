@@ -1,0 +1,122 @@
+#include "planning/live_view.hpp"
+
+#include <gtest/gtest.h>
+
+#include "mapping/test_support.hpp"
+#include "planning/exploration_planner.hpp"
+#include "planning/mission.hpp"
+#include "planning/test_maps.hpp"
+
+namespace pex::planning {
+namespace {
+
+using mapping::EdgeType;
+using mapping::Point;
+using E = EdgeType;
+
+// Two rooms, 4 x 4 m each, joined by a 1 m door at y = 1.5 .. 2.5 in the
+// wall x = 4 .. 4.2. The world's walls, for the laser.
+std::vector<mapping::testing::Wall> two_rooms_walls(bool door_open = true) {
+  std::vector<mapping::testing::Wall> w;
+  if (!door_open) w.push_back({Point(4.0, 1.5), Point(4.0, 2.5)});
+  mapping::testing::add_box(w, 0, 0, 8.2, 4);
+  w.push_back({Point(4.0, 0.0), Point(4.0, 1.5)});
+  w.push_back({Point(4.0, 2.5), Point(4.0, 4.0)});
+  w.push_back({Point(4.2, 0.0), Point(4.2, 1.5)});
+  w.push_back({Point(4.2, 2.5), Point(4.2, 4.0)});
+  w.push_back({Point(4.0, 1.5), Point(4.2, 1.5)});
+  w.push_back({Point(4.0, 2.5), Point(4.2, 2.5)});
+  return w;
+}
+
+// The planning map as a ghost band left it: both rooms mapped, but the door
+// cut (the rooms are two polygons 0.2 m apart); room B's far side is a frontier.
+mapping::TypedMultiPolygon map_with_the_door_closed() {
+  using testing::typed_polygon;
+  return {typed_polygon({{Point(0, 0), Point(4, 0), Point(4, 4), Point(0, 4)}, {}}),
+          typed_polygon({{Point(4.2, 0), Point(8.2, 0), Point(8.2, 4), Point(4.2, 4)},
+                         {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}})};
+}
+
+PlannerOptions options() {
+  PlannerOptions o;
+  o.cspace.robot_radius_m = 0.27;
+  o.cspace.clearance_margin_m = 0.05;
+  o.approach_range_m = 0.0;  // the door itself, not a look from afar
+  return o;
+}
+
+mapping::TypedMultiPolygon view_from(const Pose2& robot, double range_m, bool door_open = true) {
+  const mapping::testing::ScanSpec spec;
+  const mapping::Pose2 sensor{robot.x, robot.y, robot.theta};
+  const auto ranges = mapping::testing::cast_scan(two_rooms_walls(door_open), sensor, spec);
+  LiveViewOptions o;
+  o.range_m = range_m;
+  return live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, sensor, o);
+}
+
+TEST(LiveView, TheNewestScanReopensADoorTheMapClosed) {
+  const Pose2 robot{2.5, 2.0, 0.0};  // in room A, facing the door
+  const auto map = map_with_the_door_closed();
+  const Plan without = plan_exploration(map, robot, {}, options());
+  ASSERT_TRUE(without.ok) << without.error;
+  EXPECT_EQ(without.best_candidate(), nullptr) << "room B's frontier is cut off by the band";
+
+  const auto live = view_from(robot, 4.0);
+  ASSERT_FALSE(live.empty());
+  // It opens, it adds no frontier: every edge is an obstacle edge.
+  EXPECT_EQ(mapping::edge_length(live, E::kFrontier), 0.0);
+  EXPECT_GT(mapping::edge_length(live, E::kObstacle), 0.0);
+
+  PlanRequest request;
+  request.map = std::make_shared<const mapping::TypedMultiPolygon>(map);
+  request.pose = robot;
+  request.options = options();
+  request.live_view = std::make_shared<const mapping::TypedMultiPolygon>(live);
+  const PlanResult with = compute_plan(request);
+  ASSERT_TRUE(with.plan.ok) << with.plan.error;
+  const GoalCandidate* goal = with.plan.best_candidate();
+  ASSERT_NE(goal, nullptr) << "the door is open in the live view";
+  EXPECT_GT(goal->position.x(), 4.2);  // in room B
+  // The path goes through the door.
+  bool through_door = false;
+  for (std::size_t k = 1; k < goal->path.size(); ++k) {
+    const auto& a = goal->path[k - 1];
+    const auto& b = goal->path[k];
+    if ((a.x() - 4.1) * (b.x() - 4.1) <= 0.0) {
+      const double y = a.y() + (b.y() - a.y()) * (4.1 - a.x()) / (b.x() - a.x());
+      through_door = y > 1.5 + 0.27 && y < 2.5 - 0.27;
+    }
+  }
+  EXPECT_TRUE(through_door);
+}
+
+TEST(LiveView, AWallTheLaserSeesStaysClosed) {
+  // The same map, but the door really is shut: the laser sees the wall, the
+  // live view ends at it, with the band of its own returns, and nothing opens.
+  const Pose2 robot{2.5, 2.0, 0.0};
+  const auto live = view_from(robot, 4.0, /*door_open=*/false);
+  ASSERT_FALSE(live.empty());
+  PlanRequest request;
+  request.map = std::make_shared<const mapping::TypedMultiPolygon>(map_with_the_door_closed());
+  request.pose = robot;
+  request.options = options();
+  request.live_view = std::make_shared<const mapping::TypedMultiPolygon>(live);
+  const PlanResult result = compute_plan(request);
+  ASSERT_TRUE(result.plan.ok) << result.plan.error;
+  EXPECT_EQ(result.plan.best_candidate(), nullptr);
+}
+
+TEST(LiveView, OffOrWithoutAPolygonItIsEmpty) {
+  EXPECT_TRUE(view_from(Pose2{2.5, 2.0, 0.0}, 0.0).empty());
+  const std::vector<float> one_beam{1.0f};
+  LiveViewOptions o;
+  o.range_m = 3.0;
+  EXPECT_TRUE(live_view(one_beam, 0.0, 0.01, 0.05, mapping::Pose2{}, o).empty());
+  // And an empty live view leaves the map as it is.
+  const auto map = map_with_the_door_closed();
+  EXPECT_EQ(mapping::vertex_count(with_live_view(map, {})), mapping::vertex_count(map));
+}
+
+}  // namespace
+}  // namespace pex::planning
