@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <sstream>
 #include <limits>
+#include <numbers>
 #include <utility>
 
 #include "planning/live_view.hpp"
@@ -301,6 +302,7 @@ MissionOutput Mission::output() const {
     out.mission_time_s = static_cast<double>((end_utime_ >= 0 ? end_utime_ : now_utime_) - start_utime_) * 1e-6;
   out.goals = outcomes_;
   out.plans = plans_;
+  out.looks_around = looks_around_;
   out.plan_stats = plan_stats_;
   return out;
 }
@@ -417,7 +419,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
   goal_tight_ = false;
   const GoalCandidate* best = plan.best_candidate();
   if (!best) {
-    follower_.clear();
+    if (!looking_around_) follower_.clear();  // a turn on the spot goes on through its plans
     goal_.reset();
     phase_ = Phase::kSelecting;
     if (map_utime_ != last_empty_map_utime_) {
@@ -465,6 +467,24 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       status_ = "trying the " + std::to_string(given_up) + " goals given up once more before finishing (" + why + ")";
       return;
     }
+    const Point here(pose_->x, pose_->y);
+    if (empty_plans_ >= options_.done_confirmations && !nothing_left && options_.look_around && !looking_around_ &&
+        (!looked_around_at_ || distance(here, *looked_around_at_) > 1.0)) {
+      // Before it calls the rest unreachable: one turn on the spot, planning
+      // on the newest scan as it goes round (MissionOptions::look_around).
+      looking_around_ = true;
+      look_turned_rad_ = 0.0;
+      look_last_theta_ = pose_->theta;
+      look_until_utime_ = now_utime + options_.look_around_max_us;
+      empty_plans_ = 0;
+      ++looks_around_;
+      status_ = "looking around before finishing (" + why + ")";
+      return;
+    }
+    if (looking_around_) {
+      status_ = "looking around before finishing (" + why + ")";
+      return;
+    }
     if (empty_plans_ >= options_.done_confirmations) {
       finish(nothing_left ? Phase::kDone : Phase::kDoneWithUnreachable, "exploration done: " + why, now_utime);
     } else {
@@ -473,6 +493,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
     return;
   }
   empty_plans_ = 0;
+  looking_around_ = false;
   goal_ = best->position;
   goal_frontier_ = best->frontier_point;
   progress_goal_ = best->frontier_point;
@@ -630,6 +651,21 @@ MissionOutput Mission::step(std::int64_t now_utime) {
     const bool fresh_map = map_utime_ != last_request_map_utime_;
     if (outstanding_id_ == 0 ? (fresh_map || want_tight_ || plan_due(now_utime)) : plan_due(now_utime))
       request_plan(now_utime, Purpose::kSelect, want_tight_);
+    if (looking_around_) {
+      look_turned_rad_ += std::abs(wrap_angle(pose_->theta - look_last_theta_));
+      look_last_theta_ = pose_->theta;
+      if (look_turned_rad_ >= 2.0 * std::numbers::pi || now_utime >= look_until_utime_) {
+        // Round once (or out of time): the plans made on the way decide.
+        looking_around_ = false;
+        looked_around_at_ = Point(pose_->x, pose_->y);
+        status_ = "looked around; confirming on a newer map";
+      } else {
+        MissionOutput out = output();
+        out.command = follower_.turn_to(*pose_, pose_->theta + 1.0, dt_s);  // always 1 rad ahead: round and round
+        out.plan_request = pending_request_;
+        return out;
+      }
+    }
   }
 
   if (phase_ == Phase::kMoving) {

@@ -122,6 +122,14 @@ struct MissionOptions {
   // near them, plan once more without planner.cspace.clearance_margin_m: a
   // door that looks narrower on a newer map may still let the robot through.
   bool tight_fallback = true;
+  // Before it ends DONE_WITH_UNREACHABLE the robot turns once on the spot,
+  // planning as it turns (the explorer unites the newest scan into each plan:
+  // planning/live_view.hpp), unless it looked around within 1 m of here
+  // already: a door closed in the map by a band, out of the laser's sight
+  // where the robot stopped, opens when the laser sees through it. Bounded by
+  // look_around_max_us (a robot that cannot turn ends the look then).
+  bool look_around = true;
+  std::int64_t look_around_max_us = 15'000'000;
 };
 
 // How goals ended (counted over the mission).
@@ -173,6 +181,7 @@ struct MissionOutput {
   double mission_time_s = 0.0;  // since the mission started (frozen when it ends)
   GoalOutcomes goals;
   std::int64_t plans = 0;       // plan results used
+  std::int64_t looks_around = 0;  // turns on the spot before DONE_WITH_UNREACHABLE (MissionOptions::look_around)
   std::optional<PlanRequest> plan_request;  // run compute_plan() on it and call on_plan()
   PlanStats plan_stats;         // of the last plan
 };
@@ -273,6 +282,13 @@ class Mission {
   std::optional<PlanRequest> pending_request_;  // made, not yet handed out
   bool want_tight_ = false;                     // the next select plan goes without the margin
   bool given_up_retried_ = false;               // this leg's goals given up had their second try
+  // The look around before DONE_WITH_UNREACHABLE (MissionOptions::look_around).
+  bool looking_around_ = false;
+  double look_turned_rad_ = 0.0;
+  double look_last_theta_ = 0.0;
+  std::int64_t look_until_utime_ = 0;
+  std::optional<Point> looked_around_at_;
+  std::int64_t looks_around_ = 0;
   std::int64_t last_request_utime_ = -1;
   std::int64_t last_request_map_utime_ = -1;
   std::int64_t select_after_map_utime_ = -1;  // SELECTING waits for a map newer than this

@@ -496,6 +496,22 @@ TEST(Mission, SqueezesThroughANarrowGapWithoutTheMarginOnlyWhenNothingElseIsLeft
   strict.on_map(rooms_with_a_narrow_gap(), 1'000'000);
   strict.on_pose(Pose2{2, 2.5, 0}, 1'000'000);
   out = step_with_inline_planning(strict, 1'000'000);
+  // Before it says so, one turn on the spot (MissionOptions::look_around).
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_NE(out.status.find("looking around"), std::string::npos) << out.status;
+  double theta = 0.0, turned = 0.0;
+  for (std::int64_t t = 1'100'000; t <= 12'000'000 && !is_finished(out.phase); t += 100'000) {
+    if (t % 1'000'000 == 0) strict.on_map(rooms_with_a_narrow_gap(), t);
+    strict.on_pose(Pose2{2, 2.5, theta}, t);
+    out = step_with_inline_planning(strict, t);
+    EXPECT_EQ(out.command.v_mps, 0.0);  // on the spot
+    EXPECT_GE(out.command.omega_radps, 0.0);
+    theta = wrap_angle(theta + out.command.omega_radps * 0.1);
+    turned += out.command.omega_radps * 0.1;
+  }
+  EXPECT_GE(turned, 2.0 * std::numbers::pi);  // once round, then done
+  EXPECT_LT(turned, 2.0 * std::numbers::pi + 1.0);
+  EXPECT_EQ(out.looks_around, 1);
   // Done, but truthfully: a frontier is left that the robot cannot reach.
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable);
   ASSERT_FALSE(out.frontiers.empty());

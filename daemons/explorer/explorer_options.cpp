@@ -102,6 +102,9 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   m.look_tolerance_rad = config.get<double>("look_tolerance_rad", m.look_tolerance_rad, in_range(0.0, 3.2));
   m.max_travel_step_m = config.get<double>("max_travel_step_m", m.max_travel_step_m, positive<double>());
   m.tight_fallback = config.get<bool>("tight_fallback", m.tight_fallback);
+  m.look_around = config.get<bool>("look_around", m.look_around);
+  m.look_around_max_us = static_cast<std::int64_t>(
+      config.get<double>("look_around_max_s", static_cast<double>(m.look_around_max_us) * 1e-6, in_range(1.0, 600.0)) * 1e6);
   o.scan_guard = config.get<bool>("scan_guard", o.scan_guard);
   o.guard.body_radius_m = config.get<double>("guard_body_radius_m", o.guard.body_radius_m, in_range(0.01, 5.0));
   o.guard.margin_m = config.get<double>("guard_margin_m", o.guard.margin_m, in_range(0.0, 1.0));

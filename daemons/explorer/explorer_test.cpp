@@ -262,11 +262,15 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
 // cuts the planning map in two; the laser sees through the door now. With the
 // live view the explorer plans through it, without it the far room's frontier
 // has no path.
-TEST(ExplorerNode, TheLiveViewOpensADoorTheMapHasClosed) {
-  // Room A [0,4] x [0,4], room B [4.2,8.2] x [0,4] with a frontier on its far
-  // side; the door at y = 1.5 .. 2.5 between them is not in the map.
-  const auto map = map_of({ring(0, false, {{0, 0}, {4, 0}, {4, 4}, {0, 4}}),
-                           ring(1, false, {{4.2, 0}, {8.2, 0}, {8.2, 4}, {4.2, 4}}, {0, 1, 0, 0})});
+// Room A [0,4] x [0,4], room B [4.2,8.2] x [0,4] with a frontier on its far
+// side; the map has lost the 1 m door between them (y = 1.5 .. 2.5) to a band.
+pex::polygon_map_t two_rooms_door_closed() {
+  return map_of({ring(0, false, {{0, 0}, {4, 0}, {4, 4}, {0, 4}}),
+                 ring(1, false, {{4.2, 0}, {8.2, 0}, {8.2, 4}, {4.2, 4}}, {0, 1, 0, 0})});
+}
+
+// The laser's scan in the world where that door is open.
+pex::laser_scan_t two_rooms_scan(const pex::pose_t& pose) {
   std::vector<mapping::testing::Wall> walls;
   mapping::testing::add_box(walls, 0, 0, 8.2, 4);
   for (const double x : {4.0, 4.2}) {
@@ -279,15 +283,22 @@ TEST(ExplorerNode, TheLiveViewOpensADoorTheMapHasClosed) {
   scan.angle_increment = static_cast<float>(spec.angle_increment);
   scan.range_min = 0.05f;
   scan.range_max = static_cast<float>(spec.range_max_m);
-  scan.ranges = mapping::testing::cast_scan(walls, mapping::Pose2{2.5, 2.0, 0.0}, spec);
+  scan.ranges = mapping::testing::cast_scan(walls, mapping::Pose2{pose.x, pose.y, pose.theta}, spec);
   scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
+  return scan;
+}
+
+TEST(ExplorerNode, TheLiveViewOpensADoorTheMapHasClosed) {
+  const auto map = two_rooms_door_closed();
   pex::pose_t pose{};
   pose.x = 2.5;
-  pose.y = 2.0;
+  pose.y = 2.0;  // facing the door
+  const auto scan = two_rooms_scan(pose);
   auto goal_after_a_while = [&](double live_range_m) {
     ExplorerOptions options;
     options.live_view.range_m = live_range_m;
     options.mission.planner.approach_range_m = 0.0;  // the door itself, not a look from afar
+    options.mission.look_around = false;
     ExplorerNode node(options);
     std::optional<Point> goal;
     for (std::int64_t t = 0; t <= 3'000'000 && !goal; t += 100'000) {
@@ -305,5 +316,33 @@ TEST(ExplorerNode, TheLiveViewOpensADoorTheMapHasClosed) {
   EXPECT_FALSE(goal_after_a_while(0.0).has_value());
 }
 
+// The same, with the door behind the robot, in the laser's blind 90 degrees:
+// before it calls room B unreachable it turns on the spot, sees the door, and
+// goes.
+TEST(ExplorerNode, ItLooksAroundBeforeItCallsAFrontierUnreachable) {
+  ExplorerOptions options;
+  options.live_view.range_m = 3.0;
+  options.mission.planner.approach_range_m = 0.0;
+  ExplorerNode node(options);
+  pex::pose_t pose{};
+  pose.x = 2.5;
+  pose.y = 2.0;
+  pose.theta = 3.14159;  // facing room A's far wall
+  std::optional<Point> goal;
+  for (std::int64_t t = 0; t <= 30'000'000 && !goal; t += 100'000) {
+    pose.utime = t;
+    if (t % 1'000'000 == 0) EXPECT_EQ(node.on_map(two_rooms_door_closed(), t), "");
+    EXPECT_EQ(node.on_pose(pose, t), "");
+    EXPECT_EQ(node.on_scan(two_rooms_scan(pose), t), "");
+    const auto cmd = node.step(t);
+    EXPECT_EQ(cmd.v, 0.0) << "it stands until it has a goal";
+    pose.theta += cmd.omega * 0.1;
+    goal = node.last_output().goal;
+    ASSERT_FALSE(planning::is_finished(node.last_output().phase)) << node.last_output().status;
+  }
+  ASSERT_TRUE(goal.has_value());
+  EXPECT_GT(goal->x(), 4.2);
+  EXPECT_EQ(node.last_output().looks_around, 1);
+}
 }  // namespace
 }  // namespace pex::explorer

@@ -91,6 +91,7 @@ int main(int argc, char** argv) {
           node.counter("map_polygons_dropped") = c.map_polygons_dropped;
           node.counter("commands_applied") = c.commands_applied;
           node.counter("plans") = out.plans;
+          node.counter("looks_around") = out.looks_around;
           node.counter("goals_reached") = out.goals.reached;
           node.counter("goals_seen") = out.goals.seen;
           node.counter("goals_blocked") = out.goals.blocked;
