@@ -2,11 +2,11 @@
 # What goes where (docs/deployment.md):
 #   /usr/bin                        daemons and tools (pex_add_executable; no benchmarks)
 #   /lib/systemd/system             systemd/*.service, *.target (ExecStart=/usr/bin/...)
-#   /etc/polyexplore                configs, conffiles: config/robot/X.toml where it exists,
-#                                   else config/X.toml (sim.toml with an absolute world path);
-#                                   lcm.env, capture.env, multicast-route.env
+#   /usr/share/polyexplore/config   config/*.toml: the defaults layer of every daemon
+#   /etc/polyexplore                conffiles: each daemon's robot overlay (config/robot/X.toml,
+#                                   else one setting nothing), lcm.env, capture.env
 #   /usr/share/polyexplore/worlds   worlds/*.wkt
-#   /usr/share/polyexplore/config/sim  the simulator's config set (for polyexplore-sim.target)
+#   /usr/share/polyexplore/config/sim  overlays setting nothing (for polyexplore-sim.target)
 #   /usr/share/java/pex_types.jar   LCM types for lcm-spy
 #   /usr/bin/pex-spy, pex-logplayer-gui  lcm-spy / lcm-logplayer-gui launchers (tools/spy)
 # Included last from the top CMakeLists.txt, after every program is defined.
@@ -17,44 +17,46 @@ set(PEX_UNIT_DIR /lib/systemd/system)     # Debian 12's place for packaged units
 set(PEX_PACKAGE_PREFIX /usr)
 set(PEX_SHARE_DIR share/polyexplore)      # under the prefix (/usr)
 
-# --- configs: the robot's values win, whole files (each robot file is complete) ---
+# --- configs, two layers (docs/deployment.md, "Configuration") ---
+# Each unit runs its daemon with `--config /usr/share/polyexplore/config/X.toml --config
+# /etc/polyexplore/X.toml`: each key from the last file that sets it.
+#   /usr/share/polyexplore/config/X.toml  config/X.toml as it is: the defaults (the
+#       simulator's set; sim.toml's "../worlds/" is relative to its own folder, so it
+#       names /usr/share/polyexplore/worlds). Not conffiles: an upgrade replaces them.
+#   /etc/polyexplore/X.toml  the robot's overlay, a conffile: config/robot/X.toml, only
+#       the keys the robot changes; for a daemon with none, an overlay setting nothing
+#       (the place for local changes).
+#   /usr/share/polyexplore/config/sim/X.toml  overlays setting nothing: copied over
+#       /etc/polyexplore, the daemons run the simulator's set (polyexplore-sim.target).
 set(_pex_pkg_dir ${CMAKE_BINARY_DIR}/packaging)
 file(GLOB _pex_configs RELATIVE ${PROJECT_SOURCE_DIR}/config CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/config/*.toml)
 file(GLOB _pex_robot_configs RELATIVE ${PROJECT_SOURCE_DIR}/config/robot CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/config/robot/*.toml)
-# A robot file with no base file would be a typo: say so at configure time.
+# A robot overlay with no base file would be a typo: say so at configure time.
 foreach(f ${_pex_robot_configs})
   if(NOT f IN_LIST _pex_configs)
     message(FATAL_ERROR "config/robot/${f} has no config/${f}")
   endif()
 endforeach()
-# sim.toml names its world relative to its own folder (../worlds/); installed, the
-# worlds are in /usr/share/polyexplore/worlds: the installed copy names it absolutely.
-file(READ ${PROJECT_SOURCE_DIR}/config/sim.toml _pex_sim_toml)
-string(REGEX REPLACE "world_file = \"\\.\\./worlds/" "world_file = \"${PEX_PACKAGE_PREFIX}/${PEX_SHARE_DIR}/worlds/"
-       _pex_sim_toml_installed "${_pex_sim_toml}")
-if(_pex_sim_toml_installed STREQUAL _pex_sim_toml)
-  message(FATAL_ERROR "config/sim.toml: no world_file = \"../worlds/...\" to point at the installed worlds")
-endif()
-file(WRITE ${_pex_pkg_dir}/sim.toml "${_pex_sim_toml_installed}")
-set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/config/sim.toml)
 
 set(_pex_conffiles)
 foreach(f ${_pex_configs})
+  install(FILES ${PROJECT_SOURCE_DIR}/config/${f} DESTINATION ${PEX_SHARE_DIR}/config)
+  set(base ${PEX_PACKAGE_PREFIX}/${PEX_SHARE_DIR}/config/${f})
   if(f IN_LIST _pex_robot_configs)
-    set(src ${PROJECT_SOURCE_DIR}/config/robot/${f})
-  elseif(f STREQUAL "sim.toml")
-    set(src ${_pex_pkg_dir}/sim.toml)
+    install(FILES ${PROJECT_SOURCE_DIR}/config/robot/${f} DESTINATION ${PEX_ETC_DIR})
   else()
-    set(src ${PROJECT_SOURCE_DIR}/config/${f})
-  endif()
-  install(FILES ${src} DESTINATION ${PEX_ETC_DIR})
-  # the simulator's set, untouched by the robot files, for polyexplore-sim.target
-  if(f STREQUAL "sim.toml")
-    install(FILES ${_pex_pkg_dir}/sim.toml DESTINATION ${PEX_SHARE_DIR}/config/sim)
-  else()
-    install(FILES ${PROJECT_SOURCE_DIR}/config/${f} DESTINATION ${PEX_SHARE_DIR}/config/sim)
+    file(WRITE ${_pex_pkg_dir}/robot/${f}
+      "# ${PEX_ETC_DIR}/${f}: the robot's changes over ${base}\n"
+      "# (read after it: each key set here wins; docs/deployment.md). The robot changes nothing\n"
+      "# here; a key copied from that file and changed here overrides it.\n")
+    install(FILES ${_pex_pkg_dir}/robot/${f} DESTINATION ${PEX_ETC_DIR})
   endif()
   list(APPEND _pex_conffiles ${PEX_ETC_DIR}/${f})
+  file(WRITE ${_pex_pkg_dir}/sim/${f}
+    "# ${PEX_ETC_DIR}/${f} for the simulator (polyexplore-sim.target): nothing over\n"
+    "# ${base}, which is the simulator's set. Copied from\n"
+    "# ${PEX_PACKAGE_PREFIX}/${PEX_SHARE_DIR}/config/sim/ (docs/deployment.md).\n")
+  install(FILES ${_pex_pkg_dir}/sim/${f} DESTINATION ${PEX_SHARE_DIR}/config/sim)
 endforeach()
 file(GLOB _pex_env_files CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/systemd/*.env)
 install(FILES ${_pex_env_files} DESTINATION ${PEX_ETC_DIR})

@@ -20,6 +20,7 @@ PEX_DEBS=(
   curl                   # tests/systemd/sandbox_syscalls.sh: pex-viewer's page fetched under strace
   default-jre libjchart2d-java  # pex-spy: lcm-spy's Swing GUI and its message view's plots (jchart2d)
   xvfb xdotool xclip imagemagick  # tests/spy: an X server, clicks and keys, the clipboard, screenshots
+  systemd-container debootstrap openssh-client  # tests/systemd/nspawn_*.sh: the package booted under systemd in a Debian 12 root
 )
 # scripts/fuzz.sh only: clang and libFuzzer with its sanitizer runtimes.
 if [ "${PEX_DEPS_FUZZ:-0}" = 1 ]; then

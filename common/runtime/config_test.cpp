@@ -7,8 +7,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <tuple>
-#include <set>
 #include <toml++/toml.h>
 
 using pex::runtime::ConfigError;
@@ -127,26 +127,27 @@ TEST(ConfigReader, PathsAreRelativeToTheConfigFile) {
                     HasSubstr("cannot read '/opt/pex/config/../worlds/x.wkt'")));
 }
 
-// The shipped files and the `clock` key. config/ is the simulator deployment;
-// on the robot, config/robot/ files are copied over it (README), whole files
-// replacing whole files. So a daemon whose sim file runs on "sim" needs a robot
-// file saying "system", and that file must have every key the sim file has
-// (else the robot silently runs on a default the sim file overrides).
+// The shipped files and the `clock` key. config/X.toml is the simulator's set and the
+// defaults layer; config/robot/X.toml is the robot's overlay, read after it (installed:
+// /usr/share/polyexplore/config/X.toml, then /etc/polyexplore/X.toml; docs/deployment.md).
+// So a daemon whose config/ file runs on "sim" needs an overlay saying "system", and an
+// overlay holds only what the robot changes: a key repeating config/'s value would hide
+// a later change of that value from the robot.
 namespace {
 
-void leaf_keys(const toml::table& t, const std::string& prefix, std::set<std::string>& out) {
+void leaf_values(const toml::table& t, const std::string& prefix, std::map<std::string, const toml::node*>& out) {
   for (const auto& [k, v] : t) {
     const std::string path = prefix + std::string(k.str());
     if (const auto* sub = v.as_table())
-      leaf_keys(*sub, path + ".", out);
+      leaf_values(*sub, path + ".", out);
     else
-      out.insert(path);
+      out[path] = &v;
   }
 }
 
 }  // namespace
 
-TEST(ShippedConfig, EveryDaemonOnTheSimClockHasACompleteRobotFileOnTheSystemClock) {
+TEST(ShippedConfig, EveryDaemonOnTheSimClockHasARobotOverlayOnTheSystemClockWithOnlyWhatItChanges) {
   const std::filesystem::path config_dir = std::filesystem::path(PEX_SOURCE_DIR) / "config";
   int on_sim = 0;
   for (const auto& entry : std::filesystem::directory_iterator(config_dir)) {
@@ -160,12 +161,20 @@ TEST(ShippedConfig, EveryDaemonOnTheSimClockHasACompleteRobotFileOnTheSystemCloc
     const toml::table robot = toml::parse_file(robot_path.string());
     EXPECT_EQ(robot["clock"].value_or(std::string("system")), "system") << robot_path;
     EXPECT_TRUE(robot.contains("clock")) << robot_path << ": say clock = \"system\" explicitly";
-    std::set<std::string> sim_keys, robot_keys;
-    leaf_keys(sim, "", sim_keys);
-    leaf_keys(robot, "", robot_keys);
-    for (const auto& k : sim_keys) EXPECT_TRUE(robot_keys.count(k)) << robot_path << " lacks " << k;
+    std::map<std::string, const toml::node*> sim_values, robot_values;
+    leaf_values(sim, "", sim_values);
+    leaf_values(robot, "", robot_values);
+    for (const auto& [key, value] : robot_values) {
+      const auto base = sim_values.find(key);
+      EXPECT_FALSE(base != sim_values.end() &&
+                   toml::node_view<const toml::node>(base->second) == toml::node_view<const toml::node>(value))
+          << robot_path << ": " << key << " repeats " << entry.path() << "'s value (an overlay holds what the robot changes)";
+    }
   }
   EXPECT_GE(on_sim, 5);  // lidar_reader, base_driver, slam, polygon_mapper, explorer
+  // Every overlay has its base file.
+  for (const auto& entry : std::filesystem::directory_iterator(config_dir / "robot"))
+    EXPECT_TRUE(std::filesystem::exists(config_dir / entry.path().filename())) << entry.path() << " has no base file in config/";
   // The simulator is the clock: it never runs on its own.
   EXPECT_NE(toml::parse_file((config_dir / "sim.toml").string())["clock"].value_or(std::string()), "sim");
 }

@@ -115,19 +115,21 @@ TEST(DecodeMap, EncodeDecodeRoundTrip) {
 }
 
 TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
-  for (const char* file : {"/config/explorer.toml", "/config/robot/explorer.toml"}) {
-    auto config = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + file);
+  const std::string sim = std::string(PEX_SOURCE_DIR) + "/config/explorer.toml";
+  const std::string robot = std::string(PEX_SOURCE_DIR) + "/config/robot/explorer.toml";  // the robot's overlay
+  for (const std::vector<std::string>& files : {std::vector<std::string>{sim}, std::vector<std::string>{sim, robot}}) {
+    auto config = runtime::ConfigReader::from_files(files);
     const auto runtime_options = runtime::load_runtime_options(config);  // read by run_daemon
     const auto o = load_options(config);
-    EXPECT_NO_THROW(config.finish()) << file;
+    EXPECT_NO_THROW(config.finish()) << files.back();
     EXPECT_EQ(o.pose_channel, "SLAM_POSE");
     EXPECT_EQ(o.mission.planner.cspace.robot_radius_m, 0.27);
     // The simulator's set explores at once on the sim's clock; a robot that
     // boots waits for a start command and runs on the system clock.
-    const bool robot = std::string(file).find("/robot/") != std::string::npos;
-    EXPECT_EQ(o.mission.autostart, !robot) << file;
-    EXPECT_EQ(runtime_options.clock, robot ? runtime::ClockSource::kSystem : runtime::ClockSource::kSim) << file;
-    EXPECT_EQ(o.mission.scan_timeout_us, 500'000) << file;  // no driving blind, on the robot too
+    const bool on_robot = files.size() == 2;
+    EXPECT_EQ(o.mission.autostart, !on_robot) << files.back();
+    EXPECT_EQ(runtime_options.clock, on_robot ? runtime::ClockSource::kSystem : runtime::ClockSource::kSim) << files.back();
+    EXPECT_EQ(o.mission.scan_timeout_us, 500'000) << files.back();  // no driving blind, on the robot too
   }
 }
 

@@ -216,12 +216,12 @@ INSTANTIATE_TEST_SUITE_P(EveryDaemon, BadConfig, testing::ValuesIn(kAllDaemons),
 // reads its config the same way.
 INSTANTIATE_TEST_SUITE_P(Viewer, BadConfig, testing::Values("viewer"), [](const auto& info) { return info.param; });
 
-// The robot's base driver config names SocketCAN interface can0, which this
-// machine cannot have: the driver must refuse to start with EX_UNAVAILABLE (69)
+// The robot's base driver config (config/base_driver.toml and the robot's overlay over
+// it, as the unit reads them) names SocketCAN interface can0, which this machine cannot have: the driver must refuse to start with EX_UNAVAILABLE (69)
 // and say which interface and what to load, not crash.
 TEST(RobotConfig, BaseDriverWithoutSocketCanExits69NamingTheInterface) {
-  const auto r = run_to_completion({bin_path("pex-base-driver"), "--config",
-                                    source_path("config/robot/base_driver.toml"), "--lcm-url", kTestLcmUrl});
+  const auto r = run_to_completion({bin_path("pex-base-driver"), "--config", source_path("config/base_driver.toml"),
+                                    "--config", source_path("config/robot/base_driver.toml"), "--lcm-url", kTestLcmUrl});
   EXPECT_EQ(r.exit_code, 69) << r.output;
   EXPECT_THAT(r.output, HasSubstr("can0"));
 }

@@ -10,7 +10,7 @@ src=$1 debdir=$2 version=$3 programs=$4
 deb=$(ls "$debdir"/polyexplore_*.deb) || exit 1
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 root=$tmp/root
-fails=0
+fails=0 robot_values=0
 fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
 
 arch=$(dpkg --print-architecture)
@@ -70,21 +70,21 @@ for u in "$src"/systemd/*.service "$src"/systemd/*.target "$src"/systemd/*.timer
   [ -e "$u" ] && same /lib/systemd/system/"$(basename "$u")" "$u"
 done
 for e in "$src"/systemd/*.env; do same /etc/polyexplore/"$(basename "$e")" "$e"; done
-# configs: the robot's file where there is one, else config/'s; sim.toml names the installed world
+# configs, two layers: /usr/share/polyexplore/config/X.toml is config/X.toml (the
+# defaults), /etc/polyexplore/X.toml the robot's overlay (config/robot/X.toml, else one
+# setting no key), /usr/share/polyexplore/config/sim/X.toml overlays setting no key
+keys_of() { grep -Ev '^[[:space:]]*(#.*)?$' "$1"; }  # the lines that set something
 for c in "$src"/config/*.toml; do
   n=$(basename "$c")
+  same /usr/share/polyexplore/config/"$n" "$c"
   if [ -f "$src/config/robot/$n" ]; then same /etc/polyexplore/"$n" "$src/config/robot/$n"
-  elif [ "$n" = sim.toml ]; then
-    need /etc/polyexplore/sim.toml || continue
-    w=$(sed -n 's/^world_file = "\([^"]*\)".*/\1/p' "$root/etc/polyexplore/sim.toml")
-    [[ "$w" == /usr/share/polyexplore/worlds/*.wkt ]] || fail "sim.toml world_file = $w"
-    need "$w"
-    diff <(grep -v '^world_file' "$c") <(grep -v '^world_file' "$root/etc/polyexplore/sim.toml") >/dev/null || fail "sim.toml differs from config/sim.toml beyond world_file"
-  else same /etc/polyexplore/"$n" "$c"
+  elif need /etc/polyexplore/"$n"; then
+    [ -z "$(keys_of "$root/etc/polyexplore/$n")" ] || fail "/etc/polyexplore/$n sets keys but there is no config/robot/$n"
   fi
-  [ "$n" = sim.toml ] || same /usr/share/polyexplore/config/sim/"$n" "$c"
+  if need /usr/share/polyexplore/config/sim/"$n"; then
+    [ -z "$(keys_of "$root/usr/share/polyexplore/config/sim/$n")" ] || fail "/usr/share/polyexplore/config/sim/$n sets keys"
+  fi
 done
-grep -q '^can_transport = "socketcan"' "$root/etc/polyexplore/base_driver.toml" 2>/dev/null || fail "base_driver.toml is not the robot's (socketcan)"
 for w in "$src"/worlds/*.wkt; do same /usr/share/polyexplore/worlds/"$(basename "$w")" "$w"; done
 if need /usr/share/java/pex_types.jar; then
   classes=$(jar tf "$root/usr/share/java/pex_types.jar")
@@ -111,6 +111,62 @@ for exe in $(sed -n 's/^Exec[A-Za-z]*=[-@:+!]*\([^ ]*\).*/\1/p' "$tmp"/units/* |
     *) fail "a unit runs $exe, which is neither in the package nor a known dependency" ;;
   esac
 done
+# The robot's values win in the installed tree: each daemon run as its unit runs it
+# (ExecStart's arguments, paths into the scratch root) with --print-config. Every key
+# the overlay in /etc sets is printed from there (file and line), every other one from
+# /usr/share/polyexplore/config/X.toml or its default; with the simulator's overlays
+# over /etc (README), every key from /usr/share or its default.
+overlay_keys() {  # "key line" for each key an overlay sets, [section] as a prefix
+  awk '/^[ \t]*\[/ { s = $0; gsub(/[][ \t]/, "", s); sub(/#.*/, "", s); next }
+       /^[ \t]*[A-Za-z0-9_]+[ \t]*=/ { k = $0; sub(/[ \t]*=.*/, "", k); gsub(/[ \t]/, "", k);
+                                      print (s == "" ? k : s "." k), NR }' "$1"
+}
+cp -a "$root/etc/polyexplore" "$tmp/etc-sim"
+for f in "$root"/usr/share/polyexplore/config/sim/*.toml; do cp "$f" "$tmp/etc-sim/"; done
+for u in "$tmp"/units/pex-*.service; do
+  line=$(sed -n 's/^ExecStart=\(\/usr\/bin\/pex-[^ ]*\)\(.*\)/\1\2/p' "$u")
+  [ -n "$line" ] || continue
+  read -r -a argv <<<"$line"
+  overlay=$(grep -o '/etc/polyexplore/[a-z_]*\.toml' <<<"$line")
+  base=$(grep -o '/usr/share/polyexplore/config/[a-z_]*\.toml' <<<"$line")
+  [ -n "$overlay" ] && [ -n "$base" ] || { fail "$(basename "$u"): ExecStart does not name /usr/share/polyexplore/config/X.toml and /etc/polyexplore/X.toml: $line"; continue; }
+  [[ "$line" == *"--config $base --config $overlay"* ]] || fail "$(basename "$u"): the overlay is not read after the defaults: $line"
+  for setup in robot sim; do
+    etc=$root/etc/polyexplore; [ $setup = sim ] && etc=$tmp/etc-sim
+    args=("${argv[@]:1}"); args=("${args[@]//\/etc\/polyexplore/$etc}"); args=("${args[@]//\/usr\/share/$root/usr/share}")
+    out=$("$root${argv[0]}" --print-config "${args[@]}" 2>&1) || { fail "$(basename "$u") ($setup): --print-config failed: $out"; continue; }
+    from_etc=$(grep -c "# $etc/" <<<"$out")
+    expected=0
+    while read -r key n; do
+      expected=$((expected + 1))
+      grep -q "^$key = .*# $etc/$(basename "$overlay"):$n\$" <<<"$out" \
+        || fail "$(basename "$u") ($setup): $key, set in $overlay line $n, is printed as: $(grep "^$key = " <<<"$out")"
+    done < <(overlay_keys "$etc/$(basename "$overlay")")
+    [ "$from_etc" = "$expected" ] || fail "$(basename "$u") ($setup): $from_etc keys printed from $etc, the overlay sets $expected"
+    grep -v '^#' <<<"$out" | grep -Ev "# ($root/usr/share/polyexplore/config/[a-z_]+\.toml:[0-9]+|$etc/[a-z_]+\.toml:[0-9]+|default)\$" \
+      | head -n 3 | while read -r l; do fail "$(basename "$u") ($setup): a value from elsewhere: $l"; done
+    if [ $setup = robot ]; then
+      case $(basename "$u") in
+        pex-base-driver.service) want='can_transport = "socketcan"' ;;
+        pex-lidar-reader.service) want='host = "192.168.0.1"' ;;
+        pex-explorer.service) want='autostart = false' ;;
+        *) want= ;;
+      esac
+      [ -z "$want" ] || grep -q "^$want " <<<"$out" || fail "$(basename "$u"): the robot's $want lost: $(grep "^${want%% *} " <<<"$out")"
+    fi
+    clock=$(sed -n 's/^clock = "\([a-z]*\)".*/\1/p' <<<"$out")
+    if grep -q '^clock = "sim"' "$root$base"; then  # the daemons on the simulator's clock in the defaults
+      [ $setup = robot ] && [ "$clock" != system ] && fail "$(basename "$u"): the robot runs on clock = \"$clock\""
+      [ $setup = sim ] && [ "$clock" != sim ] && fail "$(basename "$u") with the simulator's overlays: clock = \"$clock\""
+    fi
+    robot_values=$((robot_values + expected))
+  done
+  if [ "$(basename "$u")" = pex-sim.service ]; then  # the world it names is installed
+    w=$(sed -n 's/^world_file = "\([^"]*\)".*/\1/p' <<<"$out")
+    [ -f "$w" ] || fail "pex-sim's world_file $w is not in the package"
+  fi
+done
+echo "print-config as the units run: $robot_values keys printed from the /etc overlays"
 sed -i -e "s#=\([-@:+!]*\)/usr/bin/pex-#=\1$root/usr/bin/pex-#" -e "s#=\([-@:+!]*\)/usr/lib/polyexplore/#=\1$root/usr/lib/polyexplore/#" "$tmp"/units/*
 out=$(systemd-analyze verify "$tmp"/units/* 2>&1 | grep -F "$tmp" || true)
 [ -z "$out" ] || fail "systemd-analyze verify: $out"

@@ -71,16 +71,17 @@ TEST(LiveChain, IntelHeadThroughLogplayerSlamAndPerParticleMapper) {
     ++maps;
     last_map = m;
   });
-  // Real data, no simulator: the robot's configs (clock = "system"; they name
-  // no device), with their checkpoints in the test's folder: a robot's
-  // /var/lib/polyexplore, where one exists, is neither read nor written.
-  auto robot_config = [&](const std::string& daemon) {
-    return write_config(dir, daemon,
+  // Real data, no simulator: the robot's configs, as its units read them: config/X.toml,
+  // then the robot's overlay (clock = "system"; they name no device), with the
+  // checkpoints in the test's folder: a robot's /var/lib/polyexplore, where one
+  // exists, is neither read nor written.
+  auto robot_overlay = [&](const std::string& daemon) {
+    return write_config(dir, daemon + "-robot",
                         with_key(read_file(source_path("config/robot/" + daemon + ".toml")), "checkpoint_file",
                                  "\"" + dir + "/" + daemon + "-checkpoint.bin\""));
   };
-  auto slam = start_daemon("slam", dir, {}, robot_config("slam"));
-  auto mapper = start_daemon("polygon_mapper", dir, {}, robot_config("polygon_mapper"));
+  auto slam = start_daemon("slam", dir, {"--config", robot_overlay("slam")});
+  auto mapper = start_daemon("polygon_mapper", dir, {"--config", robot_overlay("polygon_mapper")});
   ASSERT_TRUE(bus.spin_until([&] { return bus.all_ok({"slam", "polygon_mapper"}); }, 5s));
 
   Process player({"/usr/bin/lcm-logplayer", "--speed=5", std::string("--lcm-url=") + kTestLcmUrl, head},

@@ -57,19 +57,8 @@ spy=$(timeout 30 xdotool search --sync --name '^LCM Spy$' | head -n 1)
 [ -n "$spy" ] || fail "no 'LCM Spy' window within 30 s"
 grep -q "Found $(ls "$src"/lcmtypes/*.lcm | wc -l) LCM types" "$tmp/spy.out" || fail "pex-spy did not load our types: $(head -n 3 "$tmp/spy.out")"
 
-table() { # the spy's channel table, tab-separated, as Ctrl+C copies it. The clipboard
-  # holds a marker first, and the copy has landed when the marker is gone (Java takes
-  # the clipboard a moment after the keys): never the last table read again.
-  printf 'pex-no-copy' | xclip -selection clipboard -i >/dev/null 2>&1  # its server stays until Java copies
-  xdotool windowfocus "$spy" mousemove --window "$spy" 60 28 click 1 key ctrl+a ctrl+c 2>/dev/null
-  local t
-  for _ in $(seq 50); do
-    t=$(timeout 5 xclip -selection clipboard -o 2>/dev/null)
-    [ -n "$t" ] && [ "$t" != pex-no-copy ] && { printf '%s\n' "$t"; return 0; }
-    sleep 0.1
-  done
-  return 1
-}
+. "$src/tests/spy/spy_table.sh"
+table() { spy_table "$spy"; }
 col() { awk -F'\t' -v c="$1" -v f="$2" '$1 == c { gsub(/^ +| +$/, "", $f); print $f }'; }
 # 1. every expected channel listed, with its type, nothing undecodable
 ok=0
