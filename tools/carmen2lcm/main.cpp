@@ -73,12 +73,12 @@ class LogWriter {
   std::int64_t events_ = 0;
 };
 
-pex::odometry_t odometry_message(std::int64_t utime, const pex::slam::Pose2& pose, double v, double omega) {
+pex::odometry_t odometry_message(std::int64_t utime, const pex::geometry::Pose2& pose, double v, double omega) {
   pex::odometry_t msg{};
   msg.utime = utime;
   msg.x = pose.x_m;
   msg.y = pose.y_m;
-  msg.theta = pex::slam::normalize_angle(pose.theta_rad);
+  msg.theta = pex::geometry::wrap_angle(pose.theta_rad);
   msg.v = v;
   msg.omega = omega;
   return msg;
@@ -88,15 +88,15 @@ pex::odometry_t odometry_message(std::int64_t utime, const pex::slam::Pose2& pos
 // pose as the robot's odometry pose composed with the mounting offset, so their
 // difference is the offset; where it is implausible for a front laser (some
 // logs write a corrected pose there) the PARAM robot_frontlaser_offset is used.
-pex::slam::Pose2 sensor_mounting(const ev::CarmenLaser& laser, double frontlaser_offset_m) {
-  const pex::slam::Pose2 offset = pex::slam::relative(laser.odometry, laser.laser_pose);
+pex::geometry::Pose2 sensor_mounting(const ev::CarmenLaser& laser, double frontlaser_offset_m) {
+  const pex::geometry::Pose2 offset = pex::geometry::relative(laser.odometry, laser.laser_pose);
   // (+ 0.0 turns the -0.0 of an exactly zero offset into +0.0.)
   if (std::hypot(offset.x_m, offset.y_m) <= 1.0 && std::abs(offset.theta_rad) <= 0.2)
     return {offset.x_m + 0.0, offset.y_m + 0.0, offset.theta_rad + 0.0};
   return {frontlaser_offset_m, 0.0, 0.0};
 }
 
-pex::laser_scan_t scan_message(const ev::CarmenLaser& laser, std::int32_t counter, const pex::slam::Pose2& sensor) {
+pex::laser_scan_t scan_message(const ev::CarmenLaser& laser, std::int32_t counter, const pex::geometry::Pose2& sensor) {
   pex::laser_scan_t msg{};
   msg.utime = to_utime(laser.timestamp_s);
   msg.device_utime = 0;

@@ -117,8 +117,8 @@ int main(int argc, char** argv) {
                                 std::abs(best->timestamp_s - laser.timestamp_s)))
       best = &*std::prev(it);
     if (best == nullptr || std::abs(best->timestamp_s - laser.timestamp_s) > max_time_difference_s) continue;
-    const auto mount = pex::slam::relative(laser.odometry, laser.laser_pose);
-    const auto sensor = pex::slam::compose(best->pose, mount);
+    const auto mount = pex::geometry::relative(laser.odometry, laser.laser_pose);
+    const auto sensor = pex::geometry::compose(best->pose, mount);
     scans.push_back({{sensor.x_m, sensor.y_m, sensor.theta_rad},
                      laser.angle_min_rad,
                      laser.angle_increment_rad,
