@@ -147,7 +147,7 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
           !std::isfinite(theta)) {
         return fail(line_number, "START needs three finite numbers: x_m y_m theta_rad");
       }
-      world.start = Pose2{x, y, kinematics::normalize_angle(theta)};
+      world.start = Pose2{x, y, geometry::wrap_angle(theta)};
       have_start = true;
       start_line = line_number;
       continue;
@@ -330,7 +330,7 @@ void DiffDrivePlant::step(double dt_s, double left_radps, double right_radps, co
   const double dtheta = (dr - dl) / base;
   const double mid = pose_.theta_rad + 0.5 * dtheta;
   Pose2 next{pose_.x_m + ds * std::cos(mid), pose_.y_m + ds * std::sin(mid),
-             kinematics::normalize_angle(pose_.theta_rad + dtheta)};
+             geometry::wrap_angle(pose_.theta_rad + dtheta)};
   bool refused = false;
   if (caster && std::abs(ds) > 0.0) {
     // Refuse translation into a wall (rotation in place is always allowed).

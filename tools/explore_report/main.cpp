@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   auto parsed = pex::sim::parse_world(text.str(), world_path);
   if (auto* error = std::get_if<pex::sim::WorldError>(&parsed)) return fail(65, error->message);
   const auto& world = std::get<pex::sim::World>(parsed);
-  pex::kinematics::Pose2 start = world.start;
+  pex::geometry::Pose2 start = world.start;
   if (!start_pose.empty()) start = {start_pose[0], start_pose[1], start_pose[2]};
   if (map_frame == "start") options.map_in_world = start;
   using pex::explore_report::ScoredMap;

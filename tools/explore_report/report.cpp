@@ -240,7 +240,7 @@ std::string path_of(const MultiPolygon& polygons, const ToPx& px) {
 }  // namespace
 
 std::string to_svg(const sim::World& world, const MultiPolygon& reachable, const mapping::TypedMultiPolygon& map_world,
-                   const kinematics::Pose2& start, double robot_radius_m, double wall_tolerance_m) {
+                   const geometry::Pose2& start, double robot_radius_m, double wall_tolerance_m) {
   const MultiPolygon map_free = mapping::geometry_of(map_world);
   // Frame: the walls' box and the map, a 1 m margin.
   double min_x = world.min_x, min_y = world.min_y, max_x = world.max_x, max_y = world.max_y;

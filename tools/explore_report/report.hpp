@@ -51,7 +51,7 @@ struct ReportOptions {
   evaluation::CreditNear credit_near = evaluation::CreditNear::kMapObstacleEdges;
   // The pose of the MAP frame's origin in the world: the robot's start pose
   // (SLAM / odometry frame) or the identity (pose_source = "sim_truth").
-  kinematics::Pose2 map_in_world;
+  geometry::Pose2 map_in_world;
 };
 
 // One benchmark line; nullopt fields are printed as null.
@@ -84,7 +84,7 @@ std::string to_json(const Report& report);
 // an edge is farther than wall_tolerance_m from every wall), frontier edges
 // orange, world walls black, the robot's disk at the start green; y up.
 std::string to_svg(const sim::World& world, const mapping::MultiPolygon& reachable,
-                   const mapping::TypedMultiPolygon& map_world, const kinematics::Pose2& start,
+                   const mapping::TypedMultiPolygon& map_world, const geometry::Pose2& start,
                    double robot_radius_m, double wall_tolerance_m);
 
 }  // namespace pex::explore_report
