@@ -40,6 +40,7 @@
 #include "mapping/test_support.hpp"
 
 using namespace pex::mapping;
+using pex::geometry::Pose2;
 
 namespace {
 
@@ -138,9 +139,9 @@ int run_log(const std::string& path, int map_count, long merge_every) {
     for (std::size_t m = 0; m < maps.size(); ++m) {
       Pose2 p = pose;
       if (m > 0) {  // the other maps: the pose as a particle might have it
-        p.x += shift(rng);
-        p.y += shift(rng);
-        p.theta += turn(rng);
+        p.x_m += shift(rng);
+        p.y_m += shift(rng);
+        p.theta_rad += turn(rng);
       }
       const auto scan = scan_to_polygon(ranges, laser.angle_min_rad, laser.angle_increment_rad, p, options);
       if (scan.ok) insert(maps[m], scan.polygon, c);

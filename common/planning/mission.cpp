@@ -74,7 +74,7 @@ std::string to_text(const MissionCheckpoint& c) {
   add("start_utime %lld\n", static_cast<long long>(c.start_utime));
   add("end_utime %lld\n", static_cast<long long>(c.end_utime));
   add("travelled_m %.17g\n", c.travelled_m);
-  if (c.home) add("home %.17g %.17g %.17g\n", c.home->x, c.home->y, c.home->theta);
+  if (c.home) add("home %.17g %.17g %.17g\n", c.home->x_m, c.home->y_m, c.home->theta_rad);
   add("outcomes %lld %lld %lld %lld\n", static_cast<long long>(c.outcomes.reached),
       static_cast<long long>(c.outcomes.seen), static_cast<long long>(c.outcomes.blocked),
       static_cast<long long>(c.outcomes.no_progress));
@@ -118,8 +118,8 @@ std::optional<MissionCheckpoint> checkpoint_from_text(const std::string& text, s
       ok = static_cast<bool>(f >> c.travelled_m) && std::isfinite(c.travelled_m) && c.travelled_m >= 0.0;
     } else if (key == "home") {
       Pose2 h;
-      ok = static_cast<bool>(f >> h.x >> h.y >> h.theta) && std::isfinite(h.x) && std::isfinite(h.y) &&
-           std::isfinite(h.theta);
+      ok = static_cast<bool>(f >> h.x_m >> h.y_m >> h.theta_rad) && std::isfinite(h.x_m) && std::isfinite(h.y_m) &&
+           std::isfinite(h.theta_rad);
       c.home = h;
     } else if (key == "outcomes") {
       ok = static_cast<bool>(f >> c.outcomes.reached >> c.outcomes.seen >> c.outcomes.blocked >> c.outcomes.no_progress);
@@ -206,9 +206,9 @@ void Mission::on_map(TypedMultiPolygon map, std::int64_t utime, std::int64_t sca
 }
 
 void Mission::on_pose(const Pose2& pose, std::int64_t utime) {
-  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta)) return;
+  if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad)) return;
   if (pose_ && phase_ != Phase::kWaitingStart) {  // a robot pushed before the start is not the mission's travel
-    const double step = std::hypot(pose.x - pose_->x, pose.y - pose_->y);
+    const double step = std::hypot(pose.x_m - pose_->x_m, pose.y_m - pose_->y_m);
     if (step <= options_.max_travel_step_m) travelled_m_ += step;
   }
   pose_ = pose;
@@ -268,7 +268,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
       follower_.clear();
       outstanding_id_ = 0;
       end_utime_ = -1;
-      enter(Phase::kHoming, format("going home to (%.2f, %.2f)", home_->x, home_->y));
+      enter(Phase::kHoming, format("going home to (%.2f, %.2f)", home_->x_m, home_->y_m));
       last_request_utime_ = -1;
       return {};
     case MissionCommand::kStop:
@@ -310,7 +310,7 @@ void Mission::request_plan(std::int64_t now_utime, Purpose purpose, bool tight) 
   r.options = options_.planner;
   r.tight = tight;
   if (tight) r.options.cspace.clearance_margin_m = 0.0;
-  if (purpose == Purpose::kHome) r.home = Point(home_->x, home_->y);
+  if (purpose == Purpose::kHome) r.home = Point(home_->x_m, home_->y_m);
   outstanding_id_ = r.id;
   outstanding_purpose_ = purpose;
   outstanding_tight_ = tight;
@@ -628,14 +628,14 @@ MissionOutput Mission::step(std::int64_t now_utime) {
   }
 
   if (phase_ == Phase::kMoving) {
-    const Point here(pose_->x, pose_->y);
+    const Point here(pose_->x_m, pose_->y_m);
     if (distance(here, *goal_) <= options_.follower.goal_tolerance_m) {
       // There: face the frontier first, or the laser may never have seen it
       // (a goal right behind the robot at the start is the common case).
       const double to_frontier = distance(here, goal_frontier_);
       const double bearing = std::atan2(goal_frontier_.y() - here.y(), goal_frontier_.x() - here.x());
       if (options_.look_tolerance_rad > 0.0 && to_frontier > 0.05 &&
-          std::abs(wrap_angle(bearing - pose_->theta)) > options_.look_tolerance_rad) {
+          std::abs(geometry::wrap_angle(bearing - pose_->theta_rad)) > options_.look_tolerance_rad) {
         MissionOutput out = output();
         out.command = follower_.turn_to(*pose_, bearing, dt_s);
         out.status = status_;
@@ -667,9 +667,9 @@ MissionOutput Mission::step(std::int64_t now_utime) {
   }
 
   if (phase_ == Phase::kHoming) {
-    const Point here(pose_->x, pose_->y);
-    if (distance(here, Point(home_->x, home_->y)) <= options_.follower.goal_tolerance_m) {
-      finish(Phase::kHome, format("home: back at (%.2f, %.2f)", home_->x, home_->y), now_utime);
+    const Point here(pose_->x_m, pose_->y_m);
+    if (distance(here, Point(home_->x_m, home_->y_m)) <= options_.follower.goal_tolerance_m) {
+      finish(Phase::kHome, format("home: back at (%.2f, %.2f)", home_->x_m, home_->y_m), now_utime);
       return stopped();
     }
     if (plan_due(now_utime)) request_plan(now_utime, Purpose::kHome, false);

@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
   // Each scan at the pose with the nearest time stamp. The poses are the
   // robot's; the scan's own laser pose relative to its odometry gives the mount.
   std::vector<mw::PosedScan> scans;
-  std::vector<mw::Pose> trajectory;
+  std::vector<mw::Pose2> trajectory;
   for (const auto& laser : log.lasers) {
     const auto it = std::lower_bound(poses.poses.begin(), poses.poses.end(), laser.timestamp_s,
                                      [](const ev::StampedPose& p, double t) { return p.timestamp_s < t; });
@@ -119,12 +119,12 @@ int main(int argc, char** argv) {
     if (best == nullptr || std::abs(best->timestamp_s - laser.timestamp_s) > max_time_difference_s) continue;
     const auto mount = pex::geometry::relative(laser.odometry, laser.laser_pose);
     const auto sensor = pex::geometry::compose(best->pose, mount);
-    scans.push_back({{sensor.x_m, sensor.y_m, sensor.theta_rad},
+    scans.push_back({sensor,
                      laser.angle_min_rad,
                      laser.angle_increment_rad,
                      laser.max_range_m,
                      laser.ranges_m});
-    trajectory.push_back({best->pose.x_m, best->pose.y_m, best->pose.theta_rad});
+    trajectory.push_back(best->pose);
   }
   std::fprintf(stderr, "pex-make-world: %zu of %zu scans matched a pose (of %zu)\n", scans.size(),
                log.lasers.size(), poses.poses.size());

@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-plan: the MAP is bad input: %s\n", decoded.error.c_str());
     return EX_DATAERR;
   }
-  const pex::mapping::Pose2 robot{pose->x, pose->y, pose->theta};
+  const pex::geometry::Pose2 robot{pose->x, pose->y, pose->theta};
   const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner);
   pex::planning::ConfigurationSpace cspace;
   cspace.build(decoded.polygons, planner.cspace);
