@@ -13,12 +13,17 @@ function(pex_target_options target)
 endfunction()
 
 # pex_add_library(name [SOURCES ...] [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
-# A static library whose headers are included as "<dir>/<header>" from the
-# folder above its own (common/ for algorithms, platform/ for I/O), so only a
-# target that links it finds them; without SOURCES a header-only (INTERFACE) one.
+# A static library whose headers are included as "<dir>/<header>": from
+# platform/ for a library there (I/O), else from common/ (algorithms; the
+# daemons' own libraries include common/'s headers too). Without SOURCES a
+# header-only (INTERFACE) library.
 function(pex_add_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
-  get_filename_component(include_root ${CMAKE_CURRENT_SOURCE_DIR} DIRECTORY)
+  set(include_root ${PROJECT_SOURCE_DIR}/common)
+  string(FIND "${CMAKE_CURRENT_SOURCE_DIR}/" "${PROJECT_SOURCE_DIR}/platform/" at)
+  if(at EQUAL 0)
+    set(include_root ${PROJECT_SOURCE_DIR}/platform)
+  endif()
   if(NOT ARG_SOURCES)
     add_library(${name} INTERFACE)
     target_include_directories(${name} INTERFACE ${include_root})

@@ -12,6 +12,8 @@
 
 #include <boost/geometry/geometries/multi_point.hpp>
 
+#include "geometry/point.hpp"
+
 namespace pex::evaluation {
 
 namespace bg = boost::geometry;
@@ -195,10 +197,7 @@ MultiPolygon reachable_free_space(const sim::World& world, double robot_radius_m
 }
 
 MultiPolygon to_world(const MultiPolygon& in_map, const geometry::Pose2& map_in_world) {
-  const double c = std::cos(map_in_world.theta_rad), s = std::sin(map_in_world.theta_rad);
-  auto move = [&](const Point& p) {
-    return Point(map_in_world.x_m + c * p.x() - s * p.y(), map_in_world.y_m + s * p.x() + c * p.y());
-  };
+  const geometry::PoseTransform move(map_in_world);
   MultiPolygon out = in_map;
   for (auto& polygon : out) {
     for (auto& p : polygon.outer()) p = move(p);

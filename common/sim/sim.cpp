@@ -15,12 +15,14 @@
 #include <boost/geometry/geometries/segment.hpp>
 #include <boost/geometry/index/rtree.hpp>
 
+#include "geometry/point.hpp"
+
 namespace pex::sim {
 
 namespace bg = boost::geometry;
 namespace bgi = boost::geometry::index;
-using Point = bg::model::d2::point_xy<double>;
-using Segment = bg::model::segment<Point>;
+using geometry::Point;
+using geometry::Segment;
 using Linestring = bg::model::linestring<Point>;
 using MultiLinestring = bg::model::multi_linestring<Linestring>;
 using Polygon = bg::model::polygon<Point>;
@@ -281,15 +283,13 @@ Laser::Laser(LaserOptions options, std::uint64_t seed) : options_(options), rng_
 
 std::vector<float> Laser::scan(const RayCaster& caster, const Pose2& robot) {
   const int n = options_.beam_count();
-  const double c = std::cos(robot.theta_rad), s = std::sin(robot.theta_rad);
-  const double sx = robot.x_m + c * options_.mount_x_m - s * options_.mount_y_m;
-  const double sy = robot.y_m + s * options_.mount_x_m + c * options_.mount_y_m;
+  const Point sensor = geometry::transform(robot, Point(options_.mount_x_m, options_.mount_y_m));
   const double base = robot.theta_rad + options_.mount_theta_rad + options_.first_angle_rad();
   const double step = options_.step_deg * std::numbers::pi / 180.0;
   std::normal_distribution<double> noise(0.0, options_.range_noise_sigma_m);
   std::vector<float> ranges(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    const double r = caster.cast(sx, sy, base + i * step, options_.max_range_m);
+    const double r = caster.cast(sensor.x(), sensor.y(), base + i * step, options_.max_range_m);
     // Draw noise for every beam, hit or not, so one beam's outcome never
     // shifts the random sequence of the others.
     const double e = options_.range_noise_sigma_m > 0.0 ? noise(rng_) : 0.0;
