@@ -10,6 +10,7 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 
+#include "cli/command_line.hpp"
 #include "runtime/log_file_error.hpp"
 
 namespace pex::runtime {
@@ -51,8 +52,7 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
   // The program's name as installed: "polygon_mapper" -> "pex-polygon-mapper".
   std::string program = "pex-" + info.name;
   std::replace(program.begin(), program.end(), '_', '-');
-  CLI::App app{info.description, program};
-  app.set_version_flag("--version", program + " " + PEX_VERSION);
+  CLI::App app{info.description};
   CommonArgs args;
   app.add_option("--config", args.config_paths,
                  "TOML configuration file; several: layered, each key from the last file that sets it "
@@ -73,16 +73,7 @@ int run_daemon(int argc, char** argv, const DaemonInfo& info, const DaemonSetup&
     app.add_option("--out", args.replay_out, "with --log: write what is published to this LCM log");
   }
   if (info.add_options) info.add_options(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    // --help and --version end here too, with CLI11's exit 0.
-    return app.exit(e) == 0 ? exit_code::kOk : exit_code::kUsage;
-  }
+  if (const auto code = cli::parse_command_line(app, program, argc, argv)) return *code;
 
   auto logger = spdlog::stderr_color_mt(info.name);
   logger->set_pattern("%Y-%m-%dT%H:%M:%S.%e %n[%P] %^%l%$: %v");

@@ -21,9 +21,6 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
 #include <lcm/lcm-cpp.hpp>
 
 #include <cmath>
@@ -36,6 +33,7 @@
 #include <pex/laser_scan_t.hpp>
 #include <pex/odometry_t.hpp>
 
+#include "cli/command_line.hpp"
 #include "evaluation/carmen_log.hpp"
 #include "evaluation/odometry_direction.hpp"
 #include "runtime/channels.hpp"
@@ -134,12 +132,7 @@ int main(int argc, char** argv) {
   app.add_option("--flaser-max-range-m", parse.flaser_max_range_m,
                  "FLASER readings at or beyond this are no return")
       ->capture_default_str();
-  app.set_version_flag("--version", std::string("pex-carmen2lcm ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-carmen2lcm", argc, argv)) return *code;
 
   std::ifstream in(in_path);
   if (!in) {

@@ -18,10 +18,7 @@
 
 #include <CLI/CLI.hpp>
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
-
+#include "cli/command_line.hpp"
 #include "report.hpp"
 
 namespace {
@@ -61,12 +58,7 @@ int main(int argc, char** argv) {
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
   app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed) to this SVG");
-  app.set_version_flag("--version", std::string("pex-explore-report ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 64;  // --help: 0; a bad command line: 64, as the daemons
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-explore-report", argc, argv)) return *code;
 
   std::ifstream world_file(world_path);
   if (!world_file) return fail(66, "cannot read world file " + world_path);

@@ -7,10 +7,6 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/command_line.hpp"
 #include "evaluation/carmen_log.hpp"
 #include "evaluation/relations.hpp"
 #include "make_world.hpp"
@@ -74,12 +71,7 @@ int main(int argc, char** argv) {
   app.add_option("--simplify-m", o.simplify_m, "Ramer-Douglas-Peucker tolerance")->capture_default_str();
   app.add_option("--robot-radius-m", o.robot_radius_m, "for the reachable area")->capture_default_str();
   app.add_option("--start-clearance-m", o.start_clearance_m, "START's distance to every wall")->capture_default_str();
-  app.set_version_flag("--version", std::string("pex-make-world ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-make-world", argc, argv)) return *code;
   if (const auto bad = g.validate(); !bad.empty()) {
     std::fprintf(stderr, "pex-make-world: %s\n", bad.c_str());
     return 64;

@@ -14,13 +14,11 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
 
+#include "cli/command_line.hpp"
 #include "explorer_options.hpp"
 #include "map_message.hpp"
 #include "plan_report.hpp"
@@ -40,12 +38,7 @@ int main(int argc, char** argv) {
   app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
   app.add_flag("--tight", tight, "plan without the clearance margin (the explorer's tight fallback)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
-  app.set_version_flag("--version", std::string("pex-plan ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-plan", argc, argv)) return *code;
 
   pex::explorer::ExplorerOptions options;
   try {
