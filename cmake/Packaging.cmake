@@ -121,10 +121,3 @@ set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 set(CMAKE_SKIP_INSTALL_ALL_DEPENDENCY ON)
 set(CPACK_OUTPUT_FILE_PREFIX ${CMAKE_BINARY_DIR})
 include(CPack)
-
-# --version of the tools: the package's version (tools/*/main.cpp: PEX_VERSION).
-foreach(tool pex-status pex-render-map pex-carmen2lcm pex-eval-slam pex-explore-report pex-mission pex-plan pex-make-world pex-map pex-stress-mapping)
-  if(TARGET ${tool})
-    target_compile_definitions(${tool} PRIVATE PEX_VERSION="${PROJECT_VERSION}")
-  endif()
-endforeach()

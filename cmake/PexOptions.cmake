@@ -1,20 +1,38 @@
 # One place for the language standard and the warnings every target gets.
 function(pex_target_options target)
-  target_compile_features(${target} PUBLIC cxx_std_20)
-  set_target_properties(${target} PROPERTIES CXX_EXTENSIONS OFF)
   get_target_property(_type ${target} TYPE)
+  if(_type STREQUAL "INTERFACE_LIBRARY")
+    target_compile_features(${target} INTERFACE cxx_std_20)
+  else()
+    target_compile_features(${target} PUBLIC cxx_std_20)
+  endif()
+  set_target_properties(${target} PROPERTIES CXX_EXTENSIONS OFF)
   if(NOT _type STREQUAL "INTERFACE_LIBRARY")
     target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Werror=return-type)
   endif()
 endfunction()
 
-# pex_add_library(name SOURCES ... [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
-# A static library whose headers are included as "<dir>/<header>" from common/.
+# pex_add_library(name [SOURCES ...] [PUBLIC_LIBS ...] [PRIVATE_LIBS ...])
+# A static library whose headers are included as "<dir>/<header>": from
+# platform/ for a library there (I/O), else from common/ (algorithms; the
+# daemons' own libraries include common/'s headers too). Without SOURCES a
+# header-only (INTERFACE) library.
 function(pex_add_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_LIBS;PRIVATE_LIBS" ${ARGN})
-  add_library(${name} STATIC ${ARG_SOURCES})
-  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR}/common)
-  target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LIBS} PRIVATE ${ARG_PRIVATE_LIBS})
+  set(include_root ${PROJECT_SOURCE_DIR}/common)
+  string(FIND "${CMAKE_CURRENT_SOURCE_DIR}/" "${PROJECT_SOURCE_DIR}/platform/" at)
+  if(at EQUAL 0)
+    set(include_root ${PROJECT_SOURCE_DIR}/platform)
+  endif()
+  if(NOT ARG_SOURCES)
+    add_library(${name} INTERFACE)
+    target_include_directories(${name} INTERFACE ${include_root})
+    target_link_libraries(${name} INTERFACE ${ARG_PUBLIC_LIBS})
+  else()
+    add_library(${name} STATIC ${ARG_SOURCES})
+    target_include_directories(${name} PUBLIC ${include_root})
+    target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LIBS} PRIVATE ${ARG_PRIVATE_LIBS})
+  endif()
   pex_target_options(${name})
 endfunction()
 

@@ -21,7 +21,7 @@
 
 namespace {
 
-bool plausible_pose(const pex::slam::Pose2& p, double limit) {
+bool plausible_pose(const pex::geometry::Pose2& p, double limit) {
   return std::abs(p.x_m) <= limit && std::abs(p.y_m) <= limit && std::abs(p.theta_rad) <= limit;
 }
 
@@ -68,10 +68,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                  "direction: message count");
   PEX_FUZZ_CHECK(result.changed_laser_poses <= log.lasers.size() && result.reversed_steps < log.odometry.size() + 1,
                  "direction: counts");
-  auto same = [](const pex::slam::Pose2& a, const pex::slam::Pose2& b) {
+  auto same = [](const pex::geometry::Pose2& a, const pex::geometry::Pose2& b) {
     return a.x_m == b.x_m && a.y_m == b.y_m && a.theta_rad == b.theta_rad;
   };
-  auto finite = [](const pex::slam::Pose2& p) {
+  auto finite = [](const pex::geometry::Pose2& p) {
     return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
   };
   for (std::size_t i = 0; i < log.lasers.size(); ++i) {

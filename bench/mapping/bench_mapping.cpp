@@ -23,6 +23,7 @@
 namespace {
 
 using namespace pex::mapping;
+using pex::geometry::Pose2;
 
 constexpr double kSpacingM = 2.0;  // rock lattice
 const testing::ScanSpec kSpec{};   // 270 degrees, 541 beams, 10 m

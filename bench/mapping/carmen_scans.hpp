@@ -21,11 +21,11 @@ bool for_each_moved_scan(const std::string& path, Fn&& fn) {
   std::ifstream in(path);
   if (!in) return false;
   const auto log = evaluation::parse_carmen_log(in);
-  std::optional<mapping::Pose2> last;
+  std::optional<geometry::Pose2> last;
   for (const auto& laser : log.lasers) {
-    const mapping::Pose2 pose{laser.laser_pose.x_m, laser.laser_pose.y_m, laser.laser_pose.theta_rad};
-    if (last && std::hypot(pose.x - last->x, pose.y - last->y) < 0.2 &&
-        std::abs(std::remainder(pose.theta - last->theta, 2 * M_PI)) < 0.25)
+    const geometry::Pose2& pose = laser.laser_pose;
+    if (last && std::hypot(pose.x_m - last->x_m, pose.y_m - last->y_m) < 0.2 &&
+        std::abs(pex::geometry::wrap_angle(pose.theta_rad - last->theta_rad)) < 0.25)
       continue;
     last = pose;
     std::vector<float> ranges = laser.ranges_m;

@@ -21,9 +21,6 @@
 //                      map, as WKT
 #include <CLI/CLI.hpp>
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -35,11 +32,13 @@
 #include <vector>
 
 #include "carmen_scans.hpp"
+#include "cli/command_line.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "mapping/test_support.hpp"
 
 using namespace pex::mapping;
+using pex::geometry::Pose2;
 
 namespace {
 
@@ -138,9 +137,9 @@ int run_log(const std::string& path, int map_count, long merge_every) {
     for (std::size_t m = 0; m < maps.size(); ++m) {
       Pose2 p = pose;
       if (m > 0) {  // the other maps: the pose as a particle might have it
-        p.x += shift(rng);
-        p.y += shift(rng);
-        p.theta += turn(rng);
+        p.x_m += shift(rng);
+        p.y_m += shift(rng);
+        p.theta_rad += turn(rng);
       }
       const auto scan = scan_to_polygon(ranges, laser.angle_min_rad, laser.angle_increment_rad, p, options);
       if (scan.ok) insert(maps[m], scan.polygon, c);
@@ -186,12 +185,7 @@ int main(int argc, char** argv) {
   int verbose = 0;
   app.add_option("--verbose", verbose, "1: every merge's outcome and every failed planning layer's reason");
   app.add_option("--dump", g_dump, "(--intel) write the failed tiles' layers and the merged map to this file");
-  app.set_version_flag("--version", std::string("pex-stress-mapping ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 64;  // --help, --version: 0; a bad command line: 64, as the other tools
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-stress-mapping", argc, argv)) return *code;
   g_verbose = verbose == 1;
   if (merge_epsilon >= 0.0) g_merge_epsilon = merge_epsilon;
   if (random <= 0 && log.empty()) {

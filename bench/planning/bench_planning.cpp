@@ -163,11 +163,11 @@ std::unique_ptr<Scene> build_intel(std::size_t target_vertices) {
   const auto log = pex::evaluation::parse_carmen_log(in);
   pex::mapping::PolygonMap map;
   const pex::mapping::ScanPolygonOptions options;
-  std::optional<pex::mapping::Pose2> first, last;
+  std::optional<pex::geometry::Pose2> first, last;
   for (const auto& laser : log.lasers) {
-    const pex::mapping::Pose2 pose{laser.laser_pose.x_m, laser.laser_pose.y_m, laser.laser_pose.theta_rad};
-    if (last && std::hypot(pose.x - last->x, pose.y - last->y) < 0.2 &&
-        std::abs(std::remainder(pose.theta - last->theta, 2 * M_PI)) < 0.25)
+    const pex::geometry::Pose2& pose = laser.laser_pose;
+    if (last && std::hypot(pose.x_m - last->x_m, pose.y_m - last->y_m) < 0.2 &&
+        std::abs(pex::geometry::wrap_angle(pose.theta_rad - last->theta_rad)) < 0.25)
       continue;
     last = pose;
     if (!first) first = pose;
@@ -191,7 +191,7 @@ std::unique_ptr<Scene> build_intel(std::size_t target_vertices) {
     scene->error = built.error;
     return scene;
   }
-  const auto start = scene->cspace->nearest_interior_point(Point(first->x, first->y), 0.5);
+  const auto start = scene->cspace->nearest_interior_point(Point(first->x_m, first->y_m), 0.5);
   if (!start) {
     scene->error = "the first Intel pose is not in the C-space";
     return scene;
@@ -355,7 +355,7 @@ MissionScene& mission_scene(int which) {
   tight.cspace.clearance_margin_m = 0.0;
   slot->maps = pex::bench::emulate_mission(
       std::string(PEX_SOURCE_DIR) + "/worlds/" + slot->name + ".wkt", options,
-      [&](const TypedMultiPolygon& map, const pex::mapping::Pose2& pose, const std::vector<Point>& blacklist) {
+      [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
         // The mission's tight fallback: nothing reachable, plan once more without the margin.
         auto plan = plan_exploration(map, pose, blacklist, greedy);
         return plan.best_candidate() ? plan : plan_exploration(map, pose, blacklist, tight);
@@ -427,7 +427,7 @@ void BM_PlanStep(benchmark::State& state) {
   const auto plan = plan_exploration(snap.map, snap.pose, snap.blacklist, options);
   std::vector<Point> targets;
   for (const auto& c : plan.candidates) targets.push_back(c.position);
-  const auto start = cs.nearest_interior_point(Point(snap.pose.x, snap.pose.y), options.start_snap_distance_m);
+  const auto start = cs.nearest_interior_point(Point(snap.pose.x_m, snap.pose.y_m), options.start_snap_distance_m);
   for (auto _ : state) {
     if (state.range(1) == 0) {
       ConfigurationSpace fresh;

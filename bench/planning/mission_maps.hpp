@@ -93,11 +93,11 @@ inline MissionMaps emulate_mission(
     const auto ranges = laser.scan(caster, sim::Pose2{x, y, theta});
     const auto scan = mapping::scan_to_polygon(ranges, laser.options().first_angle_rad(),
                                                laser.options().step_deg * std::numbers::pi / 180.0,
-                                               mapping::Pose2{x, y, theta}, scan_options);
+                                               geometry::Pose2{x, y, theta}, scan_options);
     if (scan.ok) map.insert(scan.polygon);
   };
-  planning::Pose2 pose{world.start.x_m, world.start.y_m, world.start.theta_rad};
-  insert_at(pose.x, pose.y, pose.theta);
+  planning::Pose2 pose = world.start;
+  insert_at(pose.x_m, pose.y_m, pose.theta_rad);
   std::vector<mapping::Point> blacklist;
   MissionSnapshot latest;
   auto snapshot = [&]() -> const MissionSnapshot* {
@@ -136,7 +136,7 @@ inline MissionMaps emulate_mission(
       for (double s_m = std::min(options.scan_step_m, length);; s_m = std::min(s_m + options.scan_step_m, length)) {
         const double t = s_m / length;
         pose = {path[k - 1].x() + t * dx, path[k - 1].y() + t * dy, heading};
-        insert_at(pose.x, pose.y, pose.theta);
+        insert_at(pose.x_m, pose.y_m, pose.theta_rad);
         since_replan += options.scan_step_m;
         if (since_replan >= options.replan_step_m) {
           since_replan = 0.0;
@@ -170,8 +170,8 @@ inline MissionMaps emulate_mission(
       continue;
     }
     // At the goal: look at the frontier, then never choose that goal again.
-    pose.theta = std::atan2(goal->frontier_point.y() - pose.y, goal->frontier_point.x() - pose.x);
-    insert_at(pose.x, pose.y, pose.theta);
+    pose.theta_rad = std::atan2(goal->frontier_point.y() - pose.y_m, goal->frontier_point.x() - pose.x_m);
+    insert_at(pose.x_m, pose.y_m, pose.theta_rad);
     blacklist.push_back(goal->position);
     ++out.goals;
   }

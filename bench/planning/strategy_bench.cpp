@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
       mission.map = mapper.map;
       const bool fallback = explorer.mission.tight_fallback;
       const auto maps = pex::bench::emulate_mission(
-          world, mission, [&](const TypedMultiPolygon& map, const pex::mapping::Pose2& pose, const std::vector<Point>& blacklist) {
+          world, mission, [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
             Plan plan = pex::planning::plan_exploration(map, pose, blacklist, options);
             return plan.best_candidate() || !fallback ? plan : pex::planning::plan_exploration(map, pose, blacklist, tight);
           });

@@ -217,7 +217,7 @@ BENCHMARK(BM_IntelFullLog)->Args({30, 1})->Args({30, 2})->Iterations(1)->Unit(be
 struct IntelMapFixture {
   pex::slam::CowGridMap map{pex::slam::CowGridMapOptions{}};
   pex::slam::ScanPoints scan;
-  pex::slam::Pose2 pose;
+  pex::geometry::Pose2 pose;
   IntelMapFixture() {
     const auto log = load_log(shared_data("intel.clf"));
     for (std::size_t i = 0; i < 300 && i < log.lasers.size(); ++i) {

@@ -23,12 +23,13 @@ std::string hex(std::uint32_t value) {
 
 std::string hex_int32(std::int32_t value) { return hex(static_cast<std::uint32_t>(value)); }
 
+namespace {
+
+// A real as its IEEE 754 bits, always 8 hex digits.
 std::string hex_real(float value) {
   std::string digits = hex(std::bit_cast<std::uint32_t>(value));
   return std::string(8 - digits.size(), '0') + digits;  // reals always carry 8 digits
 }
-
-namespace {
 
 std::string signed_decimal(std::int64_t value) {
   std::string out(1, value < 0 ? '-' : '+');
@@ -66,8 +67,6 @@ std::string set_scan_config_request(const ScanConfig& c) {
                " " + signed_decimal(c.stop_angle_1e4deg));
 }
 
-std::string read_scan_config_request() { return frame("sRN LMPscancfg"); }
-
 std::string scan_data_config_request(const ScanDataConfig& c) {
   // output channel "01 00", remission, resolution, unit 0 (digits), encoder "00 00",
   // position, device name, comment, time, output interval
@@ -81,13 +80,11 @@ std::string output_range_request(const ScanConfig& c) {
                hex_int32(c.start_angle_1e4deg) + " " + hex_int32(c.stop_angle_1e4deg));
 }
 
-std::string write_all_request() { return frame("sMN mEEwriteall"); }
 std::string run_request() { return frame("sMN Run"); }
 std::string start_measurement_request() { return frame("sMN LMCstartmeas"); }
 std::string scan_output_request(bool enable) {
   return frame(std::string("sEN LMDscandata ") + (enable ? "1" : "0"));
 }
-std::string poll_scan_request() { return frame("sRN LMDscandata"); }
 
 // ------------------------------------------------------------------ framing --
 

@@ -45,8 +45,6 @@ struct ScanConfig {
 };
 // sMN mLMPsetscancfg +freq +1 +step +start +stop  (one "sector", decimal with sign)
 std::string set_scan_config_request(const ScanConfig& config);
-// sRN LMPscancfg (read back the active configuration)
-std::string read_scan_config_request();
 
 // What each LMDscandata telegram carries (sWN LMDscandatacfg).
 struct ScanDataConfig {
@@ -59,16 +57,12 @@ struct ScanDataConfig {
 std::string scan_data_config_request(const ScanDataConfig& config);
 // sWN LMPoutputRange 1 <step> <start> <stop> (hex): the angular range output
 std::string output_range_request(const ScanConfig& config);
-// sMN mEEwriteall: store parameters permanently.
-std::string write_all_request();
 // sMN Run: leave the authorized-client level, apply the configuration.
 std::string run_request();
 // sMN LMCstartmeas: start the laser and motor.
 std::string start_measurement_request();
 // sEN LMDscandata 1|0: start/stop continuous scan output.
 std::string scan_output_request(bool enable);
-// sRN LMDscandata: poll one scan.
-std::string poll_scan_request();
 
 // ------------------------------------------------------------------ framing --
 
@@ -240,10 +234,10 @@ std::string encode_scan_data(const ScanData& scan, bool as_poll_answer = false);
 std::string encode_reply(std::string_view type, std::string_view name,
                          const std::vector<std::string>& args = {});
 
-// Hex helpers shared by the encoder and request builders.
+// CoLa-A integers for the encoder, the request builders and the simulator's
+// replies: upper-case hex without leading zeros; an int32 as its two's complement.
 std::string hex(std::uint32_t value);
 std::string hex_int32(std::int32_t value);
-std::string hex_real(float value);
 
 }  // namespace pex::cola
 

@@ -46,7 +46,6 @@ TEST(ColaRequests, MatchTheTelegramListing) {
   EXPECT_EQ(scan_output_request(true), "\x02sEN LMDscandata 1\x03");
   EXPECT_EQ(scan_output_request(false), "\x02sEN LMDscandata 0\x03");
   EXPECT_EQ(run_request(), "\x02sMN Run\x03");
-  EXPECT_EQ(read_scan_config_request(), "\x02sRN LMPscancfg\x03");
 }
 
 TEST(ColaNumbers, HexDecimalAndReals) {
@@ -66,8 +65,13 @@ TEST(ColaNumbers, HexDecimalAndReals) {
   EXPECT_EQ(hex(0), "0");
   EXPECT_EQ(hex(0x8A1), "8A1");
   EXPECT_EQ(hex_int32(-450000), "FFF92230");
-  EXPECT_EQ(hex_real(1.0f), "3F800000");
-  EXPECT_EQ(hex_real(0.0f), "00000000");
+}
+
+// The encoder writes the recorded telegram back character for character: its
+// numbers as the laser writes them (hex without leading zeros, reals as 8 hex
+// digits, 3F800000 and 00000000 here).
+TEST(ColaScanData, EncodesTheRecordedTelegramBackToItsText) {
+  EXPECT_EQ(encode_scan_data(parse_ok(kRecordedBody), /*as_poll_answer=*/true), std::string("\x02") + kRecordedBody + "\x03");
 }
 
 TEST(ColaScanData, ParsesTheRecordedTelegramFieldByField) {

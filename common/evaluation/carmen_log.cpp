@@ -53,7 +53,7 @@ bool read_ranges(const std::vector<std::string_view>& tokens, std::size_t at, st
 }
 
 // "" if the pose, stamp and velocities are within the options' limits, else what is not.
-std::string implausible(const CarmenParseOptions& o, const slam::Pose2& pose, double timestamp_s, double tv = 0.0,
+std::string implausible(const CarmenParseOptions& o, const geometry::Pose2& pose, double timestamp_s, double tv = 0.0,
                         double rv = 0.0) {
   if (std::abs(pose.x_m) > o.max_abs_coordinate_m || std::abs(pose.y_m) > o.max_abs_coordinate_m ||
       std::abs(pose.theta_rad) > o.max_abs_coordinate_m)

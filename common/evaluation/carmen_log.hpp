@@ -10,7 +10,7 @@
 #include <variant>
 #include <vector>
 
-#include "slam/pose2.hpp"
+#include "geometry/pose2.hpp"
 
 namespace pex::evaluation {
 
@@ -22,13 +22,13 @@ struct CarmenLaser {
   double angle_increment_rad = 0.0;
   double max_range_m = 0.0;
   std::vector<float> ranges_m;
-  slam::Pose2 laser_pose;  // laser pose in the odometry frame, as logged
-  slam::Pose2 odometry;    // robot odometry pose when the scan was taken
+  geometry::Pose2 laser_pose;  // laser pose in the odometry frame, as logged
+  geometry::Pose2 odometry;    // robot odometry pose when the scan was taken
 };
 
 struct CarmenOdometry {
   double timestamp_s = 0.0;  // ipc_timestamp
-  slam::Pose2 pose;
+  geometry::Pose2 pose;
   double tv_mps = 0.0;
   double rv_radps = 0.0;
 };

@@ -12,6 +12,8 @@
 
 #include <boost/geometry/geometries/multi_point.hpp>
 
+#include "geometry/point.hpp"
+
 namespace pex::evaluation {
 
 namespace bg = boost::geometry;
@@ -146,7 +148,7 @@ MultiPolygon walls_box(const sim::World& world) {
 }  // namespace
 
 MultiPolygon configuration_free_component(const sim::World& world, double robot_radius_m,
-                                          const kinematics::Pose2& start, const ReachableOptions& options) {
+                                          const geometry::Pose2& start, const ReachableOptions& options) {
   if (!(robot_radius_m > 0.0) || world.walls.empty()) return {};
   const auto offsets = disk_offsets(robot_radius_m, options.points_per_circle);
 
@@ -171,7 +173,7 @@ MultiPolygon configuration_free_component(const sim::World& world, double robot_
   return {};
 }
 
-MultiPolygon reachable_free_space(const sim::World& world, double robot_radius_m, const kinematics::Pose2& start,
+MultiPolygon reachable_free_space(const sim::World& world, double robot_radius_m, const geometry::Pose2& start,
                                   const ReachableOptions& options) {
   const MultiPolygon component = configuration_free_component(world, robot_radius_m, start, options);
   if (component.empty()) return {};
@@ -194,11 +196,8 @@ MultiPolygon reachable_free_space(const sim::World& world, double robot_radius_m
   return overlay_or_throw(swept, walls_box(world), mapping::OverlayOp::kIntersection);
 }
 
-MultiPolygon to_world(const MultiPolygon& in_map, const kinematics::Pose2& map_in_world) {
-  const double c = std::cos(map_in_world.theta_rad), s = std::sin(map_in_world.theta_rad);
-  auto move = [&](const Point& p) {
-    return Point(map_in_world.x_m + c * p.x() - s * p.y(), map_in_world.y_m + s * p.x() + c * p.y());
-  };
+MultiPolygon to_world(const MultiPolygon& in_map, const geometry::Pose2& map_in_world) {
+  const geometry::PoseTransform move(map_in_world);
   MultiPolygon out = in_map;
   for (auto& polygon : out) {
     for (auto& p : polygon.outer()) p = move(p);
@@ -208,7 +207,7 @@ MultiPolygon to_world(const MultiPolygon& in_map, const kinematics::Pose2& map_i
   return out;  // a rigid motion keeps orientation and validity
 }
 
-mapping::TypedMultiPolygon to_world(const mapping::TypedMultiPolygon& in_map, const kinematics::Pose2& map_in_world) {
+mapping::TypedMultiPolygon to_world(const mapping::TypedMultiPolygon& in_map, const geometry::Pose2& map_in_world) {
   mapping::TypedMultiPolygon out = in_map;
   for (auto& polygon : out) polygon.geometry = to_world(MultiPolygon{polygon.geometry}, map_in_world).front();
   return out;
@@ -242,7 +241,7 @@ double iou(const MultiPolygon& map_free, const MultiPolygon& reachable) {
   return uni > 0.0 ? inter / uni : kNaN;
 }
 
-MapScore score_map(const mapping::TypedMultiPolygon& map, const kinematics::Pose2& map_in_world,
+MapScore score_map(const mapping::TypedMultiPolygon& map, const geometry::Pose2& map_in_world,
                    const MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m,
                    double obstacle_band_credit_m, CreditNear credit_near) {
   MapScore score;

@@ -37,12 +37,12 @@ struct ReachableOptions {
 // collision (no C-free component holds it) or robot_radius_m <= 0; throws
 // std::runtime_error when an overlay fails (never seen on worlds/*.wkt).
 mapping::MultiPolygon reachable_free_space(const sim::World& world, double robot_radius_m,
-                                           const kinematics::Pose2& start, const ReachableOptions& options = {});
+                                           const geometry::Pose2& start, const ReachableOptions& options = {});
 
 // The C-free component holding start (robot centres), as computed on the way
 // to reachable_free_space; exposed for tests and drawings.
 mapping::MultiPolygon configuration_free_component(const sim::World& world, double robot_radius_m,
-                                                   const kinematics::Pose2& start,
+                                                   const geometry::Pose2& start,
                                                    const ReachableOptions& options = {});
 
 // a op b (a minus b for kDifference) of valid multi-polygons, by the
@@ -59,8 +59,8 @@ std::optional<mapping::MultiPolygon> checked_overlay(const mapping::MultiPolygon
 // pose (odometry starts at 0, 0, 0 and SLAM initialises on it): pass
 // world.start. A map made with pose_source = "sim_truth" is already in the
 // world frame: pass the identity.
-mapping::MultiPolygon to_world(const mapping::MultiPolygon& in_map, const kinematics::Pose2& map_in_world);
-mapping::TypedMultiPolygon to_world(const mapping::TypedMultiPolygon& in_map, const kinematics::Pose2& map_in_world);
+mapping::MultiPolygon to_world(const mapping::MultiPolygon& in_map, const geometry::Pose2& map_in_world);
+mapping::TypedMultiPolygon to_world(const mapping::TypedMultiPolygon& in_map, const geometry::Pose2& map_in_world);
 
 // area(map_free ∩ reachable) / area(reachable), both in the world frame.
 // NaN if reachable has no area or the overlays fail (checked_overlay, and
@@ -100,7 +100,7 @@ struct MapScore {
   double iou = 0.0;               // mapped_reachable / area(map ∪ reachable), with the credit if any
   double obstacle_on_wall = 0.0;  // see obstacle_on_wall(); NaN without obstacle edges
 };
-MapScore score_map(const mapping::TypedMultiPolygon& map, const kinematics::Pose2& map_in_world,
+MapScore score_map(const mapping::TypedMultiPolygon& map, const geometry::Pose2& map_in_world,
                    const mapping::MultiPolygon& reachable, const WallIndex& walls, double wall_tolerance_m,
                    double obstacle_band_credit_m = 0.0, CreditNear credit_near = CreditNear::kMapObstacleEdges);
 

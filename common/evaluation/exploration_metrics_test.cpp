@@ -164,7 +164,7 @@ TEST(MapScores, MapEqualToTheReachableSpaceScoresOne) {
 
   // The same map given in the start frame (pose 3, 2, 90 deg): score_map
   // moves it to the world with the start pose.
-  const kinematics::Pose2 start{3.0, 2.0, std::numbers::pi / 2};
+  const geometry::Pose2 start{3.0, 2.0, std::numbers::pi / 2};
   MultiPolygon in_start_frame = reachable;
   for (auto& poly : in_start_frame)
     for (auto& p : poly.outer()) {

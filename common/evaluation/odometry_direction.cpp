@@ -7,7 +7,7 @@
 namespace pex::evaluation {
 namespace {
 
-using slam::Pose2;
+using geometry::Pose2;
 
 Pose2 reversed_translation(const Pose2& step) { return {-step.x_m, -step.y_m, step.theta_rad}; }
 
@@ -23,7 +23,7 @@ OdometryDirectionResult correct_odometry_direction(CarmenLog& log) {
   std::vector<bool> reversed(odom.size(), false);
   std::optional<std::size_t> first_reversed;
   for (std::size_t i = 1; i < odom.size(); ++i) {
-    const Pose2 step = slam::relative(odom[i - 1].pose, odom[i].pose);
+    const Pose2 step = geometry::relative(odom[i - 1].pose, odom[i].pose);
     if (odom[i - 1].tv_mps + odom[i].tv_mps < 0.0 && step.x_m > 0.0) {
       reversed[i] = true;
       ++result.reversed_steps;
@@ -36,8 +36,8 @@ OdometryDirectionResult correct_odometry_direction(CarmenLog& log) {
   std::vector<Pose2> original(odom.size());
   for (std::size_t i = 0; i < odom.size(); ++i) original[i] = odom[i].pose;
   for (std::size_t i = *first_reversed; i < odom.size(); ++i) {
-    const Pose2 step = slam::relative(original[i - 1], original[i]);
-    odom[i].pose = slam::compose(odom[i - 1].pose, reversed[i] ? reversed_translation(step) : step);
+    const Pose2 step = geometry::relative(original[i - 1], original[i]);
+    odom[i].pose = geometry::compose(odom[i - 1].pose, reversed[i] ? reversed_translation(step) : step);
   }
 
   // Each laser line's odometry at its offset from the ODOM line nearest in time
@@ -62,15 +62,15 @@ OdometryDirectionResult correct_odometry_direction(CarmenLog& log) {
       j = previous_odom ? *previous_odom : *next;
     else
       continue;
-    Pose2 offset = slam::relative(original[j], laser.odometry);
+    Pose2 offset = geometry::relative(original[j], laser.odometry);
     // The step the laser pose lies on: ahead of line j (j -> j+1) or behind it.
     const std::size_t on_step = offset.x_m >= 0.0 ? j + 1 : j;
     const bool on_reversed = on_step >= 1 && on_step < odom.size() && reversed[on_step];
     if (j < *first_reversed && on_step < *first_reversed) continue;  // nothing before it changed
     if (on_reversed) offset = reversed_translation(offset);
-    const Pose2 mounting = slam::relative(laser.odometry, laser.laser_pose);
-    laser.odometry = slam::compose(odom[j].pose, offset);
-    laser.laser_pose = slam::compose(laser.odometry, mounting);
+    const Pose2 mounting = geometry::relative(laser.odometry, laser.laser_pose);
+    laser.odometry = geometry::compose(odom[j].pose, offset);
+    laser.laser_pose = geometry::compose(laser.odometry, mounting);
     ++result.changed_laser_poses;
   }
   return result;

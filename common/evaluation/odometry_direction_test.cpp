@@ -12,7 +12,7 @@
 namespace pex::evaluation {
 namespace {
 
-using slam::Pose2;
+using geometry::Pose2;
 
 // One ODOM line (x y theta tv rv accel t host t).
 std::string odom_line(double x, double y, double theta, double tv, double t) {

@@ -64,7 +64,7 @@ RelationsFile read_relations(std::istream& in) {
       ++file.malformed_lines;
       continue;
     }
-    file.relations.push_back({v[0], v[1], {v[2], v[3], slam::normalize_angle(v[7])}});
+    file.relations.push_back({v[0], v[1], {v[2], v[3], geometry::wrap_angle(v[7])}});
   }
   return file;
 }
@@ -89,10 +89,10 @@ PoseFile read_poses(std::istream& in) {
   return file;
 }
 
-RelationError relation_error(const slam::Pose2& estimated, const slam::Pose2& reference) {
-  const slam::Pose2 error = slam::relative(reference, estimated);
+RelationError relation_error(const geometry::Pose2& estimated, const geometry::Pose2& reference) {
+  const geometry::Pose2 error = geometry::relative(reference, estimated);
   return {std::hypot(error.x_m, error.y_m),
-          std::abs(slam::normalize_angle(error.theta_rad)) * 180.0 / std::numbers::pi};
+          std::abs(geometry::wrap_angle(error.theta_rad)) * 180.0 / std::numbers::pi};
 }
 
 MetricResult evaluate_relations(const std::vector<StampedPose>& poses,
@@ -108,7 +108,7 @@ MetricResult evaluate_relations(const std::vector<StampedPose>& poses,
       ++result.unmatched;
       continue;
     }
-    const slam::Pose2 estimated = slam::relative(poses[i1].pose, poses[i2].pose);
+    const geometry::Pose2 estimated = geometry::relative(poses[i1].pose, poses[i2].pose);
     const RelationError error = relation_error(estimated, relation.pose_2_in_1);
     result.errors.push_back(error);
     trans.push_back(error.translation_m);

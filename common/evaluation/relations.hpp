@@ -9,19 +9,19 @@
 #include <string>
 #include <vector>
 
-#include "slam/pose2.hpp"
+#include "geometry/pose2.hpp"
 
 namespace pex::evaluation {
 
 struct Relation {
   double t1_s = 0.0;
   double t2_s = 0.0;
-  slam::Pose2 pose_2_in_1;  // the pose at t2 expressed in the frame of the pose at t1
+  geometry::Pose2 pose_2_in_1;  // the pose at t2 expressed in the frame of the pose at t1
 };
 
 struct StampedPose {
   double timestamp_s = 0.0;
-  slam::Pose2 pose;
+  geometry::Pose2 pose;
 };
 
 // Reads a relations file: one `t1 t2 x y z roll pitch yaw` per line (m, rad);
@@ -76,7 +76,7 @@ struct MetricResult {
 };
 
 // The error of one estimated relative pose against its reference.
-RelationError relation_error(const slam::Pose2& estimated_2_in_1, const slam::Pose2& reference_2_in_1);
+RelationError relation_error(const geometry::Pose2& estimated_2_in_1, const geometry::Pose2& reference_2_in_1);
 
 // `poses` must be sorted by timestamp. Std is the population standard deviation.
 MetricResult evaluate_relations(const std::vector<StampedPose>& poses,

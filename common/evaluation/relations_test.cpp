@@ -13,7 +13,7 @@ std::vector<StampedPose> circle_trajectory() {
   std::vector<StampedPose> poses;
   for (int i = 0; i < 50; ++i) {
     const double a = 0.1 * i;
-    poses.push_back({100.0 + i, {3.0 * std::cos(a), 3.0 * std::sin(a), slam::normalize_angle(a + 1.5)}});
+    poses.push_back({100.0 + i, {3.0 * std::cos(a), 3.0 * std::sin(a), geometry::wrap_angle(a + 1.5)}});
   }
   return poses;
 }
@@ -22,7 +22,7 @@ std::vector<Relation> relations_of(const std::vector<StampedPose>& poses) {
   std::vector<Relation> relations;
   for (std::size_t i = 0; i + 3 < poses.size(); ++i)
     relations.push_back({poses[i].timestamp_s, poses[i + 3].timestamp_s,
-                         slam::relative(poses[i].pose, poses[i + 3].pose)});
+                         geometry::relative(poses[i].pose, poses[i + 3].pose)});
   return relations;
 }
 
@@ -38,7 +38,7 @@ TEST(Relations, ExactTrajectoryHasZeroError) {
 TEST(Relations, GlobalRigidMotionDoesNotChangeTheError) {
   auto poses = circle_trajectory();
   const auto relations = relations_of(poses);
-  for (auto& p : poses) p.pose = slam::compose({5.0, -2.0, 0.7}, p.pose);
+  for (auto& p : poses) p.pose = geometry::compose({5.0, -2.0, 0.7}, p.pose);
   const auto result = evaluate_relations(poses, relations);
   EXPECT_NEAR(result.trans_mean_m, 0.0, 1e-9);
   EXPECT_NEAR(result.rot_mean_deg, 0.0, 1e-9);

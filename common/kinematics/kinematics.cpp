@@ -56,14 +56,6 @@ WheelSpeeds VelocityLimiter::step(BodyVelocity command, double dt_s) {
   return last_;
 }
 
-double normalize_angle(double a) {
-  if (!std::isfinite(a)) return 0.0;
-  a = std::fmod(a, 2.0 * std::numbers::pi);
-  if (a <= -std::numbers::pi) a += 2.0 * std::numbers::pi;
-  if (a > std::numbers::pi) a -= 2.0 * std::numbers::pi;
-  return a;
-}
-
 OdometryIntegrator::OdometryIntegrator(DriveGeometry geometry, Options options)
     : geometry_(geometry), options_(options) {}
 
@@ -98,12 +90,12 @@ bool OdometryIntegrator::update(std::int32_t left_counts, std::int32_t right_cou
 
   const double ds = 0.5 * (dl + dr);
   const double dtheta = (dr - dl) / geometry_.wheel_base_m;
-  Pose2& p = state_.pose;
+  geometry::Pose2& p = state_.pose;
   const double mid = p.theta_rad + 0.5 * dtheta;  // second-order (midpoint) integration
   const double c = std::cos(mid), s = std::sin(mid);
   p.x_m += ds * c;
   p.y_m += ds * s;
-  p.theta_rad = normalize_angle(p.theta_rad + dtheta);
+  p.theta_rad = geometry::wrap_angle(p.theta_rad + dtheta);
   signed_distance_m_ += ds;
   heading_rad_ += dtheta;
   history_.push_back({time_us, signed_distance_m_, heading_rad_});

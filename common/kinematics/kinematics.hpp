@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include "geometry/pose2.hpp"
+
 namespace pex::kinematics {
 
 // Geometry and encoder of the base. The encoder sits on the motor, before the
@@ -61,14 +63,6 @@ class VelocityLimiter {
   WheelSpeeds last_;
 };
 
-struct Pose2 {
-  double x_m = 0.0;
-  double y_m = 0.0;
-  double theta_rad = 0.0;  // (-pi, pi]
-};
-
-double normalize_angle(double angle_rad);
-
 // Integrates encoder counts into a pose with a covariance that grows with the
 // distance travelled and the angle turned. Counts are int32 and may wrap:
 // deltas are computed modulo 2^32.
@@ -88,7 +82,7 @@ class OdometryIntegrator {
   };
 
   struct State {
-    Pose2 pose;
+    geometry::Pose2 pose;  // heading in (-pi, pi]
     double v_mps = 0.0;
     double omega_radps = 0.0;
     std::array<double, 9> covariance{};  // row-major over (x, y, theta)

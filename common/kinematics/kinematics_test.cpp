@@ -123,13 +123,6 @@ TEST(Odometry, ImplausibleJumpRebaselines) {
   EXPECT_GT(odo.state().pose.x_m, x - 1.0);
 }
 
-TEST(Kinematics, NormalizeAngle) {
-  EXPECT_NEAR(normalize_angle(3.0 * std::numbers::pi), std::numbers::pi, 1e-12);
-  EXPECT_NEAR(normalize_angle(-std::numbers::pi), std::numbers::pi, 1e-12);
-  EXPECT_NEAR(normalize_angle(0.5), 0.5, 1e-15);
-  EXPECT_EQ(normalize_angle(std::numeric_limits<double>::infinity()), 0.0);
-}
-
 }  // namespace
 }  // namespace pex::kinematics
 

@@ -11,6 +11,8 @@
 namespace pex::mapping {
 namespace {
 
+using geometry::Pose2;
+
 using E = EdgeType;
 
 TypedPolygon rect(double x0, double y0, double x1, double y1, EdgeType type = E::kFrontier) {

@@ -10,6 +10,8 @@
 namespace pex::mapping {
 namespace {
 
+using geometry::Pose2;
+
 // A map of a random room with pillars, scanned along a line: several tiles,
 // holes, all three edge types.
 PolygonMap scanned_room(const PolygonMapOptions& options = {}) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "geometry/angle.hpp"
 #include "mapping/typed_ops.hpp"
 
 namespace pex::mapping {
@@ -97,8 +98,7 @@ bool append_right_offset(It first, It last, double distance_m, Ring& out) {
     const double turn = d.x() * e.y() - d.y() * e.x();
     if (turn > 1e-12) {  // left turn: an arc around b from `from` to `to`
       const double a0 = std::atan2(from.y() - b->y(), from.x() - b->x());
-      double sweep = std::atan2(to.y() - b->y(), to.x() - b->x()) - a0;
-      if (sweep < 0.0) sweep += 2.0 * M_PI;
+      const double sweep = geometry::wrap_angle_positive(std::atan2(to.y() - b->y(), to.x() - b->x()) - a0);
       const int steps = static_cast<int>(std::ceil(sweep / (2.0 * M_PI / kBandPointsPerCircle)));
       push(from);
       for (int k = 1; k < steps; ++k) {

@@ -14,6 +14,8 @@
 namespace pex::mapping {
 namespace {
 
+using geometry::Pose2;
+
 using E = EdgeType;
 using testing::ScanSpec;
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "geometry/point.hpp"
+
 namespace pex::mapping {
 
 namespace {
@@ -128,7 +130,7 @@ std::vector<Point> cluster_polyline(const std::vector<Point>& points, int level,
 }  // namespace
 
 ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_min,
-                                  double angle_increment, const Pose2& pose,
+                                  double angle_increment, const geometry::Pose2& pose,
                                   const ScanPolygonOptions& o) {
   ScanPolygonResult result;
   auto fail = [&](std::string why) {
@@ -140,7 +142,7 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
   if (ranges.size() > static_cast<std::size_t>(o.max_beams)) return fail("too many beams");
   if (!std::isfinite(angle_min) || !std::isfinite(angle_increment) || angle_increment == 0.0)
     return fail("angle_min / angle_increment not finite or increment zero");
-  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta))
+  if (!geometry::is_finite(pose))
     return fail("pose not finite");
   if (!(o.free_range_m > 0.0) || !(o.range_max_m > o.range_min_m) || !(o.obstacle_range_m >= 0.0) ||
       !(o.return_margin_m >= 0.0))
@@ -208,10 +210,7 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
   }
   for (const auto& p : pieces) result.clusters += p.cluster() ? 1 : 0;
 
-  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
-  auto to_map = [&](const Point& p) {
-    return Point(pose.x + c * p.x() - s * p.y(), pose.y + s * p.x() + c * p.y());
-  };
+  const geometry::PoseTransform to_map(pose);
 
   for (int level = 0; level <= 2; ++level) {
     std::vector<Point> vertices{Point(0.0, 0.0)};

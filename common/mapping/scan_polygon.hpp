@@ -14,16 +14,10 @@
 #include <span>
 #include <string>
 
+#include "geometry/pose2.hpp"
 #include "mapping/typed_polygon.hpp"
 
 namespace pex::mapping {
-
-// A pose in the map frame: metres, metres, radians.
-struct Pose2 {
-  double x = 0.0;
-  double y = 0.0;
-  double theta = 0.0;
-};
 
 struct ScanPolygonOptions {
   // Readings that are NaN, inf, below range_min_m or at/beyond range_max_m
@@ -92,7 +86,7 @@ struct ScanPolygonResult {
 // i * angle_increment in the sensor frame; `sensor_pose` is the sensor's pose
 // in the map frame. Never throws; bad input gives ok == false and an error.
 ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_min,
-                                  double angle_increment, const Pose2& sensor_pose,
+                                  double angle_increment, const geometry::Pose2& sensor_pose,
                                   const ScanPolygonOptions& options);
 
 }  // namespace pex::mapping

@@ -12,6 +12,8 @@
 namespace pex::mapping {
 namespace {
 
+using geometry::Pose2;
+
 using testing::add_box;
 using testing::cast_scan;
 using testing::ScanSpec;
@@ -80,8 +82,8 @@ TEST(ScanToPolygon, RoomSeenFromInsideHasObstacleEdgesOnTheWalls) {
   EXPECT_GT(area(map), 15.0);
   // The sensor origin is a vertex and both its edges are frontiers.
   const auto& ring = result.polygon.geometry.outer();
-  EXPECT_NEAR(ring.front().x(), pose.x, 1e-12);
-  EXPECT_NEAR(ring.front().y(), pose.y, 1e-12);
+  EXPECT_NEAR(ring.front().x(), pose.x_m, 1e-12);
+  EXPECT_NEAR(ring.front().y(), pose.y_m, 1e-12);
   EXPECT_EQ(result.polygon.edge_types[0].front(), EdgeType::kFrontier);
   EXPECT_EQ(result.polygon.edge_types[0].back(), EdgeType::kFrontier);
   // RDP + refit: a handful of vertices, not one per beam.

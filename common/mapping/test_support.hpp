@@ -12,6 +12,8 @@
 
 namespace pex::mapping::testing {
 
+using geometry::Pose2;
+
 struct Wall {
   Point a, b;
 };
@@ -48,15 +50,15 @@ inline std::vector<float> cast_scan(const std::vector<Wall>& walls, const Pose2&
   std::vector<Wall> near;
   const double reach = spec.range_max_m + 1e-6;
   for (const auto& w : walls) {
-    if (std::min(w.a.x(), w.b.x()) > pose.x + reach || std::max(w.a.x(), w.b.x()) < pose.x - reach ||
-        std::min(w.a.y(), w.b.y()) > pose.y + reach || std::max(w.a.y(), w.b.y()) < pose.y - reach)
+    if (std::min(w.a.x(), w.b.x()) > pose.x_m + reach || std::max(w.a.x(), w.b.x()) < pose.x_m - reach ||
+        std::min(w.a.y(), w.b.y()) > pose.y_m + reach || std::max(w.a.y(), w.b.y()) < pose.y_m - reach)
       continue;
     near.push_back(w);
   }
   std::vector<float> ranges(static_cast<std::size_t>(spec.beams));
   std::normal_distribution<double> noise(0.0, noise_m > 0 ? noise_m : 1.0);
   for (int i = 0; i < spec.beams; ++i) {
-    double r = cast_ray(near, pose.x, pose.y, pose.theta + spec.angle_min + spec.angle_increment * i);
+    double r = cast_ray(near, pose.x_m, pose.y_m, pose.theta_rad + spec.angle_min + spec.angle_increment * i);
     if (noise_m > 0 && rng && std::isfinite(r)) r += noise(*rng);
     ranges[static_cast<std::size_t>(i)] =
         r < spec.range_max_m ? static_cast<float>(r) : std::numeric_limits<float>::infinity();

@@ -19,15 +19,17 @@
 #include <boost/geometry/geometries/multi_polygon.hpp>
 #include <boost/geometry/geometries/segment.hpp>
 
+#include "geometry/point.hpp"
+
 namespace pex::mapping {
 
 namespace bg = boost::geometry;
 
-using Point = bg::model::d2::point_xy<double>;
+using geometry::Point;
+using geometry::Segment;
 using Polygon = bg::model::polygon<Point, /*ClockWise=*/false, /*Closed=*/true>;
 using Ring = Polygon::ring_type;
 using MultiPolygon = bg::model::multi_polygon<Polygon>;
-using Segment = bg::model::segment<Point>;
 using Box = bg::model::box<Point>;
 
 // The type of one edge. kBorder marks an artificial edge on the box of a map

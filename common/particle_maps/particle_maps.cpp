@@ -8,23 +8,17 @@
 #include <thread>
 #include <tuple>
 
+#include "geometry/point.hpp"
+
 namespace pex::particle_maps {
 
-using mapping::Pose2;
-
-Pose2 compose(const Pose2& a, const Pose2& b) {
-  const double c = std::cos(a.theta), s = std::sin(a.theta);
-  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, std::remainder(a.theta + b.theta, 2.0 * M_PI)};
-}
+using geometry::Pose2;
 
 namespace {
 void move_polygon(mapping::Polygon& polygon, const Pose2& pose) {
-  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  const geometry::PoseTransform to_map(pose);
   auto move = [&](mapping::Ring& ring) {
-    for (auto& p : ring) {
-      const double x = p.x(), y = p.y();
-      p = mapping::Point(pose.x + c * x - s * y, pose.y + s * x + c * y);
-    }
+    for (auto& p : ring) p = to_map(p);
   };
   move(polygon.outer());
   for (auto& inner : polygon.inners()) move(inner);
@@ -59,7 +53,7 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   const bool first = maps_.empty();
   for (std::size_t i = 0; i < particles.size(); ++i) {
     const auto& p = particles[i];
-    if (!std::isfinite(p.pose.x) || !std::isfinite(p.pose.y) || !std::isfinite(p.pose.theta)) {
+    if (!geometry::is_finite(p.pose)) {
       r.error = "particle " + std::to_string(i) + " has a non-finite pose";
       return r;
     }
@@ -86,7 +80,7 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   for (std::size_t i = 0; i < particles.size(); ++i) {
     const auto& p = particles[i];
     const int parent = first ? -1 : p.parent;
-    const auto [it, inserted] = first_with_key.emplace(std::make_tuple(parent, p.pose.x, p.pose.y, p.pose.theta), i);
+    const auto [it, inserted] = first_with_key.emplace(std::make_tuple(parent, p.pose.x_m, p.pose.y_m, p.pose.theta_rad), i);
     copy_of[i] = it->second;
     next.push_back(first ? mapping::PolygonMap(options_.map) : maps_[static_cast<std::size_t>(parent)]);
     if (inserted && local.ok) to_insert.push_back(i);
@@ -101,7 +95,7 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
     for (std::size_t k; (k = next_insert.fetch_add(1)) < to_insert.size();) {
       const std::size_t i = to_insert[k];
       const auto result =
-          next[i].insert(transformed(prepared, compose(particles[i].pose, scan.sensor_in_base)));
+          next[i].insert(transformed(prepared, geometry::compose(particles[i].pose, scan.sensor_in_base)));
       failed[i] = result.ok ? 0 : 1;
       fallbacks[i] = result.boost_fallbacks;
     }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "geometry/pose2.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
 
@@ -27,7 +28,7 @@ struct ParticleMapsOptions {
 // One particle of a filter update: its pose (map frame) when the scan was
 // taken, and its parent's index in the previous update (-1 on the first).
 struct ParticleState {
-  mapping::Pose2 pose;
+  geometry::Pose2 pose;
   int parent = -1;
 };
 
@@ -36,7 +37,7 @@ struct SensorScan {
   std::span<const float> ranges;
   double angle_min = 0.0;        // rad
   double angle_increment = 0.0;  // rad
-  mapping::Pose2 sensor_in_base; // m, m, rad
+  geometry::Pose2 sensor_in_base; // m, m, rad
 };
 
 struct UpdateResult {
@@ -51,11 +52,8 @@ struct UpdateResult {
 // The scan polygon moved by a rigid transform (rotation about the origin by
 // pose.theta, then translation). Validity is preserved up to rounding; the map
 // validates every tile it writes anyway.
-mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const mapping::Pose2& pose);
-mapping::PreparedScan transformed(const mapping::PreparedScan& scan, const mapping::Pose2& pose);
-
-// a ∘ b: pose b given in the frame of pose a.
-mapping::Pose2 compose(const mapping::Pose2& a, const mapping::Pose2& b);
+mapping::TypedPolygon transformed(const mapping::TypedPolygon& polygon, const geometry::Pose2& pose);
+mapping::PreparedScan transformed(const mapping::PreparedScan& scan, const geometry::Pose2& pose);
 
 class ParticleMaps {
  public:

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-using pex::mapping::Pose2;
+using pex::geometry::Pose2;
 using pex::particle_maps::ParticleMaps;
 using pex::particle_maps::ParticleState;
 using pex::particle_maps::SensorScan;
@@ -17,13 +17,13 @@ namespace {
 std::vector<float> room_scan(const Pose2& pose, double w, double h) {
   std::vector<float> r;
   for (int i = 0; i <= 180; ++i) {
-    const double a = pose.theta - M_PI / 2 + i * M_PI / 180;
+    const double a = pose.theta_rad - M_PI / 2 + i * M_PI / 180;
     const double dx = std::cos(a), dy = std::sin(a);
     double t = 1e9;
-    if (dx > 1e-12) t = std::min(t, (w - pose.x) / dx);
-    if (dx < -1e-12) t = std::min(t, -pose.x / dx);
-    if (dy > 1e-12) t = std::min(t, (h - pose.y) / dy);
-    if (dy < -1e-12) t = std::min(t, -pose.y / dy);
+    if (dx > 1e-12) t = std::min(t, (w - pose.x_m) / dx);
+    if (dx < -1e-12) t = std::min(t, -pose.x_m / dx);
+    if (dy > 1e-12) t = std::min(t, (h - pose.y_m) / dy);
+    if (dy < -1e-12) t = std::min(t, -pose.y_m / dy);
     r.push_back(static_cast<float>(t));
   }
   return r;
@@ -76,7 +76,7 @@ TEST(ParticleMaps, EachMapEqualsTheMapBuiltAlongItsOwnAncestry) {
     std::vector<ParticleState> ps;
     std::vector<std::vector<Pose2>> next_ancestry;
     for (int i = 0; i < 4; ++i) {
-      const Pose2 pose{truth.x + noise(rng), truth.y + noise(rng), truth.theta + 0.1 * noise(rng)};
+      const Pose2 pose{truth.x_m + noise(rng), truth.y_m + noise(rng), truth.theta_rad + 0.1 * noise(rng)};
       ps.push_back({pose, parents[g][i]});
       auto line = g == 0 ? std::vector<Pose2>{} : ancestry[parents[g][i]];
       line.push_back(pose);
@@ -186,7 +186,7 @@ TEST(ParticleMaps, ThreadCountDoesNotChangeTheMaps) {
     for (int i = 0; i < 6; ++i) ps.push_back({{5.0 + 0.02 * i, 5.0, 0.01 * i}, -1});
     maps.update(ps, scan_of(room_scan({5, 5, 0}, 20, 10)), scan_options());
     for (auto& p : ps) {
-      p.pose.x += 2.0;
+      p.pose.x_m += 2.0;
       p.parent = static_cast<int>(&p - ps.data()) % 3;
     }
     maps.update(ps, scan_of(room_scan({7, 5, 0}, 20, 10)), scan_options());

@@ -126,19 +126,19 @@ TypedMultiPolygon scanned_map(const std::vector<mapping::testing::Wall>& walls, 
   mapping::PolygonMap map;
   mapping::ScanPolygonOptions scan_options;
   scan_options.range_max_m = 10.0;
-  mapping::Pose2 pose{1.5, 1.5, 0.5};
+  geometry::Pose2 pose{1.5, 1.5, 0.5};
   for (int k = 0; k < scans; ++k) {
     const auto ranges = mapping::testing::cast_scan(walls, pose, mapping::testing::ScanSpec{}, 0.012, &rng);
     const auto scan = mapping::scan_to_polygon(ranges, -3.0 * std::numbers::pi / 4.0, std::numbers::pi / 360.0,
                                                pose, scan_options);
     if (scan.ok) map.insert(scan.polygon);
-    const double x = std::clamp(pose.x + step(rng), 1.0, w - 1.0), y = std::clamp(pose.y + step(rng), 1.0, h - 1.0);
-    if (mapping::testing::cast_ray(walls, pose.x, pose.y, std::atan2(y - pose.y, x - pose.x)) >
-        std::hypot(x - pose.x, y - pose.y) + 0.5) {
-      pose.x = x;
-      pose.y = y;
+    const double x = std::clamp(pose.x_m + step(rng), 1.0, w - 1.0), y = std::clamp(pose.y_m + step(rng), 1.0, h - 1.0);
+    if (mapping::testing::cast_ray(walls, pose.x_m, pose.y_m, std::atan2(y - pose.y_m, x - pose.x_m)) >
+        std::hypot(x - pose.x_m, y - pose.y_m) + 0.5) {
+      pose.x_m = x;
+      pose.y_m = y;
     }
-    pose.theta += turn(rng);
+    pose.theta_rad += turn(rng);
   }
   auto merged = map.planning_map();
   EXPECT_TRUE(merged.ok) << merged.error;

@@ -98,7 +98,7 @@ struct Setup {
 };
 std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, const PlannerOptions& options,
                             Plan& plan) {
-  if (!std::isfinite(robot.x) || !std::isfinite(robot.y) || !std::isfinite(robot.theta)) {
+  if (!std::isfinite(robot.x_m) || !std::isfinite(robot.y_m) || !std::isfinite(robot.theta_rad)) {
     plan.error = "robot pose is not finite";
     return std::nullopt;
   }
@@ -110,7 +110,7 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
   }
   plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(s.cspace.polygons()));
   plan.stats.reflex_nodes = static_cast<int>(s.cspace.reflex_nodes().size());
-  s.robot_point = Point(robot.x, robot.y);
+  s.robot_point = Point(robot.x_m, robot.y_m);
   const auto start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
   if (!start) {
     plan.robot_outside_cspace = true;
@@ -123,12 +123,6 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
 }
 
 }  // namespace
-
-double wrap_angle(double angle_rad) {
-  double a = std::remainder(angle_rad, 2.0 * std::numbers::pi);
-  if (a <= -std::numbers::pi) a += 2.0 * std::numbers::pi;
-  return a;
-}
 
 const char* to_string(GoalStrategy strategy) {
   switch (strategy) {
@@ -244,7 +238,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     if (c.path.size() >= 2) {
       const Point& a = c.path[0];
       const Point& b = c.path[1];
-      if (distance(a, b) > 1e-9) turn = std::abs(wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta));
+      if (distance(a, b) > 1e-9) turn = std::abs(geometry::wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta_rad));
     }
     c.cost = c.path_length_m + options.turn_cost_m_per_rad * turn;
   }

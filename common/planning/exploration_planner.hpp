@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "geometry/pose2.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "planning/cspace.hpp"
 #include "planning/frontier_goals.hpp"
@@ -19,7 +20,7 @@
 
 namespace pex::planning {
 
-using mapping::Pose2;
+using geometry::Pose2;
 
 // How the goal is chosen among the reachable candidates (the seam of goal
 // selection; measured side by side in docs/exploration.md).
@@ -121,8 +122,5 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
 // C-space (at most candidate_snap_distance_m), best when it is reachable.
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
                   const PlannerOptions& options);
-
-// Angle wrapped to (-pi, pi].
-double wrap_angle(double angle_rad);
 
 }  // namespace pex::planning

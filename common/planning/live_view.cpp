@@ -6,7 +6,7 @@
 namespace pex::planning {
 
 mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle_min, double angle_increment,
-                                     double range_min_m, const mapping::Pose2& sensor_pose,
+                                     double range_min_m, const geometry::Pose2& sensor_pose,
                                      const LiveViewOptions& options) {
   if (!(options.range_m > 0.0)) return {};
   mapping::ScanPolygonOptions scan;

@@ -34,7 +34,7 @@ struct LiveViewOptions {
 // map frame), every edge typed obstacle; empty when off or when the scan gives
 // no polygon.
 mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle_min, double angle_increment,
-                                     double range_min_m, const mapping::Pose2& sensor_pose,
+                                     double range_min_m, const geometry::Pose2& sensor_pose,
                                      const LiveViewOptions& options);
 
 // `map` with `live` united in; `map` itself when `live` is empty or the union

@@ -49,11 +49,10 @@ PlannerOptions options() {
 mapping::TypedMultiPolygon view_in(const std::vector<mapping::testing::Wall>& walls, const Pose2& robot,
                                    double range_m) {
   const mapping::testing::ScanSpec spec;
-  const mapping::Pose2 sensor{robot.x, robot.y, robot.theta};
-  const auto ranges = mapping::testing::cast_scan(walls, sensor, spec);
+  const auto ranges = mapping::testing::cast_scan(walls, robot, spec);
   LiveViewOptions o;
   o.range_m = range_m;
-  return live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, sensor, o);
+  return live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, robot, o);
 }
 
 mapping::TypedMultiPolygon view_from(const Pose2& robot, double range_m, bool door_open = true) {
@@ -145,7 +144,7 @@ TEST(LiveView, OffOrWithoutAPolygonItIsEmpty) {
   const std::vector<float> one_beam{1.0f};
   LiveViewOptions o;
   o.range_m = 3.0;
-  EXPECT_TRUE(live_view(one_beam, 0.0, 0.01, 0.05, mapping::Pose2{}, o).empty());
+  EXPECT_TRUE(live_view(one_beam, 0.0, 0.01, 0.05, geometry::Pose2{}, o).empty());
   // And an empty live view leaves the map as it is.
   const auto map = map_with_the_door_closed();
   EXPECT_EQ(mapping::vertex_count(with_live_view(map, {})), mapping::vertex_count(map));

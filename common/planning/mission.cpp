@@ -81,7 +81,7 @@ std::string to_text(const MissionCheckpoint& c) {
   add("start_utime %lld\n", static_cast<long long>(c.start_utime));
   add("end_utime %lld\n", static_cast<long long>(c.end_utime));
   add("travelled_m %.17g\n", c.travelled_m);
-  if (c.home) add("home %.17g %.17g %.17g\n", c.home->x, c.home->y, c.home->theta);
+  if (c.home) add("home %.17g %.17g %.17g\n", c.home->x_m, c.home->y_m, c.home->theta_rad);
   add("outcomes %lld %lld %lld %lld\n", static_cast<long long>(c.outcomes.reached),
       static_cast<long long>(c.outcomes.seen), static_cast<long long>(c.outcomes.blocked),
       static_cast<long long>(c.outcomes.no_progress));
@@ -125,8 +125,8 @@ std::optional<MissionCheckpoint> checkpoint_from_text(const std::string& text, s
       ok = static_cast<bool>(f >> c.travelled_m) && std::isfinite(c.travelled_m) && c.travelled_m >= 0.0;
     } else if (key == "home") {
       Pose2 h;
-      ok = static_cast<bool>(f >> h.x >> h.y >> h.theta) && std::isfinite(h.x) && std::isfinite(h.y) &&
-           std::isfinite(h.theta);
+      ok = static_cast<bool>(f >> h.x_m >> h.y_m >> h.theta_rad) && std::isfinite(h.x_m) && std::isfinite(h.y_m) &&
+           std::isfinite(h.theta_rad);
       c.home = h;
     } else if (key == "outcomes") {
       ok = static_cast<bool>(f >> c.outcomes.reached >> c.outcomes.seen >> c.outcomes.blocked >> c.outcomes.no_progress);
@@ -213,9 +213,9 @@ void Mission::on_map(TypedMultiPolygon map, std::int64_t utime, std::int64_t sca
 }
 
 void Mission::on_pose(const Pose2& pose, std::int64_t utime) {
-  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta)) return;
+  if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad)) return;
   if (pose_ && phase_ != Phase::kWaitingStart) {  // a robot pushed before the start is not the mission's travel
-    const double step = std::hypot(pose.x - pose_->x, pose.y - pose_->y);
+    const double step = std::hypot(pose.x_m - pose_->x_m, pose.y_m - pose_->y_m);
     if (step <= options_.max_travel_step_m) travelled_m_ += step;
   }
   pose_ = pose;
@@ -275,7 +275,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
       follower_.clear();
       outstanding_id_ = 0;
       end_utime_ = -1;
-      enter(Phase::kHoming, format("going home to (%.2f, %.2f)", home_->x, home_->y));
+      enter(Phase::kHoming, format("going home to (%.2f, %.2f)", home_->x_m, home_->y_m));
       last_request_utime_ = -1;
       return {};
     case MissionCommand::kStop:
@@ -318,7 +318,7 @@ void Mission::request_plan(std::int64_t now_utime, Purpose purpose, bool tight) 
   r.options = options_.planner;
   r.tight = tight;
   if (tight) r.options.cspace.clearance_margin_m = 0.0;
-  if (purpose == Purpose::kHome) r.home = Point(home_->x, home_->y);
+  if (purpose == Purpose::kHome) r.home = Point(home_->x_m, home_->y_m);
   outstanding_id_ = r.id;
   outstanding_purpose_ = purpose;
   outstanding_tight_ = tight;
@@ -468,14 +468,14 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       status_ = "trying the " + std::to_string(given_up) + " goals given up once more before finishing (" + why + ")";
       return;
     }
-    const Point here(pose_->x, pose_->y);
+    const Point here(pose_->x_m, pose_->y_m);
     if (empty_plans_ >= options_.done_confirmations && !nothing_left && options_.look_around && !looking_around_ &&
         (!looked_around_at_ || distance(here, *looked_around_at_) > 1.0)) {
       // Before it calls the rest unreachable: one turn on the spot, planning
       // on the newest scan as it goes round (MissionOptions::look_around).
       looking_around_ = true;
       look_turned_rad_ = 0.0;
-      look_last_theta_ = pose_->theta;
+      look_last_theta_ = pose_->theta_rad;
       look_until_utime_ = now_utime + options_.look_around_max_us;
       empty_plans_ = 0;
       ++looks_around_;
@@ -653,16 +653,16 @@ MissionOutput Mission::step(std::int64_t now_utime) {
     if (outstanding_id_ == 0 ? (fresh_map || want_tight_ || plan_due(now_utime)) : plan_due(now_utime))
       request_plan(now_utime, Purpose::kSelect, want_tight_);
     if (looking_around_) {
-      look_turned_rad_ += std::abs(wrap_angle(pose_->theta - look_last_theta_));
-      look_last_theta_ = pose_->theta;
+      look_turned_rad_ += std::abs(geometry::wrap_angle(pose_->theta_rad - look_last_theta_));
+      look_last_theta_ = pose_->theta_rad;
       if (look_turned_rad_ >= 2.0 * std::numbers::pi || now_utime >= look_until_utime_) {
         // Round once (or out of time): the plans made on the way decide.
         looking_around_ = false;
-        looked_around_at_ = Point(pose_->x, pose_->y);
+        looked_around_at_ = Point(pose_->x_m, pose_->y_m);
         status_ = "looked around; confirming on a newer map";
       } else {
         MissionOutput out = output();
-        out.command = follower_.turn_to(*pose_, pose_->theta + 1.0, dt_s);  // always 1 rad ahead: round and round
+        out.command = follower_.turn_to(*pose_, pose_->theta_rad + 1.0, dt_s);  // always 1 rad ahead: round and round
         out.plan_request = pending_request_;
         return out;
       }
@@ -670,14 +670,14 @@ MissionOutput Mission::step(std::int64_t now_utime) {
   }
 
   if (phase_ == Phase::kMoving) {
-    const Point here(pose_->x, pose_->y);
+    const Point here(pose_->x_m, pose_->y_m);
     if (distance(here, *goal_) <= options_.follower.goal_tolerance_m) {
       // There: face the frontier first, or the laser may never have seen it
       // (a goal right behind the robot at the start is the common case).
       const double to_frontier = distance(here, goal_frontier_);
       const double bearing = std::atan2(goal_frontier_.y() - here.y(), goal_frontier_.x() - here.x());
       if (options_.look_tolerance_rad > 0.0 && to_frontier > 0.05 &&
-          std::abs(wrap_angle(bearing - pose_->theta)) > options_.look_tolerance_rad) {
+          std::abs(geometry::wrap_angle(bearing - pose_->theta_rad)) > options_.look_tolerance_rad) {
         MissionOutput out = output();
         out.command = follower_.turn_to(*pose_, bearing, dt_s);
         out.status = status_;
@@ -709,9 +709,9 @@ MissionOutput Mission::step(std::int64_t now_utime) {
   }
 
   if (phase_ == Phase::kHoming) {
-    const Point here(pose_->x, pose_->y);
-    if (distance(here, Point(home_->x, home_->y)) <= options_.follower.goal_tolerance_m) {
-      finish(Phase::kHome, format("home: back at (%.2f, %.2f)", home_->x, home_->y), now_utime);
+    const Point here(pose_->x_m, pose_->y_m);
+    if (distance(here, Point(home_->x_m, home_->y_m)) <= options_.follower.goal_tolerance_m) {
+      finish(Phase::kHome, format("home: back at (%.2f, %.2f)", home_->x_m, home_->y_m), now_utime);
       return stopped();
     }
     if (plan_due(now_utime)) request_plan(now_utime, Purpose::kHome, false);

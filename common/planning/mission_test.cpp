@@ -506,7 +506,7 @@ TEST(Mission, SqueezesThroughANarrowGapWithoutTheMarginOnlyWhenNothingElseIsLeft
     out = step_with_inline_planning(strict, t);
     EXPECT_EQ(out.command.v_mps, 0.0);  // on the spot
     EXPECT_GE(out.command.omega_radps, 0.0);
-    theta = wrap_angle(theta + out.command.omega_radps * 0.1);
+    theta = geometry::wrap_angle(theta + out.command.omega_radps * 0.1);
     turned += out.command.omega_radps * 0.1;
   }
   EXPECT_GE(turned, 2.0 * std::numbers::pi);  // once round, then done

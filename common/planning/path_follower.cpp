@@ -30,13 +30,13 @@ void PathFollower::set_path(std::vector<Point> path) {
 
 VelocityCommand PathFollower::update(const Pose2& pose, double dt_s) {
   dt_s = std::clamp(std::isfinite(dt_s) ? dt_s : 0.0, 0.0, 0.5);
-  if (path_.empty() || reached_ || !std::isfinite(pose.x) || !std::isfinite(pose.y) ||
-      !std::isfinite(pose.theta)) {
+  if (path_.empty() || reached_ || !std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) ||
+      !std::isfinite(pose.theta_rad)) {
     last_ = {};
     turning_ = false;
     return last_;
   }
-  const Point here(pose.x, pose.y);
+  const Point here(pose.x_m, pose.y_m);
   const Point& goal = path_.back();
   const double to_goal = distance(here, goal);
   if (to_goal <= options_.goal_tolerance_m) {
@@ -71,9 +71,9 @@ VelocityCommand PathFollower::update(const Pose2& pose, double dt_s) {
   const double total = arc_.back();
   const Point target = path_.size() >= 2 ? point_at_arc_length(path_, std::min(along + options_.lookahead_m, vertex_arc))
                                           : goal;
-  const double dx = target.x() - pose.x, dy = target.y() - pose.y;
+  const double dx = target.x() - pose.x_m, dy = target.y() - pose.y_m;
   const double lookahead = std::hypot(dx, dy);
-  const double heading_error = lookahead > 1e-9 ? wrap_angle(std::atan2(dy, dx) - pose.theta) : 0.0;
+  const double heading_error = lookahead > 1e-9 ? geometry::wrap_angle(std::atan2(dy, dx) - pose.theta_rad) : 0.0;
 
   if (std::abs(heading_error) > options_.turn_in_place_rad) turning_ = true;
   if (turning_ && std::abs(heading_error) < options_.turn_in_place_exit_rad) turning_ = false;
@@ -102,7 +102,7 @@ VelocityCommand PathFollower::update(const Pose2& pose, double dt_s) {
 
 VelocityCommand PathFollower::turn_to(const Pose2& pose, double heading_rad, double dt_s) {
   dt_s = std::clamp(std::isfinite(dt_s) ? dt_s : 0.0, 0.0, 0.5);
-  const double error = wrap_angle(heading_rad - pose.theta);
+  const double error = geometry::wrap_angle(heading_rad - pose.theta_rad);
   const double wanted =
       std::clamp(options_.turn_gain_per_s * error, -options_.max_omega_radps, options_.max_omega_radps);
   last_.v_mps = step_toward(last_.v_mps, 0.0, options_.max_accel_mps2 * dt_s);

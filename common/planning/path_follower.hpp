@@ -6,13 +6,14 @@
 // that it can stop at the end of the path.
 #include <vector>
 
+#include "geometry/pose2.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "mapping/typed_polygon.hpp"
 
 namespace pex::planning {
 
 using mapping::Point;
-using mapping::Pose2;
+using geometry::Pose2;
 
 struct FollowerOptions {
   double max_speed_mps = 0.4;

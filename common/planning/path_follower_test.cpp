@@ -49,12 +49,12 @@ SimRun simulate(const std::vector<Point>& path, Pose2 pose, const FollowerOption
     run.max_angular_accel_radps2 =
         std::max(run.max_angular_accel_radps2, std::abs(c.omega_radps - previous.omega_radps) / dt);
     previous = c;
-    const bool far = distance(Point(pose.x, pose.y), path.back()) > 1.5;
+    const bool far = distance(Point(pose.x_m, pose.y_m), path.back()) > 1.5;
     if (far && !follower.turning_in_place() && i > 100) run.min_speed_while_far_mps = std::min(run.min_speed_while_far_mps, c.v_mps);
-    pose.x += c.v_mps * std::cos(pose.theta) * dt;
-    pose.y += c.v_mps * std::sin(pose.theta) * dt;
-    pose.theta += c.omega_radps * dt;
-    run.max_cross_track_m = std::max(run.max_cross_track_m, distance_to_path(Point(pose.x, pose.y), path));
+    pose.x_m += c.v_mps * std::cos(pose.theta_rad) * dt;
+    pose.y_m += c.v_mps * std::sin(pose.theta_rad) * dt;
+    pose.theta_rad += c.omega_radps * dt;
+    run.max_cross_track_m = std::max(run.max_cross_track_m, distance_to_path(Point(pose.x_m, pose.y_m), path));
   }
   run.final_pose = pose;
   return run;
@@ -72,7 +72,7 @@ TEST(PathFollower, ConvergesOnAStraightPathFromAnOffset) {
   const std::vector<Point> path{Point(0, 0), Point(8, 0)};
   const SimRun run = simulate(path, Pose2{0.0, 0.3, 0.2}, o);
   ASSERT_TRUE(run.reached);
-  EXPECT_LE(distance(Point(run.final_pose.x, run.final_pose.y), path.back()), o.goal_tolerance_m);
+  EXPECT_LE(distance(Point(run.final_pose.x_m, run.final_pose.y_m), path.back()), o.goal_tolerance_m);
   EXPECT_LT(run.max_cross_track_m, 0.4);
   expect_within_limits(run, o);
   // It drives at full speed in the middle of the path (not crawling).
@@ -85,7 +85,7 @@ TEST(PathFollower, TurnsInPlaceThenFollowsAnLShapedPath) {
   // Facing away from the path: it must turn on the spot first.
   const SimRun run = simulate(path, Pose2{0.0, 0.0, 3.0}, o);
   ASSERT_TRUE(run.reached);
-  EXPECT_LE(distance(Point(run.final_pose.x, run.final_pose.y), path.back()), o.goal_tolerance_m);
+  EXPECT_LE(distance(Point(run.final_pose.x_m, run.final_pose.y_m), path.back()), o.goal_tolerance_m);
   // The corner is cut by no more than the corner tolerance (and a little
   // overshoot of the turn on the spot), far less than the look-ahead.
   EXPECT_LT(run.max_cross_track_m, o.corner_tolerance_m + 0.05);
@@ -115,7 +115,7 @@ TEST(PathFollower, SlowsDownBeforeTheGoal) {
   Pose2 pose{0, 0, 0};
   double v_far = 0.0;
   for (int i = 0; i < 50; ++i) v_far = follower.update(pose, 0.1).v_mps;  // accelerate in place
-  pose.x = 9.7;  // 0.3 m before the end
+  pose.x_m = 9.7;  // 0.3 m before the end
   double v_near = v_far;
   for (int i = 0; i < 20; ++i) v_near = follower.update(pose, 0.1).v_mps;
   EXPECT_NEAR(v_far, o.max_speed_mps, 1e-12);

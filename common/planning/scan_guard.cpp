@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
+
+#include "geometry/angle.hpp"
 
 namespace pex::planning {
 namespace {
@@ -39,9 +40,7 @@ double arc_free_distance(double x, double y, double kappa, double r) {
   // Angles about C, counted in the direction of travel from the robot's own.
   const double sign = kappa > 0.0 ? 1.0 : -1.0;
   const double start = std::atan2(-radius, 0.0);
-  double to_point = sign * (std::atan2(dy, dx) - start);
-  to_point = std::fmod(to_point, 2.0 * std::numbers::pi);
-  if (to_point < 0.0) to_point += 2.0 * std::numbers::pi;
+  const double to_point = geometry::wrap_angle_positive(sign * (std::atan2(dy, dx) - start));
   return std::max(0.0, to_point - half_width) * abs_radius;
 }
 

@@ -15,12 +15,14 @@
 #include <boost/geometry/geometries/segment.hpp>
 #include <boost/geometry/index/rtree.hpp>
 
+#include "geometry/point.hpp"
+
 namespace pex::sim {
 
 namespace bg = boost::geometry;
 namespace bgi = boost::geometry::index;
-using Point = bg::model::d2::point_xy<double>;
-using Segment = bg::model::segment<Point>;
+using geometry::Point;
+using geometry::Segment;
 using Linestring = bg::model::linestring<Point>;
 using MultiLinestring = bg::model::multi_linestring<Linestring>;
 using Polygon = bg::model::polygon<Point>;
@@ -147,7 +149,7 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
           !std::isfinite(theta)) {
         return fail(line_number, "START needs three finite numbers: x_m y_m theta_rad");
       }
-      world.start = Pose2{x, y, kinematics::normalize_angle(theta)};
+      world.start = Pose2{x, y, geometry::wrap_angle(theta)};
       have_start = true;
       start_line = line_number;
       continue;
@@ -281,15 +283,13 @@ Laser::Laser(LaserOptions options, std::uint64_t seed) : options_(options), rng_
 
 std::vector<float> Laser::scan(const RayCaster& caster, const Pose2& robot) {
   const int n = options_.beam_count();
-  const double c = std::cos(robot.theta_rad), s = std::sin(robot.theta_rad);
-  const double sx = robot.x_m + c * options_.mount_x_m - s * options_.mount_y_m;
-  const double sy = robot.y_m + s * options_.mount_x_m + c * options_.mount_y_m;
+  const Point sensor = geometry::transform(robot, Point(options_.mount_x_m, options_.mount_y_m));
   const double base = robot.theta_rad + options_.mount_theta_rad + options_.first_angle_rad();
   const double step = options_.step_deg * std::numbers::pi / 180.0;
   std::normal_distribution<double> noise(0.0, options_.range_noise_sigma_m);
   std::vector<float> ranges(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    const double r = caster.cast(sx, sy, base + i * step, options_.max_range_m);
+    const double r = caster.cast(sensor.x(), sensor.y(), base + i * step, options_.max_range_m);
     // Draw noise for every beam, hit or not, so one beam's outcome never
     // shifts the random sequence of the others.
     const double e = options_.range_noise_sigma_m > 0.0 ? noise(rng_) : 0.0;
@@ -330,7 +330,7 @@ void DiffDrivePlant::step(double dt_s, double left_radps, double right_radps, co
   const double dtheta = (dr - dl) / base;
   const double mid = pose_.theta_rad + 0.5 * dtheta;
   Pose2 next{pose_.x_m + ds * std::cos(mid), pose_.y_m + ds * std::sin(mid),
-             kinematics::normalize_angle(pose_.theta_rad + dtheta)};
+             geometry::wrap_angle(pose_.theta_rad + dtheta)};
   bool refused = false;
   if (caster && std::abs(ds) > 0.0) {
     // Refuse translation into a wall (rotation in place is always allowed).

@@ -14,7 +14,7 @@
 
 namespace pex::sim {
 
-using kinematics::Pose2;
+using geometry::Pose2;
 
 struct Wall {
   double x0, y0, x1, y1;  // m

@@ -19,7 +19,7 @@ Pose2 sample_motion(const Pose2& pose, const Pose2& step, const MotionModelOptio
   Pose2 noisy = step;
   noisy.x_m += sigma.x_m * normal(rng);
   noisy.y_m += sigma.y_m * normal(rng);
-  noisy.theta_rad = normalize_angle(noisy.theta_rad + sigma.theta_rad * normal(rng));
+  noisy.theta_rad = geometry::wrap_angle(noisy.theta_rad + sigma.theta_rad * normal(rng));
   return compose(pose, noisy);
 }
 

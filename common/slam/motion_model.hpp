@@ -4,9 +4,11 @@
 // standard deviations grow with the step, then applied to the particle.
 #include <random>
 
-#include "slam/pose2.hpp"
+#include "geometry/pose2.hpp"
 
 namespace pex::slam {
+
+using geometry::Pose2;
 
 struct MotionModelOptions {
   double srr = 0.1;  // translation std per metre of translation (m/m)

@@ -27,7 +27,7 @@ void OdometryLagEstimator::add(std::int64_t from_utime, std::int64_t to_utime, d
     const std::optional<Pose2> from = odometry_at(from_utime - lead_us);
     const std::optional<Pose2> to = odometry_at(to_utime - lead_us);
     if (!from || !to) return;  // every candidate judged on the same updates
-    const double e = normalize_angle(matched_turn_rad - normalize_angle(to->theta_rad - from->theta_rad));
+    const double e = geometry::wrap_angle(matched_turn_rad - geometry::wrap_angle(to->theta_rad - from->theta_rad));
     residual[k] = std::min(e * e, options_.outlier_rad * options_.outlier_rad);
   }
   for (std::size_t k = 0; k < cost_.size(); ++k) cost_[k] += residual[k];

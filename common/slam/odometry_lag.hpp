@@ -20,9 +20,11 @@
 #include <vector>
 
 #include "archive/byte_archive.hpp"
-#include "slam/pose2.hpp"
+#include "geometry/pose2.hpp"
 
 namespace pex::slam {
+
+using geometry::Pose2;
 
 struct OdometryLagOptions {
   double max_lead_s = 0.3;   // candidates from -max_lead_s to +max_lead_s ...

@@ -277,7 +277,7 @@ std::optional<double> ParticleFilter::best_turn_at_last_update() const {
   const TrajectoryNode* node = particles_[best_index()].trajectory.get();
   if (!node || !node->parent || node->generation != generation_ || node->parent->generation != generation_ - 1)
     return std::nullopt;
-  return normalize_angle(node->pose.theta_rad - node->parent->pose.theta_rad);
+  return geometry::wrap_angle(node->pose.theta_rad - node->parent->pose.theta_rad);
 }
 
 std::vector<Pose2> ParticleFilter::best_trajectory() const {

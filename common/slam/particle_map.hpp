@@ -6,10 +6,12 @@
 #include <cstddef>
 #include <memory>
 
-#include "slam/pose2.hpp"
+#include "geometry/pose2.hpp"
 #include "slam/scan.hpp"
 
 namespace pex::slam {
+
+using geometry::Pose2;
 
 struct PoseEvaluation {
   double score = 0.0;           // matching score: larger is better, >= 0

@@ -2,9 +2,11 @@
 // Poses in the filter's and the odometry pairing's checkpoints
 // (archive/byte_archive.hpp): three doubles, bit for bit.
 #include "archive/byte_archive.hpp"
-#include "slam/pose2.hpp"
+#include "geometry/pose2.hpp"
 
 namespace pex::slam {
+
+using geometry::Pose2;
 
 inline void put_pose(archive::ByteWriter& out, const Pose2& pose) {
   out.put<double>(pose.x_m);

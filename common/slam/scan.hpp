@@ -4,9 +4,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "slam/pose2.hpp"
+#include "geometry/pose2.hpp"
 
 namespace pex::slam {
+
+using geometry::Pose2;
 
 // The raw scan: beam i is at angle_min_rad + i * angle_increment_rad in the
 // sensor frame; a range that is not finite or lies outside [range_min_m,

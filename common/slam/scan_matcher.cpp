@@ -62,7 +62,7 @@ MatchResult match_scan(const ParticleMap& map, const ScanPoints& scan, const Pos
     for (int m = 0; m < static_cast<int>(moves.size()); ++m) {
       if (last_move >= 0 && m == (last_move ^ 1)) continue;
       Pose2 candidate = moves[static_cast<std::size_t>(m)];
-      candidate.theta_rad = normalize_angle(candidate.theta_rad);
+      candidate.theta_rad = geometry::wrap_angle(candidate.theta_rad);
       const PoseEvaluation e = map.evaluate(candidate, scan);
       ++result.evaluations;
       if (e.score > best_eval.score) {
@@ -104,12 +104,12 @@ ProposalResult sample_improved_proposal(const ParticleMap& map, const ScanPoints
       for (int k = -1; k <= 1; ++k) {
         const Eigen::Vector3d d(i * options.linear_offset_m, j * options.linear_offset_m,
                                 k * options.angular_offset_rad);
-        const Pose2 x{matched.x_m + d.x(), matched.y_m + d.y(), normalize_angle(matched.theta_rad + d.z())};
+        const Pose2 x{matched.x_m + d.x(), matched.y_m + d.y(), geometry::wrap_angle(matched.theta_rad + d.z())};
         double lw = map.log_likelihood(x, scan);
         if (options.use_motion_prior) {
           const double ex = (x.x_m - predicted.x_m) / sx;
           const double ey = (x.y_m - predicted.y_m) / sy;
-          const double et = normalize_angle(x.theta_rad - predicted.theta_rad) / st;
+          const double et = geometry::wrap_angle(x.theta_rad - predicted.theta_rad) / st;
           lw += -0.5 * (ex * ex + ey * ey + et * et);
         }
         offsets[n] = d;
@@ -139,7 +139,7 @@ ProposalResult sample_improved_proposal(const ParticleMap& map, const ScanPoints
   const Eigen::Vector3d z(normal(rng), normal(rng), normal(rng));
   const Eigen::Vector3d draw = mean + options.sample_scale * (l * z);
   ProposalResult result;
-  result.pose = {matched.x_m + draw.x(), matched.y_m + draw.y(), normalize_angle(matched.theta_rad + draw.z())};
+  result.pose = {matched.x_m + draw.x(), matched.y_m + draw.y(), geometry::wrap_angle(matched.theta_rad + draw.z())};
   result.log_weight_increment = max_log_w + std::log(sum);
   return result;
 }

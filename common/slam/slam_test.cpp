@@ -91,16 +91,6 @@ TEST(MotionModel, SampleStatisticsFollowTheNoiseParameters) {
   EXPECT_DOUBLE_EQ(turn_sigma.x_m, options.str);
 }
 
-TEST(Pose2, ComposeAndRelativeAreInverse) {
-  const Pose2 a{1.0, -2.0, 2.5}, b{0.3, 0.7, -3.0};
-  const Pose2 r = relative(a, compose(a, b));
-  EXPECT_NEAR(r.x_m, b.x_m, 1e-12);
-  EXPECT_NEAR(r.y_m, b.y_m, 1e-12);
-  EXPECT_NEAR(r.theta_rad, b.theta_rad, 1e-12);
-  const Pose2 id = compose(a, inverse(a));
-  EXPECT_NEAR(std::hypot(id.x_m, id.y_m), 0.0, 1e-12);
-}
-
 TEST(CowGridMap, ClonesShareTilesAndCopyOnWrite) {
   CowGridMap map({});
   const Pose2 pose{0.0, 0.0, 0.0};
@@ -152,7 +142,7 @@ class RecordingMap final : public ParticleMap {
   PoseEvaluation evaluate(const Pose2& pose, const ScanPoints&) const override {
     scored.push_back(pose);
     const double dx = pose.x_m - target_.x_m, dy = pose.y_m - target_.y_m;
-    const double dt = normalize_angle(pose.theta_rad - target_.theta_rad);
+    const double dt = geometry::wrap_angle(pose.theta_rad - target_.theta_rad);
     PoseEvaluation e;
     e.score = std::exp(-(dx * dx + dy * dy) / 0.01 - dt * dt / 0.01);
     e.log_likelihood = std::log(e.score);
@@ -378,7 +368,7 @@ TEST(TrajectoryRecorder, SpreadCorrectionsFollowTheTruthBetweenUpdates) {
       const Pose2 estimated = relative(poses[i - 1].pose, poses[i].pose);
       const Pose2 truth = relative(d.truth[i - 1], d.truth[i]);
       sum += std::hypot(estimated.x_m - truth.x_m, estimated.y_m - truth.y_m) +
-             std::abs(normalize_angle(estimated.theta_rad - truth.theta_rad));
+             std::abs(geometry::wrap_angle(estimated.theta_rad - truth.theta_rad));
     }
     return sum / static_cast<double>(poses.size() - 1);
   };
@@ -868,7 +858,7 @@ TEST(OdometryLag, EstimatesTheLeadOfTheOdometryFromMatchedTurns) {
       for (; odometry_until <= scan_us + 500'000; odometry_until += step_us)
         sync.add_odometry(odometry_until, {0.0, 0.0, heading(odometry_until * 1e-6 + true_lead_s)});
       const double previous_s = (scan_us - 400'000) * 1e-6;
-      sync.observe_update(scan_us, normalize_angle(heading(scan_us * 1e-6) - heading(previous_s)));
+      sync.observe_update(scan_us, geometry::wrap_angle(heading(scan_us * 1e-6) - heading(previous_s)));
     }
     return std::make_pair(sync.lead_us(), sync.lag_estimator().updates());
   };

@@ -131,9 +131,7 @@ std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_
                                                                const planning::LiveViewOptions& options) {
   if (!(options.range_m > 0.0)) return nullptr;
   // The sensor's pose in the map frame: the robot's, composed with the mounting.
-  const double c = std::cos(robot.theta), s = std::sin(robot.theta);
-  const mapping::Pose2 sensor{robot.x + c * scan.sensor_x - s * scan.sensor_y,
-                              robot.y + s * scan.sensor_x + c * scan.sensor_y, robot.theta + scan.sensor_theta};
+  const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
   auto view = planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor, options);
   if (view.empty()) return nullptr;
   return std::make_shared<const mapping::TypedMultiPolygon>(std::move(view));

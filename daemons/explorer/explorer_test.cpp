@@ -283,7 +283,7 @@ pex::laser_scan_t two_rooms_scan(const pex::pose_t& pose) {
   scan.angle_increment = static_cast<float>(spec.angle_increment);
   scan.range_min = 0.05f;
   scan.range_max = static_cast<float>(spec.range_max_m);
-  scan.ranges = mapping::testing::cast_scan(walls, mapping::Pose2{pose.x, pose.y, pose.theta}, spec);
+  scan.ranges = mapping::testing::cast_scan(walls, geometry::Pose2{pose.x, pose.y, pose.theta}, spec);
   scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
   return scan;
 }

@@ -13,11 +13,6 @@ namespace pex::polygon_mapper {
 
 namespace {
 
-double wrap_angle(double a) {
-  a = std::remainder(a, 2.0 * std::numbers::pi);
-  return a;
-}
-
 bool finite(double v) { return std::isfinite(v); }
 
 }  // namespace
@@ -73,14 +68,14 @@ MapperOptions load_options(runtime::ConfigReader& config) {
 }
 
 bool PoseBuffer::add(const TimedPose& pose) {
-  if (!finite(pose.pose.x) || !finite(pose.pose.y) || !finite(pose.pose.theta)) return false;
+  if (!finite(pose.pose.x_m) || !finite(pose.pose.y_m) || !finite(pose.pose.theta_rad)) return false;
   if (!poses_.empty() && pose.utime <= poses_.back().utime) return false;
   poses_.push_back(pose);
   while (!poses_.empty() && poses_.front().utime < pose.utime - keep_us_) poses_.pop_front();
   return true;
 }
 
-PoseBuffer::Lookup PoseBuffer::pose_at(std::int64_t utime, std::int64_t max_gap_us, mapping::Pose2& out) const {
+PoseBuffer::Lookup PoseBuffer::pose_at(std::int64_t utime, std::int64_t max_gap_us, geometry::Pose2& out) const {
   if (poses_.empty()) return Lookup::kEmpty;
   if (utime < poses_.front().utime) return Lookup::kTooOld;
   if (utime > poses_.back().utime) return Lookup::kTooNew;
@@ -95,9 +90,9 @@ PoseBuffer::Lookup PoseBuffer::pose_at(std::int64_t utime, std::int64_t max_gap_
   const TimedPose& a = *(it - 1);
   if (b.utime - a.utime > max_gap_us) return Lookup::kGap;
   const double s = static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
-  out.x = a.pose.x + s * (b.pose.x - a.pose.x);
-  out.y = a.pose.y + s * (b.pose.y - a.pose.y);
-  out.theta = wrap_angle(a.pose.theta + s * wrap_angle(b.pose.theta - a.pose.theta));
+  out.x_m = a.pose.x_m + s * (b.pose.x_m - a.pose.x_m);
+  out.y_m = a.pose.y_m + s * (b.pose.y_m - a.pose.y_m);
+  out.theta_rad = geometry::wrap_angle(a.pose.theta_rad + s * geometry::wrap_angle(b.pose.theta_rad - a.pose.theta_rad));
   return Lookup::kOk;
 }
 
@@ -220,7 +215,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   best_ = update.best;
   generation_ = update.generation;
   const auto& best = update.particles[static_cast<std::size_t>(update.best)];
-  last_insert_pose_ = mapping::Pose2{best.x, best.y, best.theta};
+  last_insert_pose_ = geometry::Pose2{best.x, best.y, best.theta};
   last_scan_utime_ = scan->utime;
   pending_.erase(pending_.begin(), scan + 1);  // older scans will get no update either
   mark_changed();
@@ -265,7 +260,7 @@ void Mapper::process_pending() {
 }
 
 bool Mapper::try_insert(const pex::laser_scan_t& scan) {
-  mapping::Pose2 robot;
+  geometry::Pose2 robot;
   const auto lookup = poses_.pose_at(scan.utime, static_cast<std::int64_t>(options_.max_pose_gap_s * 1e6), robot);
   if (lookup == PoseBuffer::Lookup::kTooNew || lookup == PoseBuffer::Lookup::kEmpty) return false;
   if (lookup != PoseBuffer::Lookup::kOk) {
@@ -273,8 +268,8 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
     return true;  // consumed: it will never get a pose
   }
   if (last_insert_pose_) {
-    const double moved = std::hypot(robot.x - last_insert_pose_->x, robot.y - last_insert_pose_->y);
-    const double turned = std::abs(wrap_angle(robot.theta - last_insert_pose_->theta));
+    const double moved = std::hypot(robot.x_m - last_insert_pose_->x_m, robot.y_m - last_insert_pose_->y_m);
+    const double turned = std::abs(geometry::wrap_angle(robot.theta_rad - last_insert_pose_->theta_rad));
     const bool due = options_.insert_max_interval_s > 0.0 && last_insert_scan_utime_ >= 0 &&
                      scan.utime - last_insert_scan_utime_ >= static_cast<std::int64_t>(options_.insert_max_interval_s * 1e6);
     if (moved < options_.insert_min_distance_m && turned < options_.insert_min_rotation_rad && !due) {
@@ -283,10 +278,7 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
     }
   }
   // Sensor pose in the map: the robot pose composed with the mounting.
-  const double c = std::cos(robot.theta), s = std::sin(robot.theta);
-  const mapping::Pose2 sensor{robot.x + c * scan.sensor_x - s * scan.sensor_y,
-                              robot.y + s * scan.sensor_x + c * scan.sensor_y,
-                              wrap_angle(robot.theta + scan.sensor_theta)};
+  const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
   const mapping::ScanPolygonOptions scan_options = scan_options_for(scan);
   const auto polygon = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options);
   if (!polygon.ok) {
@@ -372,9 +364,9 @@ std::optional<pex::polygon_map_t> Mapper::stamped(std::optional<pex::polygon_map
   message->generation = best_ >= 0 ? generation_ : counters_.scans_inserted;
   message->scans_inserted = static_cast<std::int32_t>(counters_.scans_inserted);
   if (last_insert_pose_) {
-    message->robot_x = last_insert_pose_->x;
-    message->robot_y = last_insert_pose_->y;
-    message->robot_theta = last_insert_pose_->theta;
+    message->robot_x = last_insert_pose_->x_m;
+    message->robot_y = last_insert_pose_->y_m;
+    message->robot_theta = last_insert_pose_->theta_rad;
   }
   return message;
 }
@@ -390,10 +382,10 @@ std::string Mapper::checkpoint() const {
   out.put<std::int64_t>(epoch_);
   out.put<std::int64_t>(generation_);
   out.put_bool(last_insert_pose_.has_value());
-  const mapping::Pose2 pose = last_insert_pose_.value_or(mapping::Pose2{});
-  out.put<double>(pose.x);
-  out.put<double>(pose.y);
-  out.put<double>(pose.theta);
+  const geometry::Pose2 pose = last_insert_pose_.value_or(geometry::Pose2{});
+  out.put<double>(pose.x_m);
+  out.put<double>(pose.y_m);
+  out.put<double>(pose.theta_rad);
   out.put<std::int64_t>(last_insert_scan_utime_);
   out.put<std::int64_t>(last_scan_utime_);
   out.put<std::int64_t>(counters_.scans_inserted);
@@ -411,10 +403,10 @@ std::string Mapper::restore(std::string_view checkpoint) {
              options_.pose_source + "\"";
     const auto epoch = in.get<std::int64_t>(), generation = in.get<std::int64_t>();
     const bool has_pose = in.get_bool();
-    mapping::Pose2 pose;
-    pose.x = in.get<double>();
-    pose.y = in.get<double>();
-    pose.theta = in.get<double>();
+    geometry::Pose2 pose;
+    pose.x_m = in.get<double>();
+    pose.y_m = in.get<double>();
+    pose.theta_rad = in.get<double>();
     const auto last_insert_scan_utime = in.get<std::int64_t>(), last_scan_utime = in.get<std::int64_t>();
     const auto scans_inserted = in.get<std::int64_t>();
     mapping::PolygonMap map = mapping::read_polygon_map(in, options_.map);

@@ -56,7 +56,7 @@ MapperOptions load_options(runtime::ConfigReader& config);
 
 struct TimedPose {
   std::int64_t utime = 0;
-  mapping::Pose2 pose;
+  geometry::Pose2 pose;
 };
 
 // Poses in time order; pose_at() interpolates (theta along the shorter arc).
@@ -67,7 +67,7 @@ class PoseBuffer {
   bool add(const TimedPose& pose);
   enum class Lookup { kOk, kTooOld, kTooNew, kGap, kEmpty };
   // The pose at `utime`, if two buffered poses at most max_gap_us apart bracket it.
-  Lookup pose_at(std::int64_t utime, std::int64_t max_gap_us, mapping::Pose2& out) const;
+  Lookup pose_at(std::int64_t utime, std::int64_t max_gap_us, geometry::Pose2& out) const;
   std::size_t size() const { return poses_.size(); }
 
  private:
@@ -172,7 +172,7 @@ class Mapper {
   PoseBuffer poses_;
   std::deque<pex::laser_scan_t> pending_;
   mapping::PolygonMap map_;
-  std::optional<mapping::Pose2> last_insert_pose_;
+  std::optional<geometry::Pose2> last_insert_pose_;
   std::int64_t last_insert_scan_utime_ = -1;
   std::int64_t last_scan_utime_ = 0;
   std::optional<pex::polygon_map_t> message_;

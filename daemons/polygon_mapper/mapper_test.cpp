@@ -16,11 +16,11 @@ TEST(PoseBuffer, InterpolatesAndWrapsTheta) {
   PoseBuffer buffer(10.0);
   ASSERT_TRUE(buffer.add({1'000'000, {0.0, 0.0, 3.0}}));
   ASSERT_TRUE(buffer.add({2'000'000, {2.0, 1.0, -3.0}}));  // turned 0.28 rad through pi
-  mapping::Pose2 p;
+  geometry::Pose2 p;
   ASSERT_EQ(buffer.pose_at(1'500'000, 2'000'000, p), PoseBuffer::Lookup::kOk);
-  EXPECT_NEAR(p.x, 1.0, 1e-12);
-  EXPECT_NEAR(p.y, 0.5, 1e-12);
-  EXPECT_NEAR(std::abs(p.theta), std::numbers::pi, 1e-9);
+  EXPECT_NEAR(p.x_m, 1.0, 1e-12);
+  EXPECT_NEAR(p.y_m, 0.5, 1e-12);
+  EXPECT_NEAR(std::abs(p.theta_rad), std::numbers::pi, 1e-9);
   EXPECT_EQ(buffer.pose_at(500'000, 2'000'000, p), PoseBuffer::Lookup::kTooOld);
   EXPECT_EQ(buffer.pose_at(2'500'000, 2'000'000, p), PoseBuffer::Lookup::kTooNew);
   EXPECT_EQ(buffer.pose_at(1'500'000, 100'000, p), PoseBuffer::Lookup::kGap);
@@ -28,7 +28,7 @@ TEST(PoseBuffer, InterpolatesAndWrapsTheta) {
   EXPECT_FALSE(buffer.add({1'500'000, {0.0, 0.0, 0.0}}));  // out of order
 }
 
-pex::laser_scan_t make_scan(const std::vector<mapping::testing::Wall>& walls, const mapping::Pose2& pose,
+pex::laser_scan_t make_scan(const std::vector<mapping::testing::Wall>& walls, const geometry::Pose2& pose,
                             std::int64_t utime) {
   const mapping::testing::ScanSpec spec;
   pex::laser_scan_t scan{};
@@ -85,7 +85,7 @@ TEST(Mapper, FreeSpaceMessageKeepsTheFloorTheObstacleBandTakes) {
   mapping::testing::add_box(walls, 0, 0, 10, 5);
   walls.push_back({mapping::Point{5.0, 0.0}, mapping::Point{5.0, 3.0}});  // the thin wall, door from y = 3 to 5
   Mapper mapper(MapperOptions{});
-  const std::vector<mapping::Pose2> stops{{2.5, 1.5, 0.0}, {2.5, 4.0, 0.0}, {7.5, 1.5, 3.14}, {7.5, 4.0, 3.14}};
+  const std::vector<geometry::Pose2> stops{{2.5, 1.5, 0.0}, {2.5, 4.0, 0.0}, {7.5, 1.5, 3.14}, {7.5, 4.0, 3.14}};
   std::int64_t t = 1'000'000;
   for (const auto& stop : stops) {
     mapper.on_pose({t, stop});
@@ -155,7 +155,7 @@ TEST(MapperOptions, ShippedConfigLoadsAndNamesTheSlamSource) {
 // --- pose_source = "slam": one map per particle, best particle's map published.
 
 // Ranges seen from `pose` inside the room [0, 20] x [0, 10]: 181 beams over 180 degrees.
-pex::laser_scan_t room_scan(std::int64_t utime, const mapping::Pose2& pose) {
+pex::laser_scan_t room_scan(std::int64_t utime, const geometry::Pose2& pose) {
   pex::laser_scan_t s{};
   s.utime = utime;
   s.angle_min = static_cast<float>(-M_PI / 2);
@@ -163,12 +163,12 @@ pex::laser_scan_t room_scan(std::int64_t utime, const mapping::Pose2& pose) {
   s.range_min = 0.05f;
   s.range_max = 30.0f;
   for (int i = 0; i <= 180; ++i) {
-    const double a = pose.theta - M_PI / 2 + i * M_PI / 180, dx = std::cos(a), dy = std::sin(a);
+    const double a = pose.theta_rad - M_PI / 2 + i * M_PI / 180, dx = std::cos(a), dy = std::sin(a);
     double t = 1e9;
-    if (dx > 1e-12) t = std::min(t, (20 - pose.x) / dx);
-    if (dx < -1e-12) t = std::min(t, -pose.x / dx);
-    if (dy > 1e-12) t = std::min(t, (10 - pose.y) / dy);
-    if (dy < -1e-12) t = std::min(t, -pose.y / dy);
+    if (dx > 1e-12) t = std::min(t, (20 - pose.x_m) / dx);
+    if (dx < -1e-12) t = std::min(t, -pose.x_m / dx);
+    if (dy > 1e-12) t = std::min(t, (10 - pose.y_m) / dy);
+    if (dy < -1e-12) t = std::min(t, -pose.y_m / dy);
     s.ranges.push_back(static_cast<float>(t));
   }
   s.nranges = static_cast<std::int32_t>(s.ranges.size());
@@ -176,7 +176,7 @@ pex::laser_scan_t room_scan(std::int64_t utime, const mapping::Pose2& pose) {
 }
 
 pex::slam_update_t slam_update(std::int64_t generation, std::int64_t scan_utime, int best,
-                               const std::vector<std::pair<mapping::Pose2, int>>& particles) {
+                               const std::vector<std::pair<geometry::Pose2, int>>& particles) {
   pex::slam_update_t u{};
   u.utime = scan_utime + 1000;
   u.scan_utime = scan_utime;
@@ -184,9 +184,9 @@ pex::slam_update_t slam_update(std::int64_t generation, std::int64_t scan_utime,
   u.best = best;
   for (const auto& [pose, parent] : particles) {
     pex::particle_t p{};
-    p.x = pose.x;
-    p.y = pose.y;
-    p.theta = pose.theta;
+    p.x = pose.x_m;
+    p.y = pose.y_m;
+    p.theta = pose.theta_rad;
     p.parent = parent;
     u.particles.push_back(p);
   }

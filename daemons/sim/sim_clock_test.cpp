@@ -29,7 +29,7 @@ TEST(SimClock, StepsInSimulatedTimeWithTruthOnTheSameTimeLineAndCountsContacts) 
   o.can_local_path = "@pex-sim-clock-test-" + std::to_string(getpid());
   // Parked against a wall (the outer wall at x = 0): one contact, no motion.
   o.start_override = true;
-  o.start = kinematics::Pose2{o.plant.robot_radius_m - 0.01, 3.5, 0.0};
+  o.start = geometry::Pose2{o.plant.robot_radius_m - 0.01, 3.5, 0.0};
 
   std::vector<pex::sim_clock_t> clocks;
   std::vector<pex::pose_t> truths;

@@ -38,7 +38,7 @@ SimOptions load_options(runtime::ConfigReader& config) {
       throw ConfigError(config.origin() + ": start_pose_m_m_rad: needs [x_m, y_m, theta_rad], finite");
     }
     o.start_override = true;
-    o.start = kinematics::Pose2{start[0], start[1], kinematics::normalize_angle(start[2])};
+    o.start = geometry::Pose2{start[0], start[1], geometry::wrap_angle(start[2])};
   }
 
   runtime::ConfigReader lidar = config.section("lidar");

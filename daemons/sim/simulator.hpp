@@ -27,7 +27,7 @@ struct SimOptions {
   PacingOptions pacing;             // hold the clock while the set lags (pacer.hpp)
   // Override of the world's START pose (all three or none).
   bool start_override = false;
-  kinematics::Pose2 start;
+  geometry::Pose2 start;
 
   // The laser and its CoLa-A server.
   sim::LaserOptions laser;

@@ -12,7 +12,7 @@ SlamNode::SlamNode(const SlamNodeOptions& options, SlamOutputs outputs)
 
 void SlamNode::on_odometry(const odometry_t& msg) {
   const slam::Pose2 pose{msg.x, msg.y, msg.theta};
-  if (!slam::is_finite(pose)) throw std::invalid_argument("odometry pose is not finite");
+  if (!geometry::is_finite(pose)) throw std::invalid_argument("odometry pose is not finite");
   // An impossible step is held back (OdometrySync): SLAM does not move on it.
   if (!sync_.add_odometry(msg.utime, pose, msg.covariance[8])) throw std::invalid_argument(sync_.why());
   process(sync_.take_ready());

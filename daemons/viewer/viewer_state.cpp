@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "geometry/point.hpp"
 #include "map_files.hpp"
 #include "runtime/daemon_state.hpp"
 
@@ -78,9 +79,9 @@ std::string ViewerState::on_scan(const pex::laser_scan_t& scan) {
       !finite(scan.range_max) || !finite(scan.sensor_x) || !finite(scan.sensor_y) || !finite(scan.sensor_theta))
     return "non-finite angles, limits or sensor pose";
   if (!pose_) return {};  // nothing to draw it from yet: not the scan's fault
-  const double c = std::cos(pose_->theta), s = std::sin(pose_->theta);
-  const double sx = pose_->x + c * scan.sensor_x - s * scan.sensor_y;
-  const double sy = pose_->y + s * scan.sensor_x + c * scan.sensor_y;
+  const geometry::Point sensor =
+      geometry::transform({pose_->x, pose_->y, pose_->theta}, geometry::Point(scan.sensor_x, scan.sensor_y));
+  const double sx = sensor.x(), sy = sensor.y();
   const double st = pose_->theta + scan.sensor_theta;
   const int n = scan.nranges;
   const int step = std::max(1, (n + options_.max_scan_points - 1) / std::max(1, options_.max_scan_points));

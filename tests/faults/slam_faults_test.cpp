@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "exploration_set.hpp"
+#include "geometry/pose2.hpp"
 #include "map_score.hpp"
 #include "harness.hpp"
 #include "runtime/channels.hpp"
@@ -49,13 +50,8 @@ pex::pose_t truth_at(const std::vector<pex::pose_t>& truth, std::int64_t utime) 
 
 // `to` seen from `from`: (forward, left, turn). The same for the truth and for
 // SLAM whatever their frames, so their motions compare directly.
-struct Motion {
-  double x, y, theta;
-};
-Motion motion(const pex::pose_t& from, const pex::pose_t& to) {
-  const double c = std::cos(from.theta), s = std::sin(from.theta);
-  const double dx = to.x - from.x, dy = to.y - from.y;
-  return {c * dx + s * dy, -s * dx + c * dy, std::remainder(to.theta - from.theta, 2.0 * std::numbers::pi)};
+pex::geometry::Pose2 motion(const pex::pose_t& from, const pex::pose_t& to) {
+  return pex::geometry::relative({from.x, from.y, from.theta}, {to.x, to.y, to.theta});
 }
 
 }  // namespace
@@ -103,13 +99,13 @@ TEST(SlamFaults, KilledSlamGoesOnFromItsCheckpointWithTheSameEpochAndNoJump) {
   // after the restart is the robot's, within a few cm (the restored filter
   // misses at most the updates of the last checkpoint period).
   const pex::pose_t first_pose = slam_poses[poses_before];
-  const Motion slam_moved = motion(last_pose, first_pose);
-  const Motion truth_moved = motion(truth_at(truth, last_pose.utime), truth_at(truth, first_pose.utime));
-  const double error_m = std::hypot(slam_moved.x - truth_moved.x, slam_moved.y - truth_moved.y);
-  EXPECT_LT(error_m, 0.05) << "SLAM moved (" << slam_moved.x << ", " << slam_moved.y << ") over the restart, the robot ("
-                           << truth_moved.x << ", " << truth_moved.y << ")";
-  EXPECT_LT(std::abs(slam_moved.theta - truth_moved.theta), 0.03)
-      << "SLAM turned " << slam_moved.theta << " rad over the restart, the robot " << truth_moved.theta;
+  const pex::geometry::Pose2 slam_moved = motion(last_pose, first_pose);
+  const pex::geometry::Pose2 truth_moved = motion(truth_at(truth, last_pose.utime), truth_at(truth, first_pose.utime));
+  const double error_m = std::hypot(slam_moved.x_m - truth_moved.x_m, slam_moved.y_m - truth_moved.y_m);
+  EXPECT_LT(error_m, 0.05) << "SLAM moved (" << slam_moved.x_m << ", " << slam_moved.y_m << ") over the restart, the robot ("
+                           << truth_moved.x_m << ", " << truth_moved.y_m << ")";
+  EXPECT_LT(std::abs(slam_moved.theta_rad - truth_moved.theta_rad), 0.03)
+      << "SLAM turned " << slam_moved.theta_rad << " rad over the restart, the robot " << truth_moved.theta_rad;
   // The same lineage: the same epoch, generations going on from the checkpoint's.
   const pex::slam_update_t& first_update = updates[updates_before];
   EXPECT_EQ(first_update.epoch, last_update.epoch) << "the restarted SLAM is a new filter";
@@ -119,8 +115,8 @@ TEST(SlamFaults, KilledSlamGoesOnFromItsCheckpointWithTheSameEpochAndNoJump) {
   EXPECT_LE(first_update.generation, last_update.generation + 1);
   std::cout << "SLAM killed at generation " << last_update.generation << ", first update after the restart: generation "
             << first_update.generation << (first_update.republished ? " (republished)" : "") << "; motion over the restart "
-            << "SLAM (" << slam_moved.x << ", " << slam_moved.y << ", " << slam_moved.theta << "), truth (" << truth_moved.x
-            << ", " << truth_moved.y << ", " << truth_moved.theta << ")\n";
+            << "SLAM (" << slam_moved.x_m << ", " << slam_moved.y_m << ", " << slam_moved.theta_rad << "), truth (" << truth_moved.x_m
+            << ", " << truth_moved.y_m << ", " << truth_moved.theta_rad << ")\n";
 
   expect_done_with_the_world_mapped(set);
   const auto other_epoch = std::count_if(updates.begin() + static_cast<std::ptrdiff_t>(updates_before), updates.end(),

@@ -18,6 +18,8 @@
 namespace pex::mapping {
 namespace {
 
+using geometry::Pose2;
+
 std::string read_file(const std::string& path) {
   std::ifstream in(path);
   std::stringstream ss;
@@ -34,11 +36,11 @@ std::vector<Pose2> trajectory(const std::vector<std::pair<double, double>>& wayp
     const auto [x0, y0] = waypoints[k];
     const auto [x1, y1] = waypoints[k + 1];
     const double target = std::atan2(y1 - y0, x1 - x0);
-    double turn = std::remainder(target - heading, 2 * std::numbers::pi);
+    double turn = geometry::wrap_angle(target - heading);
     while (std::abs(turn) > 0.2) {
       heading += std::copysign(0.2, turn);
       poses.push_back({x0, y0, heading});
-      turn = std::remainder(target - heading, 2 * std::numbers::pi);
+      turn = geometry::wrap_angle(target - heading);
     }
     heading = target;
     const double length = std::hypot(x1 - x0, y1 - y0);
@@ -83,7 +85,7 @@ TEST(MappingAccuracy, TwoRoomsNoiseFree) {
   PolygonMap map;
   int inserted = 0, refused = 0;
   for (const auto& pose : poses) {
-    const auto ranges = laser.scan(caster, {pose.x, pose.y, pose.theta});
+    const auto ranges = laser.scan(caster, pose);
     const auto scan = scan_to_polygon(ranges, laser_options.first_angle_rad(), laser_options.step_deg * std::numbers::pi / 180.0,
                                       pose, scan_options);
     ASSERT_TRUE(scan.ok) << scan.error;

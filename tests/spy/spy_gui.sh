@@ -3,7 +3,7 @@
 # them, on a real X server (Xvfb), inside a private network namespace while the set
 # (pex-sim, lidar_reader, base_driver, slam, polygon_mapper, explorer) runs:
 #  1. pex-spy opens its window and lists the set's channels, each with its registry
-#     type (common/runtime/channels.hpp) and 0 undecodable messages; the table is read
+#     type (platform/runtime/channels.hpp) and 0 undecodable messages; the table is read
 #     through the clipboard (click, Ctrl+A, Ctrl+C, xclip), as a person copies it;
 #  2. a double click on MAP opens its message view (pex.polygon_map_t, jchart2d's
 #     plots), which stays open while more MAP messages arrive, with no exception on
@@ -39,9 +39,9 @@ export DISPLAY=:$(cat "$tmp/display")
 # channel -> type from the registry (kLidarScan = "LIDAR_SCAN"; {kLidarScan, "pex.laser_scan_t", ...})
 declare -A type_of
 while read -r const name; do
-  t=$(sed -n "s/^ *{$const, \"pex\.\([a-z0-9_]*\)\".*/\1/p" "$src/common/runtime/channels.hpp")
+  t=$(sed -n "s/^ *{$const, \"pex\.\([a-z0-9_]*\)\".*/\1/p" "$src/platform/runtime/channels.hpp")
   [ -n "$t" ] && type_of[$name]=$t
-done < <(sed -n 's/^inline constexpr std::string_view \(k[A-Za-z]*\) = "\([A-Z_]*\)";/\1 \2/p' "$src/common/runtime/channels.hpp")
+done < <(sed -n 's/^inline constexpr std::string_view \(k[A-Za-z]*\) = "\([A-Z_]*\)";/\1 \2/p' "$src/platform/runtime/channels.hpp")
 ((${#type_of[@]} >= 10)) || fail "could not read the channel registry"
 expected=(LIDAR_SCAN ODOMETRY SLAM_UPDATE SLAM_POSE MAP EXPLORE_STATE DAEMON_STATUS SIM_TRUTH SIM_CLOCK)
 

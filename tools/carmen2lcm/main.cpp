@@ -25,9 +25,6 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
 #include <lcm/lcm-cpp.hpp>
 
 #include <cmath>
@@ -40,6 +37,7 @@
 #include <pex/laser_scan_t.hpp>
 #include <pex/odometry_t.hpp>
 
+#include "cli/command_line.hpp"
 #include "evaluation/carmen_log.hpp"
 #include "evaluation/laps.hpp"
 #include "evaluation/odometry_direction.hpp"
@@ -78,12 +76,12 @@ class LogWriter {
   std::int64_t events_ = 0;
 };
 
-pex::odometry_t odometry_message(std::int64_t utime, const pex::slam::Pose2& pose, double v, double omega) {
+pex::odometry_t odometry_message(std::int64_t utime, const pex::geometry::Pose2& pose, double v, double omega) {
   pex::odometry_t msg{};
   msg.utime = utime;
   msg.x = pose.x_m;
   msg.y = pose.y_m;
-  msg.theta = pex::slam::normalize_angle(pose.theta_rad);
+  msg.theta = pex::geometry::wrap_angle(pose.theta_rad);
   msg.v = v;
   msg.omega = omega;
   return msg;
@@ -93,15 +91,15 @@ pex::odometry_t odometry_message(std::int64_t utime, const pex::slam::Pose2& pos
 // pose as the robot's odometry pose composed with the mounting offset, so their
 // difference is the offset; where it is implausible for a front laser (some
 // logs write a corrected pose there) the PARAM robot_frontlaser_offset is used.
-pex::slam::Pose2 sensor_mounting(const ev::CarmenLaser& laser, double frontlaser_offset_m) {
-  const pex::slam::Pose2 offset = pex::slam::relative(laser.odometry, laser.laser_pose);
+pex::geometry::Pose2 sensor_mounting(const ev::CarmenLaser& laser, double frontlaser_offset_m) {
+  const pex::geometry::Pose2 offset = pex::geometry::relative(laser.odometry, laser.laser_pose);
   // (+ 0.0 turns the -0.0 of an exactly zero offset into +0.0.)
   if (std::hypot(offset.x_m, offset.y_m) <= 1.0 && std::abs(offset.theta_rad) <= 0.2)
     return {offset.x_m + 0.0, offset.y_m + 0.0, offset.theta_rad + 0.0};
   return {frontlaser_offset_m, 0.0, 0.0};
 }
 
-pex::laser_scan_t scan_message(const ev::CarmenLaser& laser, std::int32_t counter, const pex::slam::Pose2& sensor) {
+pex::laser_scan_t scan_message(const ev::CarmenLaser& laser, std::int32_t counter, const pex::geometry::Pose2& sensor) {
   pex::laser_scan_t msg{};
   msg.utime = to_utime(laser.timestamp_s);
   msg.device_utime = 0;
@@ -147,12 +145,7 @@ int main(int argc, char** argv) {
   app.add_option("--lap-gap-s", lap_gap_s, "time between the end of a pass and the start of the next")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
-  app.set_version_flag("--version", std::string("pex-carmen2lcm ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-carmen2lcm", argc, argv)) return *code;
 
   std::ifstream in(in_path);
   if (!in) {

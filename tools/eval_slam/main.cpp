@@ -3,14 +3,11 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
-
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 
+#include "cli/command_line.hpp"
 #include "evaluation/relations.hpp"
 
 int main(int argc, char** argv) {
@@ -28,12 +25,7 @@ int main(int argc, char** argv) {
                  "also summarise relations less than this many s apart (near: local accuracy) and the "
                  "others (far: loops) apart; 0: no split")
       ->capture_default_str();
-  app.set_version_flag("--version", std::string("pex-eval-slam ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-eval-slam", argc, argv)) return *code;
 
   std::ifstream poses_in(poses_path);
   if (!poses_in) {

@@ -18,10 +18,7 @@
 
 #include <CLI/CLI.hpp>
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
-
+#include "cli/command_line.hpp"
 #include "report.hpp"
 
 namespace {
@@ -61,12 +58,7 @@ int main(int argc, char** argv) {
       ->expected(3);
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
   app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed, violet: not reachable, gold: beyond the walls) to this SVG");
-  app.set_version_flag("--version", std::string("pex-explore-report ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 64;  // --help: 0; a bad command line: 64, as the daemons
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-explore-report", argc, argv)) return *code;
 
   std::ifstream world_file(world_path);
   if (!world_file) return fail(66, "cannot read world file " + world_path);
@@ -75,7 +67,7 @@ int main(int argc, char** argv) {
   auto parsed = pex::sim::parse_world(text.str(), world_path);
   if (auto* error = std::get_if<pex::sim::WorldError>(&parsed)) return fail(65, error->message);
   const auto& world = std::get<pex::sim::World>(parsed);
-  pex::kinematics::Pose2 start = world.start;
+  pex::geometry::Pose2 start = world.start;
   if (!start_pose.empty()) start = {start_pose[0], start_pose[1], start_pose[2]};
   if (map_frame == "start") options.map_in_world = start;
   using pex::explore_report::ScoredMap;

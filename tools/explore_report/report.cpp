@@ -44,7 +44,7 @@ std::optional<double> finite(double v) {
 }
 
 // SLAM_POSE against the truth nearest in time (Report's slam_error_*).
-void audit_poses(const LogContents& log, const kinematics::Pose2& map_in_world, Report& r) {
+void audit_poses(const LogContents& log, const geometry::Pose2& map_in_world, Report& r) {
   if (log.slam_poses.empty() || log.truth.empty()) return;
   std::vector<StampedPose> truth = log.truth;
   std::stable_sort(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
@@ -65,7 +65,7 @@ void audit_poses(const LogContents& log, const kinematics::Pose2& map_in_world, 
     if (!std::isfinite(e)) continue;
     sum += e;
     worst = std::max(worst, e);
-    heading_sum += std::abs(kinematics::normalize_angle(map_in_world.theta_rad + p.theta_rad - nearest->pose.theta_rad));
+    heading_sum += std::abs(geometry::wrap_angle(map_in_world.theta_rad + p.theta_rad - nearest->pose.theta_rad));
     ++n;
   }
   if (n == 0) return;
@@ -100,7 +100,7 @@ std::optional<LogContents> read_log(const std::string& path, std::string* error)
       pex::pose_t msg;
       if (!decode(*event, msg)) ++out.rejected;
       else (event->channel == ch::kSlamPose ? out.slam_poses : out.truth)
-          .push_back({msg.utime, kinematics::Pose2{msg.x, msg.y, msg.theta}});
+          .push_back({msg.utime, geometry::Pose2{msg.x, msg.y, msg.theta}});
     } else if (event->channel == ch::kDaemonStatus) {
       pex::daemon_status_t msg;
       if (!decode(*event, msg)) ++out.rejected;
@@ -297,7 +297,7 @@ std::string path_of(const MultiPolygon& polygons, const ToPx& px) {
 }  // namespace
 
 std::string to_svg(const sim::World& world, const MultiPolygon& reachable, const mapping::TypedMultiPolygon& map_world,
-                   const kinematics::Pose2& start, double robot_radius_m, double wall_tolerance_m,
+                   const geometry::Pose2& start, double robot_radius_m, double wall_tolerance_m,
                    const MultiPolygon* world_free) {
   const MultiPolygon map_free = mapping::geometry_of(map_world);
   // Frame: the walls' box and the map, a 1 m margin.

@@ -18,7 +18,7 @@ namespace pex::explore_report {
 
 struct StampedPose {
   std::int64_t utime = 0;
-  kinematics::Pose2 pose;
+  geometry::Pose2 pose;
 };
 
 // The last decodable message of each channel the report needs, and the
@@ -60,7 +60,7 @@ struct ReportOptions {
   evaluation::CreditNear credit_near = evaluation::CreditNear::kMapObstacleEdges;
   // The pose of the MAP frame's origin in the world: the robot's start pose
   // (SLAM / odometry frame) or the identity (pose_source = "sim_truth").
-  kinematics::Pose2 map_in_world;
+  geometry::Pose2 map_in_world;
 };
 
 // One benchmark line; nullopt fields are printed as null.
@@ -112,7 +112,7 @@ std::string to_json(const Report& report);
 // With world_free (make_report), the map's free space outside the world's
 // free region (beyond a wall) is drawn gold over the violet.
 std::string to_svg(const sim::World& world, const mapping::MultiPolygon& reachable,
-                   const mapping::TypedMultiPolygon& map_world, const kinematics::Pose2& start,
+                   const mapping::TypedMultiPolygon& map_world, const geometry::Pose2& start,
                    double robot_radius_m, double wall_tolerance_m, const mapping::MultiPolygon* world_free = nullptr);
 
 }  // namespace pex::explore_report

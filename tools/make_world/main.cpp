@@ -7,10 +7,6 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/command_line.hpp"
 #include "evaluation/carmen_log.hpp"
 #include "evaluation/relations.hpp"
 #include "make_world.hpp"
@@ -74,12 +71,7 @@ int main(int argc, char** argv) {
   app.add_option("--simplify-m", o.simplify_m, "Ramer-Douglas-Peucker tolerance")->capture_default_str();
   app.add_option("--robot-radius-m", o.robot_radius_m, "for the reachable area")->capture_default_str();
   app.add_option("--start-clearance-m", o.start_clearance_m, "START's distance to every wall")->capture_default_str();
-  app.set_version_flag("--version", std::string("pex-make-world ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-make-world", argc, argv)) return *code;
   if (const auto bad = g.validate(); !bad.empty()) {
     std::fprintf(stderr, "pex-make-world: %s\n", bad.c_str());
     return 64;
@@ -106,7 +98,7 @@ int main(int argc, char** argv) {
   // Each scan at the pose with the nearest time stamp. The poses are the
   // robot's; the scan's own laser pose relative to its odometry gives the mount.
   std::vector<mw::PosedScan> scans;
-  std::vector<mw::Pose> trajectory;
+  std::vector<mw::Pose2> trajectory;
   for (const auto& laser : log.lasers) {
     const auto it = std::lower_bound(poses.poses.begin(), poses.poses.end(), laser.timestamp_s,
                                      [](const ev::StampedPose& p, double t) { return p.timestamp_s < t; });
@@ -117,14 +109,14 @@ int main(int argc, char** argv) {
                                 std::abs(best->timestamp_s - laser.timestamp_s)))
       best = &*std::prev(it);
     if (best == nullptr || std::abs(best->timestamp_s - laser.timestamp_s) > max_time_difference_s) continue;
-    const auto mount = pex::slam::relative(laser.odometry, laser.laser_pose);
-    const auto sensor = pex::slam::compose(best->pose, mount);
-    scans.push_back({{sensor.x_m, sensor.y_m, sensor.theta_rad},
+    const auto mount = pex::geometry::relative(laser.odometry, laser.laser_pose);
+    const auto sensor = pex::geometry::compose(best->pose, mount);
+    scans.push_back({sensor,
                      laser.angle_min_rad,
                      laser.angle_increment_rad,
                      laser.max_range_m,
                      laser.ranges_m});
-    trajectory.push_back({best->pose.x_m, best->pose.y_m, best->pose.theta_rad});
+    trajectory.push_back(best->pose);
   }
   std::fprintf(stderr, "pex-make-world: %zu of %zu scans matched a pose (of %zu)\n", scans.size(),
                log.lasers.size(), poses.poses.size());

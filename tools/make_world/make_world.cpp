@@ -347,7 +347,7 @@ std::size_t World::edges() const {
   return e;
 }
 
-std::variant<World, std::string> extract_world(const OccupancyGrid& grid, const std::vector<Pose>& trajectory,
+std::variant<World, std::string> extract_world(const OccupancyGrid& grid, const std::vector<Pose2>& trajectory,
                                                const WorldOptions& options) {
   const int w = grid.width(), h = grid.height();
   const double cell = grid.cell_m();
@@ -660,7 +660,7 @@ std::string to_svg(const World& world) {
 }
 
 Picture render(const World& world, const OccupancyGrid& grid, double dx_m, double dy_m,
-               const std::vector<Pose>& trajectory) {
+               const std::vector<Pose2>& trajectory) {
   Picture pic;
   pic.width = grid.width();
   pic.height = grid.height();

@@ -18,18 +18,16 @@
 #include <variant>
 #include <vector>
 
+#include "geometry/pose2.hpp"
+
 namespace pex::make_world {
 
-struct Pose {
-  double x_m = 0.0;
-  double y_m = 0.0;
-  double theta_rad = 0.0;
-};
+using geometry::Pose2;
 
 // One laser scan at a known sensor pose (world frame). Beam i points at
 // sensor.theta_rad + angle_min_rad + i * angle_increment_rad.
 struct PosedScan {
-  Pose sensor;
+  Pose2 sensor;
   double angle_min_rad = 0.0;
   double angle_increment_rad = 0.0;
   double no_return_m = 0.0;  // readings >= this mean "no return"
@@ -121,7 +119,7 @@ enum class CellClass : std::uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
 struct World {
   Ring boundary;                // the free region's outer boundary, counter-clockwise
   std::vector<Ring> obstacles;  // its holes (clutter, pillars, wall blocks inside), counter-clockwise
-  Pose start;
+  Pose2 start;
   std::size_t start_index = 0;  // which trajectory pose is START
   double free_area_m2 = 0.0;    // area of the free region (cells)
   double reachable_area_m2 = 0.0;  // area of the cells a robot_radius disk's centre reaches from START
@@ -140,7 +138,7 @@ struct World {
 // The world from a grid and the trajectory the scans were taken along (the
 // seed of the free region is the first trajectory pose in a free cell). An
 // error when no trajectory pose is in a free cell or none is clear enough.
-std::variant<World, std::string> extract_world(const OccupancyGrid& grid, const std::vector<Pose>& trajectory,
+std::variant<World, std::string> extract_world(const OccupancyGrid& grid, const std::vector<Pose2>& trajectory,
                                                const WorldOptions& options);
 
 // Translates every ring, the start and the bounds by (dx, dy).
@@ -171,6 +169,6 @@ struct Picture {
   std::vector<std::uint8_t> rgb;  // 3 bytes a pixel, top row first
 };
 Picture render(const World& world, const OccupancyGrid& grid, double dx_m, double dy_m,
-               const std::vector<Pose>& trajectory = {});
+               const std::vector<Pose2>& trajectory = {});
 
 }  // namespace pex::make_world

@@ -34,7 +34,7 @@ std::vector<Segment> box(double x0, double y0, double x1, double y1) {
 }
 
 // A 360° scanner, 0.5° steps, noise-free; 80 m means no return.
-PosedScan scan_at(const std::vector<Segment>& walls, Pose pose) {
+PosedScan scan_at(const std::vector<Segment>& walls, Pose2 pose) {
   PosedScan s;
   s.sensor = pose;
   s.angle_min_rad = -std::numbers::pi;
@@ -64,7 +64,7 @@ bool reachable_at(const World& w, const OccupancyGrid& g, double x, double y) {
   return w.reachable[static_cast<std::size_t>(g.cell_y(y)) * g.width() + g.cell_x(x)] != 0;
 }
 
-World extract_ok(const OccupancyGrid& grid, const std::vector<Pose>& trajectory, WorldOptions options = {}) {
+World extract_ok(const OccupancyGrid& grid, const std::vector<Pose2>& trajectory, WorldOptions options = {}) {
   auto r = extract_world(grid, trajectory, options);
   if (auto* err = std::get_if<std::string>(&r)) {
     ADD_FAILURE() << *err;
@@ -128,7 +128,7 @@ TEST(Rings, SimplifyKeepsCornersAndTolerance) {
 // A 6 × 4 m room with a 0.6 m square pillar, seen from a few poses.
 struct Room {
   std::vector<Segment> walls;
-  std::vector<Pose> poses;
+  std::vector<Pose2> poses;
 };
 
 // Off the grid's cell borders (the grid starts at a multiple of the cell

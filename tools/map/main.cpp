@@ -14,10 +14,7 @@
 
 #include <CLI/CLI.hpp>
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
-
+#include "cli/command_line.hpp"
 #include "map_files.hpp"
 #include "map_source.hpp"
 #include "runtime/channels.hpp"
@@ -77,7 +74,6 @@ void add_source_options(CLI::App& cmd, Source& src, bool with_map_file) {
 int main(int argc, char** argv) {
   CLI::App app{"Save the polygonal map to a file (GeoJSON) or export it as a ROS occupancy grid (PGM + YAML)",
                "pex-map"};
-  app.set_version_flag("--version", std::string("pex-map ") + PEX_VERSION);
   app.require_subcommand(1);
   Source save_src, export_src;
   std::string save_out, pgm_out;
@@ -90,11 +86,7 @@ int main(int argc, char** argv) {
   exp->add_option("--resolution-m", resolution_m, "cell side, m")->check(CLI::Range(0.001, 10.0));
   exp->add_option("--margin-m", margin_m, "unknown space around the map, m")->check(CLI::Range(0.0, 100.0));
   add_source_options(*exp, export_src, true);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-map", argc, argv)) return *code;
 
   pex::polygon_map_t map{};
   if (save->parsed()) {

@@ -12,13 +12,11 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/explore_state_t.hpp>
 #include <pex/mission_cmd_t.hpp>
 
+#include "cli/command_line.hpp"
 #include "planning/mission.hpp"
 #include "runtime/channels.hpp"
 
@@ -63,12 +61,7 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", url, "LCM URL (default: $LCM_DEFAULT_URL or LCM's)");
   app.add_option("--timeout", timeout_s, "seconds to wait for the explorer to show the command in effect")
       ->check(CLI::PositiveNumber);
-  app.set_version_flag("--version", std::string("pex-mission ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-mission", argc, argv)) return *code;
 
   const std::map<std::string, pex::planning::MissionCommand> commands = {
       {"start", pex::planning::MissionCommand::kStart}, {"pause", pex::planning::MissionCommand::kPause},

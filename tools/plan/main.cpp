@@ -14,15 +14,13 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/laser_scan_t.hpp>
 #include <pex/pose_t.hpp>
 
 #include "explorer_node.hpp"
+#include "cli/command_line.hpp"
 #include "explorer_options.hpp"
 #include "map_message.hpp"
 #include "plan_report.hpp"
@@ -43,12 +41,7 @@ int main(int argc, char** argv) {
   app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
   app.add_flag("--tight", tight, "plan without the clearance margin (the explorer's tight fallback)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
-  app.set_version_flag("--version", std::string("pex-plan ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-plan", argc, argv)) return *code;
 
   pex::explorer::ExplorerOptions options;
   try {
@@ -100,7 +93,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-plan: the MAP is bad input: %s\n", decoded.error.c_str());
     return EX_DATAERR;
   }
-  const pex::mapping::Pose2 robot{pose->x, pose->y, pose->theta};
+  const pex::geometry::Pose2 robot{pose->x, pose->y, pose->theta};
   // As the explorer plans: the newest scan's live view united in (live_view_range_m).
   const auto live = scan ? pex::explorer::live_view_of(*scan, robot, options.live_view) : nullptr;
   const auto planned_on = live ? pex::planning::with_live_view(decoded.polygons, *live) : decoded.polygons;

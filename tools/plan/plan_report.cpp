@@ -64,12 +64,12 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   return out;
 }
 
-std::string to_svg(const mapping::TypedMultiPolygon& map, const mapping::Pose2& robot,
+std::string to_svg(const mapping::TypedMultiPolygon& map, const geometry::Pose2& robot,
                    const planning::ConfigurationSpace& cspace, const planning::Plan& plan, double pixels_per_m) {
   bg::model::box<Point> box;
   bg::assign_inverse(box);
   for (const auto& p : map) bg::expand(box, bg::return_envelope<bg::model::box<Point>>(p.geometry));
-  bg::expand(box, Point(robot.x, robot.y));
+  bg::expand(box, Point(robot.x_m, robot.y_m));
   const double margin = 1.0;
   const double x0 = box.min_corner().x() - margin, y1 = box.max_corner().y() + margin;
   const double w = (box.max_corner().x() - box.min_corner().x() + 2 * margin) * pixels_per_m;
@@ -113,9 +113,9 @@ std::string to_svg(const mapping::TypedMultiPolygon& map, const mapping::Pose2& 
     out += format("<polyline points=\"%s\" fill=\"none\" stroke=\"#0050ff\" stroke-width=\"2\"/>\n", pts.c_str());
   }
   const double r = cspace.options().robot_radius_m * pixels_per_m;
-  out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\" fill=\"none\" stroke=\"#0050ff\"/>\n", X(robot.x), Y(robot.y), r);
-  out += format("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#0050ff\"/>\n", X(robot.x), Y(robot.y),
-                X(robot.x + 0.4 * std::cos(robot.theta)), Y(robot.y + 0.4 * std::sin(robot.theta)));
+  out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\" fill=\"none\" stroke=\"#0050ff\"/>\n", X(robot.x_m), Y(robot.y_m), r);
+  out += format("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#0050ff\"/>\n", X(robot.x_m), Y(robot.y_m),
+                X(robot.x_m + 0.4 * std::cos(robot.theta_rad)), Y(robot.y_m + 0.4 * std::sin(robot.theta_rad)));
   out += "</svg>\n";
   return out;
 }

@@ -18,7 +18,7 @@ namespace pex::plan_tool {
 std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
                      const planning::ConfigurationSpace& cspace, const planning::Plan& plan);
 
-std::string to_svg(const mapping::TypedMultiPolygon& map, const mapping::Pose2& robot,
+std::string to_svg(const mapping::TypedMultiPolygon& map, const geometry::Pose2& robot,
                    const planning::ConfigurationSpace& cspace, const planning::Plan& plan,
                    double pixels_per_m = 40.0);
 

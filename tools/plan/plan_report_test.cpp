@@ -13,7 +13,7 @@ namespace {
 struct Fixture {
   TypedMultiPolygon map{typed_polygon(
       rectangle(0, 0, 6, 3, {EdgeType::kObstacle, EdgeType::kFrontier, EdgeType::kObstacle, EdgeType::kObstacle}))};
-  pex::mapping::Pose2 robot{1.0, 1.5, 0.0};
+  pex::geometry::Pose2 robot{1.0, 1.5, 0.0};
   PlannerOptions options;
   ConfigurationSpace cspace;
   Plan plan;
@@ -25,8 +25,8 @@ struct Fixture {
     plan = plan_exploration(map, robot, {}, options);
     msg.utime = 7;
     msg.vertex_count = 4;
-    pose.x = robot.x;
-    pose.y = robot.y;
+    pose.x = robot.x_m;
+    pose.y = robot.y_m;
   }
 };
 

@@ -15,13 +15,10 @@
 #include <vector>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
-
 #include <CLI/CLI.hpp>
 #include <pex/polygon_map_t.hpp>
 
+#include "cli/command_line.hpp"
 #include "map_source.hpp"
 #include "render.hpp"
 #include "runtime/channels.hpp"
@@ -39,12 +36,7 @@ int main(int argc, char** argv) {
   app.add_flag("--align", options.align, "rotate the map so its dominant wall direction lies along the axes");
   bool no_legend = false;
   app.add_flag("--no-legend", no_legend, "no footer (legend, scale bar)");
-  app.set_version_flag("--version", std::string("pex-render-map ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-render-map", argc, argv)) return *code;
   options.legend = !no_legend;
   if (svg_path.empty() && png_path.empty()) {
     std::fprintf(stderr, "pex-render-map: give --svg and/or --png\n");

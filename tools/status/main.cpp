@@ -11,13 +11,11 @@
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
-#ifndef PEX_VERSION
-#define PEX_VERSION "unknown"  // set by cmake/Packaging.cmake
-#endif
 #include <lcm/lcm-cpp.hpp>
 #include <pex/daemon_status_t.hpp>
 #include <pex/explore_state_t.hpp>
 
+#include "cli/command_line.hpp"
 #include "planning/mission.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/daemon_state.hpp"
@@ -108,12 +106,7 @@ int main(int argc, char** argv) {
                  "with --follow-mission: give up after this many wall-clock seconds (default: 3 x the mission "
                  "limit + 120, for a mission clock that stands still)")
       ->check(CLI::PositiveNumber);
-  app.set_version_flag("--version", std::string("pex-status ") + PEX_VERSION);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : EX_USAGE;  // --help, --version: 0; a bad command line: 64
-  }
+  if (const auto code = pex::cli::parse_command_line(app, "pex-status", argc, argv)) return *code;
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {

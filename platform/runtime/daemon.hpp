@@ -74,15 +74,4 @@ struct RuntimeOptions {
 // Throws ConfigError; with `is_clock_source` (pex-sim), clock = "sim" is one.
 RuntimeOptions load_runtime_options(ConfigReader& config, bool is_clock_source = false);
 
-// The options every daemon gets, after parsing (for daemons that need them in setup).
-struct CommonArgs {
-  std::vector<std::string> config_paths;  // the layers, lowest first
-  std::string config_path;                // the last of them ("" if none)
-  std::string lcm_url;
-  std::string log_level = "info";
-  std::vector<std::string> replay_logs;
-  std::string replay_out;
-};
-const CommonArgs& common_args();
-
 }  // namespace pex::runtime
