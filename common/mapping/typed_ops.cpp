@@ -52,14 +52,54 @@ TypedOpResult failed(std::string why) {
   return result;
 }
 
+// Net area of rings as the overlay takes them (outer rings counter-clockwise,
+// holes clockwise: the shoelace sum is the area covered).
+double net_area(std::span<const RingRef> rings) {
+  double twice = 0.0;
+  for (const RingRef& r : rings)
+    for (std::size_t i = 0; i + 1 < r.ring->size(); ++i)
+      twice += (*r.ring)[i].x() * (*r.ring)[i + 1].y() - (*r.ring)[i + 1].x() * (*r.ring)[i].y();
+  return 0.5 * twice;
+}
+
+// The bounds any correct result's area keeps (union: each operand and no more
+// than both; difference: a less b and no more than a; intersection: no more
+// than either), with room for the overlay's snapping. Why: on degenerate
+// operands (slivers of 1e-10 m², vertices repeated 1e-9 m apart: fuzz/known)
+// the overlay can return ok with a hole filled or an operand lost; a map
+// built on that is wrong for good, a refused operation is counted and the
+// caller keeps what it had.
+std::optional<std::string> area_out_of_bounds(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
+                                              const TypedMultiPolygon& out) {
+  const double area_a = net_area(a), area_b = net_area(b);
+  double lo = 0.0, hi = 0.0;
+  switch (op) {
+    case OverlayOp::kUnion: lo = std::max(area_a, area_b), hi = area_a + area_b; break;
+    case OverlayOp::kDifference: lo = std::max(0.0, area_a - area_b), hi = area_a; break;
+    case OverlayOp::kIntersection: lo = 0.0, hi = std::min(area_a, area_b); break;
+  }
+  const double tolerance = 1e-6 * std::max(1.0, hi);
+  const double got = area(out);
+  if (got >= lo - tolerance && got <= hi + tolerance) return std::nullopt;
+  return "overlay result of " + std::to_string(got) + " m2 outside [" + std::to_string(lo) + ", " +
+         std::to_string(hi) + "] m2 (degenerate operands)";
+}
+
 // Our edge overlay (edge_overlay.hpp): `result` filled (ok, or the error),
 // its output retyped as assign_types would type it when the options ask for
-// uniform or plain types, and checked if options.validate.
+// uniform or plain types, checked against the area bounds always and for
+// validity if options.validate.
 void edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
                   const TypedOpOptions& options, TypedOpResult& result,
                   const std::optional<EdgeType> (&side_types)[2] = {}) {
   OverlayResult r = overlay(a, b, op, options.border_box, side_types);
   std::string why;
+  if (r.ok) {
+    if (auto bad_area = area_out_of_bounds(a, b, op, r.polygons)) {
+      r.ok = false;
+      r.error = std::move(*bad_area);
+    }
+  }
   if (r.ok && options.validate && !is_clearly_valid(r.polygons) && !bg::is_valid(geometry_of(r.polygons), why)) {
     r.ok = false;
     r.error = "invalid result: " + why;

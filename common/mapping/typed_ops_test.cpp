@@ -111,6 +111,28 @@ TEST(PutBackHoles, EachHoleGoesIntoTheInnermostPolygonAroundIt) {
   EXPECT_FALSE(put_back_holes(polygons, {hole(6, 6, 6.5, 6.5)}));
 }
 
+// A sliver of 2.5e-10 m2 from a hole's corner to the outer corner, its end
+// 1e-9 m off (the overlay's snapping distance) and a vertex repeated: valid
+// for Boost. The overlay made the hole vanish (area 4 for 3.75) and said ok
+// (fuzz/corpus/typed_ops/union_with_a_sliver_fills_a_hole); now the area
+// bounds refuse it with a reason, and the caller keeps what it had.
+TEST(TypedUnion, ADegenerateOperandThatWouldFillAHoleIsRefused) {
+  TypedPolygon a = rect(0, 0, 2, 2, {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  a.geometry.inners().push_back({{0.5, 0.5}, {0.5, 1}, {1, 1}, {1, 0.5}, {0.5, 0.5}});
+  a.edge_types.push_back(std::vector<EdgeType>(4, E::kObstacle));
+  TypedPolygon b;
+  b.geometry.outer() = {{0.5, 0.5}, {-1e-9, 0}, {0, 0}, {0, 0}, {0.5, 0.5}};
+  b.edge_types.push_back(std::vector<EdgeType>(4, E::kFrontier));
+  ASSERT_TRUE(is_valid(TypedMultiPolygon{a}));
+  ASSERT_TRUE(is_valid(TypedMultiPolygon{b}));
+  const auto result = typed_union({a}, {b});
+  if (result.ok) {
+    EXPECT_NEAR(area(result.polygons), 3.75, 1e-6) << "the union filled the hole";
+  } else {
+    EXPECT_NE(result.error.find("outside"), std::string::npos) << result.error;
+  }
+}
+
 TEST(TypedDifference, EdgesFromTheSubtrahendAreObstacles) {
   const auto free_space = rect(0, 0, 10, 10, {E::kObstacle, E::kObstacle, E::kFrontier, E::kFrontier});
   const auto obstacle = rect(4, 4, 6, 6, {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier});
