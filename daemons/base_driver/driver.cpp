@@ -141,25 +141,6 @@ void Driver::read_frames() {
   show_counters();
 }
 
-void Driver::show_counters() {
-  const DriverCounters& c = core_.counters();
-  // Event counters show once they have counted (as the node's own do).
-  for (const auto& [name, value] : {std::pair<const char*, std::int64_t>{"commands", c.commands},
-                                    {"commands_clipped", c.commands_clipped},
-                                    {"cmd_timeouts", c.cmd_timeouts},
-                                    {"can_error_frames", c.can_error_frames},
-                                    {"can_send_errors", c.can_send_errors},
-                                    {"odometry_withheld", c.odometry_withheld}}) {
-    if (value != 0) node_.counter(name) = value;
-  }
-  node_.counter("node_faults") = c.node_faults;
-  node_.counter("heartbeat_losses") = c.heartbeat_losses;
-  node_.counter("emcy_frames") = c.emcy_frames;
-  node_.counter("node_restarts") = c.node_restarts;
-  node_.counter("can_frames_malformed") = c.can_frames_malformed;
-  node_.counter("sdo_aborts") = c.sdo_aborts;
-  node_.counter("odometry_jumps") = c.odometry_jumps;
-  node_.counter("stopped") = c.stopped;
-}
+void Driver::show_counters() { node_.show_counters(core_.counters()); }
 
 }  // namespace pex::base_driver

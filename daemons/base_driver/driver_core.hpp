@@ -65,6 +65,25 @@ struct DriverCounters {
   std::int64_t sdo_aborts = 0;
   std::int64_t odometry_jumps = 0;
   std::int64_t stopped = 1;            // 1 while the wheels are held at zero
+
+  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    v.event("commands", commands);
+    v.event("commands_clipped", commands_clipped);
+    v.event("cmd_timeouts", cmd_timeouts);
+    v.event("can_error_frames", can_error_frames);
+    v.event("can_send_errors", can_send_errors);
+    v.event("odometry_withheld", odometry_withheld);
+    v.total("node_faults", node_faults);
+    v.total("heartbeat_losses", heartbeat_losses);
+    v.total("emcy_frames", emcy_frames);
+    v.total("node_restarts", node_restarts);
+    v.total("can_frames_malformed", can_frames_malformed);
+    v.total("sdo_aborts", sdo_aborts);
+    v.total("odometry_jumps", odometry_jumps);
+    v.total("stopped", stopped);
+  }
 };
 
 // The health after a control step.

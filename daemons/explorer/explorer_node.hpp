@@ -3,6 +3,7 @@
 // (planning/mission.hpp): checked inputs in, BASE_CMD and EXPLORE_STATE out,
 // plans on a worker thread (or inline, for tests). No LCM calls here, so
 // tests can drive it without a bus.
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -29,6 +30,15 @@ struct ExplorerCounters {
   std::int64_t map_polygons_dropped = 0;
   std::int64_t map_rings_reoriented = 0;
   std::int64_t commands_applied = 0;
+
+  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    v.total("maps_accepted", maps_accepted);
+    v.total("guard_limited_steps", guard_limited_steps);
+    v.total("map_polygons_dropped", map_polygons_dropped);
+    v.total("commands_applied", commands_applied);
+  }
 };
 
 // The live view (planning/live_view.hpp) of a LIDAR_SCAN taken at `robot`
@@ -76,6 +86,27 @@ class ExplorerNode {
   const LatencyStats& plan_ms() const { return plan_ms_; }
   const LatencyStats& plan_cpu_ms() const { return plan_cpu_ms_; }
   const LatencyStats& control_ms() const { return control_ms_; }
+  // The node's and the mission's counters and the latency percentiles (in
+  // us), for DAEMON_STATUS and the exploration benchmark (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    auto us = [](double ms) { return static_cast<std::int64_t>(std::llround(ms * 1000.0)); };
+    counters_.visit_counters(v);
+    v.total("plans", last_.plans);
+    v.total("looks_around", last_.looks_around);
+    v.total("goals_reached", last_.goals.reached);
+    v.total("goals_seen", last_.goals.seen);
+    v.total("goals_blocked", last_.goals.blocked);
+    v.total("goals_no_progress", last_.goals.no_progress);
+    v.total("phase", static_cast<std::int64_t>(last_.phase));
+    v.total("plan_us_p50", us(plan_ms_.quantile(0.5)));
+    v.total("plan_us_p99", us(plan_ms_.quantile(0.99)));
+    v.total("plan_us_max", us(plan_ms_.quantile(1.0)));
+    v.total("plan_cpu_us_p50", us(plan_cpu_ms_.quantile(0.5)));
+    v.total("plan_cpu_us_p99", us(plan_cpu_ms_.quantile(0.99)));
+    v.total("control_us_p99", us(control_ms_.quantile(0.99)));
+    v.total("control_us_max", us(control_ms_.quantile(1.0)));
+  }
 
  private:
   // The newest scan's live view (planning/live_view.hpp) from `robot`; null

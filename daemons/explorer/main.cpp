@@ -27,7 +27,6 @@ namespace {
 std::chrono::microseconds period_of(double rate_hz) {
   return std::chrono::microseconds(static_cast<std::int64_t>(1e6 / rate_hz));
 }
-std::int64_t us_of_ms(double ms) { return static_cast<std::int64_t>(std::llround(ms * 1000.0)); }
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -83,27 +82,7 @@ int main(int argc, char** argv) {
         });
         node.every(period_of(options.state_rate_hz), [&node, explorer](std::int64_t now_utime) {
           node.publish(ch::kExploreState, explorer->state_message(now_utime));
-          // Counters for DAEMON_STATUS (and the exploration benchmark).
-          const auto& c = explorer->counters();
-          const auto& out = explorer->last_output();
-          node.counter("maps_accepted") = c.maps_accepted;
-          node.counter("guard_limited_steps") = c.guard_limited_steps;
-          node.counter("map_polygons_dropped") = c.map_polygons_dropped;
-          node.counter("commands_applied") = c.commands_applied;
-          node.counter("plans") = out.plans;
-          node.counter("looks_around") = out.looks_around;
-          node.counter("goals_reached") = out.goals.reached;
-          node.counter("goals_seen") = out.goals.seen;
-          node.counter("goals_blocked") = out.goals.blocked;
-          node.counter("goals_no_progress") = out.goals.no_progress;
-          node.counter("phase") = static_cast<std::int64_t>(out.phase);
-          node.counter("plan_us_p50") = us_of_ms(explorer->plan_ms().quantile(0.5));
-          node.counter("plan_us_p99") = us_of_ms(explorer->plan_ms().quantile(0.99));
-          node.counter("plan_us_max") = us_of_ms(explorer->plan_ms().quantile(1.0));
-          node.counter("plan_cpu_us_p50") = us_of_ms(explorer->plan_cpu_ms().quantile(0.5));
-          node.counter("plan_cpu_us_p99") = us_of_ms(explorer->plan_cpu_ms().quantile(0.99));
-          node.counter("control_us_p99") = us_of_ms(explorer->control_ms().quantile(0.99));
-          node.counter("control_us_max") = us_of_ms(explorer->control_ms().quantile(1.0));
+          node.show_counters(*explorer);  // DAEMON_STATUS (and the exploration benchmark)
         });
         node.on_shutdown([&node] { node.publish(ch::kBaseCmd, ExplorerNode::stop_command(node.now_utime())); });
       });

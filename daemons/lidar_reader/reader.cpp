@@ -105,21 +105,6 @@ void Reader::on_readable() {
   show_counters();
 }
 
-void Reader::show_counters() {
-  const ReaderCounters& c = core_.counters();
-  // Event counters show once they have counted (as the node's own do).
-  for (const auto& [name, value] : {std::pair<const char*, std::int64_t>{"connect_attempts", c.connect_attempts},
-                                    {"disconnects", c.disconnects},
-                                    {"scans_published", c.scans_published},
-                                    {"malformed_telegrams", c.malformed_telegrams},
-                                    {"unexpected_replies", c.unexpected_replies},
-                                    {"unexpected_scans", c.unexpected_scans},
-                                    {"implausible_scans", c.implausible_scans}}) {
-    if (value != 0) node_.counter(name) = value;
-  }
-  node_.counter("skipped_bytes") = c.skipped_bytes;
-  node_.counter("truncated_telegrams") = c.truncated_telegrams;
-  node_.counter("oversize_telegrams") = c.oversize_telegrams;
-}
+void Reader::show_counters() { node_.show_counters(core_.counters()); }
 
 }  // namespace pex::lidar_reader

@@ -69,6 +69,21 @@ struct ReaderCounters {
   std::int64_t skipped_bytes = 0;        // outside any telegram
   std::int64_t truncated_telegrams = 0;  // cut off by a new STX
   std::int64_t oversize_telegrams = 0;   // longer than max_telegram_bytes
+
+  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    v.event("connect_attempts", connect_attempts);
+    v.event("disconnects", disconnects);
+    v.event("scans_published", scans_published);
+    v.event("malformed_telegrams", malformed_telegrams);
+    v.event("unexpected_replies", unexpected_replies);
+    v.event("unexpected_scans", unexpected_scans);
+    v.event("implausible_scans", implausible_scans);
+    v.total("skipped_bytes", skipped_bytes);
+    v.total("truncated_telegrams", truncated_telegrams);
+    v.total("oversize_telegrams", oversize_telegrams);
+  }
 };
 
 struct ReaderHealth {

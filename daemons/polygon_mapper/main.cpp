@@ -46,25 +46,7 @@ int main(int argc, char** argv) {
     watch->expect(std::string(ch::kLidarScan), timeout_us);
     watch->expect(pose_channel, timeout_us);
     // Counters in DAEMON_STATUS mirror the mapper's after every event.
-    auto report = [&node, mapper] {
-      const auto& c = mapper->counters();
-      node.counter("scans_inserted") = c.scans_inserted;
-      node.counter("scans_skipped_no_motion") = c.scans_skipped_no_motion;
-      node.counter("scans_without_pose") = c.scans_without_pose;
-      node.counter("scan_polygon_errors") = c.scan_polygon_errors;
-      node.counter("failed_tile_updates") = c.failed_tile_updates;
-      node.counter("boost_fallbacks") = c.boost_fallbacks;
-      node.counter("merge_boost_fallbacks") = c.merge_boost_fallbacks;
-      node.counter("boost_planning_tiles") = c.boost_planning_tiles;
-      node.counter("merge_failures") = c.merge_failures;
-      node.counter("stale_planning_tiles") = c.stale_planning_tiles;
-      node.counter("slam_updates") = c.slam_updates;
-      node.counter("updates_without_scan") = c.updates_without_scan;
-      node.counter("best_switches") = c.best_switches;
-      node.counter("slam_resyncs") = c.slam_resyncs;
-      node.counter("slam_epoch_changes") = c.slam_epoch_changes;
-      node.counter("map_vertices") = static_cast<std::int64_t>(mapper->map().planning_vertex_count());
-    };
+    auto report = [&node, mapper] { node.show_counters(*mapper); };
     // MAP (planning map) and, unless switched off, MAP_FREE (explored free space).
     auto publish_maps = [&node, mapper](std::int64_t now_utime) {
       if (auto msg = mapper->map_message(now_utime)) node.publish(ch::kMap, *msg);

@@ -101,6 +101,26 @@ struct MapperCounters {
   // slam: a SLAM started afresh (another epoch, another map frame): the maps
   // of the old one were dropped, never mixed with the new.
   std::int64_t slam_epoch_changes = 0;
+
+  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    v.total("scans_inserted", scans_inserted);
+    v.total("scans_skipped_no_motion", scans_skipped_no_motion);
+    v.total("scans_without_pose", scans_without_pose);
+    v.total("scan_polygon_errors", scan_polygon_errors);
+    v.total("failed_tile_updates", failed_tile_updates);
+    v.total("boost_fallbacks", boost_fallbacks);
+    v.total("merge_boost_fallbacks", merge_boost_fallbacks);
+    v.total("boost_planning_tiles", boost_planning_tiles);
+    v.total("merge_failures", merge_failures);
+    v.total("stale_planning_tiles", stale_planning_tiles);
+    v.total("slam_updates", slam_updates);
+    v.total("updates_without_scan", updates_without_scan);
+    v.total("best_switches", best_switches);
+    v.total("slam_resyncs", slam_resyncs);
+    v.total("slam_epoch_changes", slam_epoch_changes);
+  }
 };
 
 class Mapper {
@@ -129,6 +149,12 @@ class Mapper {
   std::optional<pex::polygon_map_t> free_space_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
+  // The counters and the map's size, for DAEMON_STATUS (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    counters_.visit_counters(v);
+    v.total("map_vertices", static_cast<std::int64_t>(map().planning_vertex_count()));
+  }
   // The map that is published: the single map, or the best particle's.
   const mapping::PolygonMap& map() const;
   // slam: the per-particle maps (empty before the first update).

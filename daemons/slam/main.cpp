@@ -69,10 +69,10 @@ int main(int argc, char** argv) {
       try {
         slam->on_odometry(msg);
       } catch (const std::invalid_argument& e) {
-        node.counter("odometry_impossible_steps") = static_cast<std::int64_t>(slam->odometry_sync().impossible_steps());
+        node.show_counters(*slam);
         throw pex::runtime::BadInput(e.what());
       }
-      node.counter("odometry_resets") = static_cast<std::int64_t>(slam->odometry_sync().odometry_resets());
+      node.show_counters(*slam);
     });
     node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [slam, &node, watch](const pex::laser_scan_t& msg) {
       try {
@@ -81,18 +81,11 @@ int main(int argc, char** argv) {
         throw pex::runtime::BadInput(e.what());
       }
       watch->seen(ch::kLidarScan, node.monotonic_us());
-      node.counter("scans_processed") = slam->scans_processed();
-      node.counter("filter_updates") = slam->filter().generation() + 1;
-      node.counter("updates_republished") = slam->republished();
-      node.counter("corrected_odometry_steps") = slam->filter().corrected_odometry_steps();
-      node.counter("scans_without_odometry") = static_cast<std::int64_t>(slam->odometry_sync().stale_pairings());
+      node.show_counters(*slam);
     });
     node.on_shutdown([slam, &node, &poses_path, &checkpoint_out] {
       slam->flush();
-      node.counter("scans_processed") = slam->scans_processed();
-      node.counter("filter_updates") = slam->filter().generation() + 1;
-      node.counter("updates_republished") = slam->republished();
-      node.counter("corrected_odometry_steps") = slam->filter().corrected_odometry_steps();
+      node.show_counters(*slam);
       spdlog::info("{} filter updates, {} odometry steps replaced by the odometry check", slam->filter().generation() + 1,
                    slam->filter().corrected_odometry_steps());
       if (!checkpoint_out.empty()) {

@@ -82,6 +82,17 @@ class SlamNode {
   const slam::ParticleFilter& filter() const { return filter_; }
   std::int64_t scans_processed() const { return scans_processed_; }
   std::int64_t republished() const { return republished_; }
+  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    v.total("scans_processed", scans_processed_);
+    v.total("filter_updates", filter_.generation() + 1);
+    v.total("updates_republished", republished_);
+    v.total("corrected_odometry_steps", filter_.corrected_odometry_steps());
+    v.total("scans_without_odometry", static_cast<std::int64_t>(sync_.stale_pairings()));
+    v.total("odometry_resets", static_cast<std::int64_t>(sync_.odometry_resets()));
+    v.event("odometry_impossible_steps", static_cast<std::int64_t>(sync_.impossible_steps()));
+  }
   // The filter's lineage (slam_update_t.epoch): 0 before the first update.
   std::int64_t epoch() const { return epoch_; }
 

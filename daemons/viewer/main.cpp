@@ -97,12 +97,7 @@ int main(int argc, char** argv) {
           if (version != *map_sent) map_json = state->map_json().dump();
           web->publish(version, std::move(map_json), state->live_json(now_utime).dump());
           *map_sent = version;
-          const auto c = web->counters();
-          node.counter("http_requests") = c.requests;
-          node.counter("http_bad_requests") = c.bad_requests;
-          node.counter("pages_open") = c.clients;
-          node.counter("pages_refused") = c.clients_refused;
-          node.counter("events_sent") = c.events_sent;
+          node.show_counters(web->counters());
           node.counter("map_version") = version;
           const std::string why = watch->stale(node.monotonic_us());
           node.set_state(why.empty() ? pex::daemon_status_t::STATE_OK : pex::daemon_status_t::STATE_DEGRADED, why);

@@ -35,6 +35,16 @@ struct WebCounters {
   std::int64_t clients = 0;           // event streams open now
   std::int64_t clients_refused = 0;   // beyond max_clients
   std::int64_t bad_requests = 0;      // unknown command, unknown path
+
+  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    v.total("http_requests", requests);
+    v.total("http_bad_requests", bad_requests);
+    v.total("pages_open", clients);
+    v.total("pages_refused", clients_refused);
+    v.total("events_sent", events_sent);
+  }
 };
 
 class WebServer {

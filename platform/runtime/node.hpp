@@ -154,6 +154,23 @@ class Node {
   void error(std::string_view what_key, const std::string& text);   // own error
   void set_state(int8_t state, std::string reason = {});            // daemon_status_t::STATE_*
   int64_t& counter(const std::string& name);                        // daemon-specific counter
+  // A component's counters into DAEMON_STATUS. The component names each one
+  // once, beside its value, in `visit_counters(v) const`: v.event(name, n)
+  // for an event count (shown once it has counted, as the node's own are)
+  // and v.total(name, n) for a total or a state (always shown). The one way
+  // a daemon shows what its library counts: no list copied into main.cpp.
+  template <class Counters>
+  void show_counters(const Counters& counters) {
+    struct Shown {
+      Node& node;
+      void event(const char* name, int64_t value) {
+        if (value != 0) node.counter(name) = value;
+      }
+      void total(const char* name, int64_t value) { node.counter(name) = value; }
+    } shown{*this};
+    counters.visit_counters(shown);
+  }
+  const std::map<std::string, int64_t>& counters() const { return counters_; }  // as DAEMON_STATUS carries them
   int64_t msgs_rejected() const { return msgs_rejected_; }
   int64_t errors() const { return errors_; }
   // The state DAEMON_STATUS carries: the daemon's own, made at least DEGRADED

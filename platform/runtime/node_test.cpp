@@ -43,6 +43,17 @@ pex::pose_t pose(int64_t utime, double x) {
   return p;
 }
 
+// A component's counters, as show_counters takes them.
+struct ShownCounters {
+  int64_t refused = 0;  // an event
+  int64_t held = 0;     // a total
+  template <class Visitor>
+  void visit_counters(Visitor& v) const {
+    v.event("refused", refused);
+    v.total("held", held);
+  }
+};
+
 }  // namespace
 
 TEST(Node, DispatchDecodesAndCallsHandler) {
@@ -54,6 +65,21 @@ TEST(Node, DispatchDecodesAndCallsHandler) {
   node.dispatch("OTHER", buf.data(), static_cast<int>(buf.size()), 2);
   EXPECT_EQ(xs, std::vector<double>{2.5});
   EXPECT_EQ(node.msgs_rejected(), 0);
+}
+
+TEST(Node, ShowCountersShowsTotalsAlwaysAndEventsOnceTheyHaveCounted) {
+  ShownCounters c;
+  Node node(NodeOptions{"t", "", true, "", 1.0});
+  node.show_counters(c);
+  EXPECT_EQ(node.counters().count("refused"), 0u);
+  ASSERT_EQ(node.counters().count("held"), 1u);
+  EXPECT_EQ(node.counters().at("held"), 0);
+  c.refused = 2;
+  c.held = 5;
+  node.show_counters(c);
+  ASSERT_EQ(node.counters().count("refused"), 1u);
+  EXPECT_EQ(node.counters().at("refused"), 2);
+  EXPECT_EQ(node.counters().at("held"), 5);
 }
 
 TEST(Node, MalformedBytesAreCountedAndDropped) {
