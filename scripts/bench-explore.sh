@@ -66,16 +66,16 @@ awk -v speed="$SPEED" '
     return v
   }
   BEGIN {
-    print "| world | strategy | phase | sim time (s) | path (m) | explored (m²) | reachable (m²) | coverage | IoU | obstacle on wall | collisions | goals | plans | plan p50 (ms) | plan p99 (ms) | plan CPU p99 (ms) | control p99 (ms) | map beyond walls (m²) | SLAM error mean / max (m) | map scored |"
+    print "| world | strategy | phase | sim time (s) | path (m) | explored (m²) | reachable (m²) | coverage | IoU | obstacle on wall | collisions | goals | plans | plan p50 (ms) | plan p99 (ms) | plan CPU p99 (ms) | control p99 (ms) | map beyond walls (m²) | SLAM error mean / max (aligned) (m) | map scored |"
     print "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
   }
   {
     w = field("world"); s = field("strategy")
-    printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s / %s | %s |\n", w, s, field("phase"),
+    printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s / %s (%s) | %s |\n", w, s, field("phase"),
       field("sim_time_s"), field("path_m"), field("explored_m2"), field("reachable_m2"), field("coverage"), field("iou"),
       field("obstacle_on_wall"), field("collisions"), field("goals"), field("plans"), field("plan_ms_p50"),
       field("plan_ms_p99"), field("plan_cpu_ms_p99"), field("control_ms_p99"), field("map_outside_free_m2"),
-      field("slam_error_mean_m"), field("slam_error_max_m"), field("scored_map")
+      field("slam_error_mean_m"), field("slam_error_max_m"), field("slam_error_aligned_mean_m"), field("scored_map")
     if (field("phase") == "done" || field("phase") == "done_with_unreachable") { path[w, s] = field("path_m"); worlds[w] = 1; strategies[s] = 1 }
   }
   END {

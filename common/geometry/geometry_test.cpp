@@ -2,12 +2,14 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "geometry/angle.hpp"
 #include "geometry/point.hpp"
 #include "geometry/pose2.hpp"
+#include "geometry/rigid_fit.hpp"
 
 namespace pex::geometry {
 namespace {
@@ -122,6 +124,46 @@ TEST(PoseTransform, IsComposesTranslationExactly) {
     EXPECT_EQ(transform(pose, p).x(), moved.x());
     EXPECT_EQ(transform(pose, p).y(), moved.y());
   }
+}
+
+TEST(BestRigidFit, RecoversAKnownMotionFromNoisyPoints) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coordinate(-20.0, 20.0);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  const Pose2 motion{3.0, -1.5, 0.3};
+  const PoseTransform apply(motion);
+  std::vector<Point> from, to;
+  for (int i = 0; i < 200; ++i) {
+    const Point p(coordinate(rng), coordinate(rng));
+    const Point q = apply(p);
+    from.push_back(p);
+    to.emplace_back(q.x() + noise(rng), q.y() + noise(rng));
+  }
+  const auto fit = best_rigid_fit(from, to);
+  ASSERT_TRUE(fit);
+  EXPECT_NEAR(fit->x_m, 3.0, 0.01);
+  EXPECT_NEAR(fit->y_m, -1.5, 0.01);
+  EXPECT_NEAR(fit->theta_rad, 0.3, 1e-3);
+  // No better fit nearby: the residual grows either way.
+  auto residual = [&](const Pose2& pose) {
+    const PoseTransform t(pose);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < from.size(); ++i) {
+      const Point p = t(from[i]);
+      sum += std::pow(p.x() - to[i].x(), 2) + std::pow(p.y() - to[i].y(), 2);
+    }
+    return sum;
+  };
+  const double best = residual(*fit);
+  for (const Pose2 nudge : {Pose2{0.01, 0, 0}, Pose2{0, -0.01, 0}, Pose2{0, 0, 0.001}, Pose2{0, 0, -0.001}})
+    EXPECT_GT(residual({fit->x_m + nudge.x_m, fit->y_m + nudge.y_m, fit->theta_rad + nudge.theta_rad}), best);
+}
+
+TEST(BestRigidFit, NeedsTwoCorrespondingPoints) {
+  const std::vector<Point> one{Point(0, 0)}, two{Point(0, 0), Point(1, 0)};
+  EXPECT_FALSE(best_rigid_fit(one, one));
+  EXPECT_FALSE(best_rigid_fit(two, one));
+  EXPECT_TRUE(best_rigid_fit(two, two));
 }
 
 }  // namespace

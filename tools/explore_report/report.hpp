@@ -85,6 +85,11 @@ struct Report {
   // inherits these errors: scans inserted at wrong poses draw walls off the
   // world's (map_outside_free_m2).
   std::optional<double> slam_error_mean_m, slam_error_max_m, slam_heading_error_mean_deg;
+  // The mean error once the whole SLAM trajectory is moved by the one rigid
+  // motion that fits it best to the truth (geometry::best_rigid_fit): small
+  // while the mean above is large means a consistent map in a frame turned
+  // at the start; large means the map bends (a loop not closed).
+  std::optional<double> slam_error_aligned_mean_m;
   // Not in the line (stderr): how the map decoded.
   int map_polygons_dropped = 0;
   std::string map_error;  // the last MAP did not decode at all

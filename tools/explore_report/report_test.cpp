@@ -148,7 +148,7 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   EXPECT_NE(json.find("\"collisions\":1,\"goals\":4,\"plans\":7,\"plan_ms_p50\":1.500,\"plan_ms_p99\":12.000,"
                       "\"control_ms_p99\":null,\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":9.000,"
                       "\"map_outside_free_m2\":null,\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,"
-                      "\"slam_error_max_m\":null,\"slam_heading_error_mean_deg\":null,\"scored_map\":\"MAP\"}"),
+                      "\"slam_error_max_m\":null,\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":\"MAP\"}"),
             std::string::npos)
       << json;
 
@@ -227,7 +227,7 @@ TEST(ExploreReport, MissingChannelsGiveNulls) {
                             "\"goals\":0,\"plans\":0,\"plan_ms_p50\":null,\"plan_ms_p99\":null,\"control_ms_p99\":null,"
                             "\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":null,\"map_outside_free_m2\":null,"
                             "\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,\"slam_error_max_m\":null,"
-                            "\"slam_heading_error_mean_deg\":null,\"scored_map\":null}");
+                            "\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":null}");
 }
 
 // The map's free space that is not reachable, split: beyond the room's wall
@@ -274,11 +274,40 @@ TEST(ExploreReport, PoseAuditComparesSlamPosesWithTheTruthAtTheSameTime) {
   EXPECT_NEAR(*r.slam_error_mean_m, 0.05, 1e-9);
   EXPECT_NEAR(*r.slam_error_max_m, 0.1, 1e-9);
   EXPECT_NEAR(*r.slam_heading_error_mean_deg, 0.05 * 180.0 / std::numbers::pi, 1e-9);
-  // The same poses with the map frame at the world's origin are 2-3 m off.
+  // The same poses with the map frame at the world's origin are 2-3 m off,
+  // but a rigid motion of the trajectory as a whole brings them close again.
   options.map_in_world = {};
-  EXPECT_GT(*make_report("room", log, world, evaluation::reachable_free_space(world, 0.25, world.start), options)
-                 .slam_error_mean_m,
-            2.0);
+  const auto off = make_report("room", log, world, evaluation::reachable_free_space(world, 0.25, world.start), options);
+  EXPECT_GT(*off.slam_error_mean_m, 2.0);
+  ASSERT_TRUE(off.slam_error_aligned_mean_m);
+  EXPECT_LT(*off.slam_error_aligned_mean_m, 0.1);
+}
+
+TEST(ExploreReport, AlignedPoseErrorSeesABentTrajectoryButNotATurnedOne) {
+  const auto world = room();
+  ReportOptions options;
+  options.map_in_world = world.start;
+  LogContents turned, bent;
+  turned.events = bent.events = 1;
+  // The truth drives 10 m along x and back, to (0.5, 0).
+  for (int i = 0; i <= 20; ++i) {
+    const std::int64_t t = 1'000'000 + i * 100'000;
+    const double along = i <= 10 ? i : 20 - i + 0.5;
+    turned.truth.push_back({t, {world.start.x_m + along, world.start.y_m, 0.0}});
+    // SLAM: the same path in a frame turned by 2 degrees at the start ...
+    const double a = 2.0 * std::numbers::pi / 180.0;
+    turned.slam_poses.push_back({t, {along * std::cos(a), along * std::sin(a), a}});
+    // ... and a path that comes back 1 m to the side of where it went.
+    bent.slam_poses.push_back({t, {along, i <= 10 ? 0.0 : 1.0, 0.0}});
+  }
+  bent.truth = turned.truth;
+  const auto free = evaluation::reachable_free_space(world, 0.25, world.start);
+  const auto r_turned = make_report("room", turned, world, free, options);
+  const auto r_bent = make_report("room", bent, world, free, options);
+  ASSERT_TRUE(r_turned.slam_error_aligned_mean_m && r_bent.slam_error_aligned_mean_m);
+  EXPECT_GT(*r_turned.slam_error_mean_m, 0.1);
+  EXPECT_LT(*r_turned.slam_error_aligned_mean_m, 1e-6);
+  EXPECT_GT(*r_bent.slam_error_aligned_mean_m, 0.3);
 }
 
 TEST(ExploreReport, UnreadableLogsAreErrors) {
