@@ -65,7 +65,8 @@ double net_area(std::span<const RingRef> rings) {
 // The bounds any correct result's area keeps (union: each operand and no more
 // than both; difference: a less b and no more than a; intersection: no more
 // than either), with room for the overlay's snapping. Why: on degenerate
-// operands (slivers of 1e-10 m², vertices repeated 1e-9 m apart: fuzz/known)
+// operands (slivers of 1e-10 m², vertices repeated 1e-9 m apart: the fuzzer's
+// fuzz/corpus/typed_ops/regression_*)
 // the overlay can return ok with a hole filled or an operand lost; a map
 // built on that is wrong for good, a refused operation is counted and the
 // caller keeps what it had.
