@@ -7,10 +7,9 @@
 // construction).
 //
 // Why our own: PolygonMap's updates are small overlays (a tile of a few
-// hundred vertices and a scan piece), where Boost.Geometry's overlay cost
-// about 100 us a call (2.8 ms over the ~25 calls of an insert), mostly in
-// set-up (sections, turn bookkeeping, traversal state), and needs the
-// reassignment pass afterwards. This one finds meeting edges through a grid
+// hundred vertices and a scan piece), where Boost.Geometry's overlay costs
+// mostly set-up (sections, turn bookkeeping, traversal state; figures in
+// docs/mapping.md) and needs the reassignment pass afterwards. This one finds meeting edges through a grid
 // and sorts only the split points, so on map-like inputs its cost grows about
 // linearly with the vertices and meeting points; its buffers are reused.
 //

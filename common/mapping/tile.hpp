@@ -27,7 +27,7 @@ bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double ep
 // layer (free minus obstacles) is derived from them on first use and kept.
 // Why lazily: only a map that is published or planned on needs it, and with
 // one map per SLAM particle most tile versions are never read before the next
-// insert replaces them (the difference was a third of an insert's cost).
+// insert replaces them (docs/mapping.md: what that saves per insert).
 // Thread-safe: a tile shared by several particle maps may be asked for its
 // planning layer from several threads; it is computed once.
 class Tile {
