@@ -52,14 +52,12 @@ TypedOpResult failed(std::string why) {
   return result;
 }
 
-// Net area of rings as the overlay takes them (outer rings counter-clockwise,
-// holes clockwise: the shoelace sum is the area covered).
+// Net area of rings as the overlay takes them: outer rings counter-clockwise
+// (positive to Boost's area for our ring type), holes clockwise (negative).
 double net_area(std::span<const RingRef> rings) {
-  double twice = 0.0;
-  for (const RingRef& r : rings)
-    for (std::size_t i = 0; i + 1 < r.ring->size(); ++i)
-      twice += (*r.ring)[i].x() * (*r.ring)[i + 1].y() - (*r.ring)[i + 1].x() * (*r.ring)[i].y();
-  return 0.5 * twice;
+  double sum = 0.0;
+  for (const RingRef& r : rings) sum += bg::area(*r.ring);
+  return sum;
 }
 
 // The bounds any correct result's area keeps (union: each operand and no more

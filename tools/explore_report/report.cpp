@@ -49,10 +49,9 @@ void audit_poses(const LogContents& log, const geometry::Pose2& map_in_world, Re
   if (log.slam_poses.empty() || log.truth.empty()) return;
   std::vector<StampedPose> truth = log.truth;
   std::stable_sort(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
-  const double c = std::cos(map_in_world.theta_rad), s = std::sin(map_in_world.theta_rad);
+  const geometry::PoseTransform place(map_in_world);  // map frame -> world
   double sum = 0.0, worst = 0.0, heading_sum = 0.0;
-  std::int64_t n = 0;
-  std::vector<geometry::Point> placed, true_points;  // the pairs, for the aligned error
+  std::vector<geometry::Point> placed, true_points;  // the pairs compared
   for (const auto& slam : log.slam_poses) {
     auto it = std::lower_bound(truth.begin(), truth.end(), slam.utime,
                                [](const StampedPose& p, std::int64_t t) { return p.utime < t; });
@@ -62,20 +61,20 @@ void audit_poses(const LogContents& log, const geometry::Pose2& map_in_world, Re
       nearest = &*std::prev(it);
     if (!nearest || std::llabs(nearest->utime - slam.utime) > 20'000) continue;
     const auto& p = slam.pose;
-    const double wx = map_in_world.x_m + c * p.x_m - s * p.y_m, wy = map_in_world.y_m + s * p.x_m + c * p.y_m;
-    const double e = std::hypot(wx - nearest->pose.x_m, wy - nearest->pose.y_m);
+    const geometry::Point w = place(geometry::Point(p.x_m, p.y_m));
+    const double e = std::hypot(w.x() - nearest->pose.x_m, w.y() - nearest->pose.y_m);
     if (!std::isfinite(e)) continue;
     sum += e;
     worst = std::max(worst, e);
-    placed.emplace_back(wx, wy);
+    placed.push_back(w);
     true_points.emplace_back(nearest->pose.x_m, nearest->pose.y_m);
     heading_sum += std::abs(geometry::wrap_angle(map_in_world.theta_rad + p.theta_rad - nearest->pose.theta_rad));
-    ++n;
   }
-  if (n == 0) return;
-  r.slam_error_mean_m = sum / static_cast<double>(n);
+  if (placed.empty()) return;
+  const auto n = static_cast<double>(placed.size());
+  r.slam_error_mean_m = sum / n;
   r.slam_error_max_m = worst;
-  r.slam_heading_error_mean_deg = heading_sum / static_cast<double>(n) * 180.0 / std::numbers::pi;
+  r.slam_heading_error_mean_deg = heading_sum / n * 180.0 / std::numbers::pi;
   // The same after the best rigid motion of the whole trajectory (the
   // absolute trajectory error as SLAM benchmarks state it): what is left is
   // the map bending, not its frame turned at the start.
@@ -86,7 +85,7 @@ void audit_poses(const LogContents& log, const geometry::Pose2& map_in_world, Re
       const geometry::Point p = align(placed[i]);
       aligned_sum += std::hypot(p.x() - true_points[i].x(), p.y() - true_points[i].y());
     }
-    r.slam_error_aligned_mean_m = aligned_sum / static_cast<double>(placed.size());
+    r.slam_error_aligned_mean_m = aligned_sum / n;
   }
 }
 
