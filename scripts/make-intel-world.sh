@@ -3,7 +3,7 @@
 # the Intel Research Lab (Seattle), from its real laser log:
 #
 #   ../shared/data/intel.clf --pex-carmen2lcm--> intel.lcm
-#       --pex-slam (offline, config/slam.toml)--> poses.txt (best trajectory, `t x y theta` per scan)
+#       --pex-slam (offline, config/slam.toml + config/datasets/slam.toml)--> poses.txt (best trajectory, `t x y theta` per scan)
 #       --pex-make-world--> worlds/intel.wkt
 #
 # pex-make-world ray-traces every scan at its pose into a 5 cm log-odds grid
@@ -34,7 +34,7 @@ trap 'rm -rf "$WORK"' EXIT
 if [ -z "${POSES:-}" ]; then
   "$BUILD/bin/pex-carmen2lcm" "$LOG" "$WORK/intel.lcm"
   # pex-slam opens an LCM instance even offline: keep it off any real network.
-  scripts/netns-run "$BUILD/bin/pex-slam" --config config/slam.toml --log "$WORK/intel.lcm" \
+  scripts/netns-run "$BUILD/bin/pex-slam" --config config/slam.toml --config config/datasets/slam.toml --log "$WORK/intel.lcm" \
     --poses "$WORK/poses.txt" --log-level warn
   POSES="$WORK/poses.txt"
 fi
@@ -53,7 +53,7 @@ ARGS=(
 [ -n "${SVG:-}" ] && ARGS+=(--svg "$SVG")
 "$BUILD/bin/pex-make-world" --log "$LOG" --poses "$POSES" --out "$OUT" "${ARGS[@]}" \
   --title "polyexplore world: intel (the Intel Research Lab, Seattle, from its real laser log; ragged walls, clutter, glass gaps)" \
-  --note "Made by scripts/make-intel-world.sh: pex-carmen2lcm ../shared/data/intel.clf -> pex-slam --config config/slam.toml" \
+  --note "Made by scripts/make-intel-world.sh: pex-carmen2lcm ../shared/data/intel.clf -> pex-slam --config config/slam.toml --config config/datasets/slam.toml" \
   --note "(offline, its best trajectory) -> pex-make-world (the parameters below). Do not edit by hand: rerun the script." \
   --note "Trajectory vs intel.relations (pex-eval-slam): $ACCURACY" \
   --note "Walls are the boundary of the free space the laser observed, connected to the robot's path: where the data" \

@@ -4,7 +4,7 @@
 //
 //   pex-bench-slam [--logs DIR]           per CARMEN log with relations in DIR (default
 //                                         ../shared/data): pex-carmen2lcm, then pex-slam --log
-//                                         with config/slam.toml, one JSON line each
+//                                         with config/slam.toml and config/datasets/slam.toml, one JSON line each
 //   pex-bench-slam --laps N [--logs DIR]  the same with every log driven N times (forwards,
 //                                         back, ...): memory and accuracy over run length
 //   pex-bench-slam --gbench [gbench args] Google Benchmark run (full log once + micro)
@@ -291,7 +291,7 @@ ChildRun run_child(const std::vector<std::string>& args, const std::string& stdo
 }
 
 // One CARMEN log through the shipped pipeline (pex-carmen2lcm [--laps N],
-// pex-slam --log with config/slam.toml), scored by the relations metric (in
+// pex-slam --log with config/slam.toml and config/datasets/slam.toml), scored by the relations metric (in
 // every lap for N > 1). The JSON line's fields, or "" when a step failed.
 std::string run_log(const std::filesystem::path& clf, const std::filesystem::path& relations_path, int laps,
                     const std::filesystem::path& work) {
@@ -306,7 +306,8 @@ std::string run_log(const std::filesystem::path& clf, const std::filesystem::pat
     return "";
   }
   const ChildRun slam = run_child({(bin / "pex-slam").string(), "--config",
-                                   std::string(PEX_SOURCE_DIR) + "/config/slam.toml", "--log", lcm.string(),
+                                   std::string(PEX_SOURCE_DIR) + "/config/slam.toml", "--config",
+                                   std::string(PEX_SOURCE_DIR) + "/config/datasets/slam.toml", "--log", lcm.string(),
                                    "--poses", poses.string(), "--log-level", "warn"},
                                   "/dev/null");
   fs::remove(lcm);
