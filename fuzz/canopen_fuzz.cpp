@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <cstring>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -104,7 +105,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         cmd.v = in.any_double();
         cmd.omega = in.any_double();
         cmd.source = "fuzz";
-        const std::string refused = driver.on_command(cmd, now_us);
+        std::string refused;
+        try {
+          driver.on_command(cmd, now_us);
+        } catch (const std::invalid_argument& e) {
+          refused = e.what();
+        }
         PEX_FUZZ_CHECK(refused.empty() || !(std::abs(cmd.v) <= options.limits.max_speed_mps &&
                                             std::abs(cmd.omega) <= options.limits.max_omega_radps),
                        "a command within the limits refused: " + refused);

@@ -11,7 +11,7 @@
 //                choosing any-value angles/limits/mounting, ranges as bytes
 //   op % 3 == 2  the rest of the input is a checkpoint for restore()
 // Invariants: nothing crashes; bad content is refused with
-// std::invalid_argument (pex-slam's BadInput), nothing else escapes; every
+// std::invalid_argument (pex-slam's refusal), nothing else escapes; every
 // SLAM_UPDATE and SLAM_POSE published is finite; a refused checkpoint says why.
 #include <algorithm>
 #include <cmath>
@@ -105,7 +105,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         (void)why;  // "" = taken; else why not
       }
     } catch (const std::invalid_argument&) {
-      // refused content: pex-slam counts it as rejected (BadInput) and goes on
+      // refused content: pex-slam counts it as rejected and goes on
     }
   }
   node.flush();

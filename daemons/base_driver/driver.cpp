@@ -92,10 +92,9 @@ std::chrono::microseconds period_of(double rate_hz) {
 
 Driver::Driver(runtime::Node& node, const DriverOptions& options)
     : node_(node), can_(open_transport(options)), core_(validated(options), outputs()) {
+  node_.collect_counters([this]() -> decltype(auto) { return core_.counters(); });
   node_.subscribe<pex::velocity_cmd_t>(runtime::channels::kBaseCmd, [this](const pex::velocity_cmd_t& cmd) {
-    const std::string refused = core_.on_command(cmd, node_.monotonic_us());
-    if (!refused.empty()) throw runtime::BadInput(refused);
-    show_counters();
+    core_.on_command(cmd, node_.monotonic_us());  // a refusal (std::invalid_argument): counted by the node
   });
   node_.watch_fd(can_->fd(), [this] { read_frames(); });
   node_.every(period_of(options.control_rate_hz), [this](std::int64_t) {
@@ -104,7 +103,6 @@ Driver::Driver(runtime::Node& node, const DriverOptions& options)
   });
   node_.every(period_of(options.odometry_rate_hz), [this](std::int64_t) {
     core_.publish_odometry(node_.monotonic_us());
-    show_counters();
   });
   node_.set_state(pex::daemon_status_t::STATE_DEGRADED, "waiting for the drives on " + can_->describe());
   spdlog::info("CAN {} nodes {} and {}, {:.1f} counts/m, cmd timeout {} ms", can_->describe(), options.left_node_id,
@@ -116,7 +114,6 @@ DriverOutputs Driver::outputs() {
   out.send_frame = [this](const canopen::Frame& frame, std::string* error) { return can_->send(frame, error); };
   out.publish_odometry = [this](const pex::odometry_t& msg) { node_.publish(runtime::channels::kOdometry, msg); };
   out.report = [this](const DriverHealth& health) {
-    show_counters();  // first: a change of state publishes DAEMON_STATUS at once
     node_.set_state(health.state, health.reason);
   };
   out.error = [this](std::string_view key, const std::string& text) { node_.error(key, text); };
@@ -138,9 +135,6 @@ void Driver::read_frames() {
   while (auto frame = can_->receive()) frames.push_back(*frame);
   core_.on_frames(frames, node_.monotonic_us(), node_.now_utime());
   node_.counter("can_malformed_datagrams") = static_cast<std::int64_t>(can_->malformed());
-  show_counters();
 }
-
-void Driver::show_counters() { node_.show_counters(core_.counters()); }
 
 }  // namespace pex::base_driver

@@ -27,7 +27,6 @@ class Driver {
   // Hands every frame waiting on the transport to the core.
   void read_frames();
   // The core's counters into DAEMON_STATUS.
-  void show_counters();
 
   runtime::Node& node_;
   std::unique_ptr<hwio::FrameTransport> can_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <cstdio>
 
 #include <linux/can/error.h>
@@ -42,23 +43,22 @@ DriverCore::DriverCore(const DriverOptions& options, DriverOutputs outputs)
       limiter_(options_.geometry, options_.limits),
       odometry_(options_.geometry, options_.odometry) {}
 
-std::string DriverCore::on_command(const pex::velocity_cmd_t& cmd, std::int64_t now_us) {
-  if (!std::isfinite(cmd.v) || !std::isfinite(cmd.omega)) {
-    return "BASE_CMD with a non-finite velocity from '" + cmd.source + "'";
-  }
+void DriverCore::on_command(const pex::velocity_cmd_t& cmd, std::int64_t now_us) {
+  if (!std::isfinite(cmd.v) || !std::isfinite(cmd.omega))
+    throw std::invalid_argument("BASE_CMD with a non-finite velocity from '" + cmd.source + "'");
   // A command over the limits is clipped by the limiter (a planner may ask
   // for "as fast as allowed"), and counted; one far beyond them is no command
   // a sane sender makes: refused, the command in force kept.
   const double max_v = options_.limits.max_speed_mps, max_omega = options_.limits.max_omega_radps;
   if (std::abs(cmd.v) > kAbsurdFactor * max_v || std::abs(cmd.omega) > kAbsurdFactor * max_omega) {
-    return "BASE_CMD v = " + std::to_string(cmd.v) + " m/s, omega = " + std::to_string(cmd.omega) + " rad/s from '" +
-           cmd.source + "': more than " + std::to_string(static_cast<int>(kAbsurdFactor)) + " x the limits";
+    throw std::invalid_argument("BASE_CMD v = " + std::to_string(cmd.v) + " m/s, omega = " + std::to_string(cmd.omega) +
+                                " rad/s from '" + cmd.source + "': more than " +
+                                std::to_string(static_cast<int>(kAbsurdFactor)) + " x the limits");
   }
   if (std::abs(cmd.v) > max_v || std::abs(cmd.omega) > max_omega) ++counters_.commands_clipped;
   command_ = kinematics::BodyVelocity{cmd.v, cmd.omega};
   command_us_ = now_us;
   ++counters_.commands;
-  return "";
 }
 
 void DriverCore::on_frames(const std::vector<canopen::Frame>& frames, std::int64_t now_us, std::int64_t now_utime) {

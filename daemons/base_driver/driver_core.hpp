@@ -115,9 +115,9 @@ class DriverCore {
   // The options must be valid (load_options, geometry.validate()).
   DriverCore(const DriverOptions& options, DriverOutputs outputs);
 
-  // A BASE_CMD. Returns "" when taken, else why it was refused (the command
-  // in force is kept).
-  std::string on_command(const pex::velocity_cmd_t& cmd, std::int64_t now_us);
+  // A BASE_CMD. One refused (non-finite, or far beyond the limits) throws
+  // std::invalid_argument with the reason; the command in force is kept.
+  void on_command(const pex::velocity_cmd_t& cmd, std::int64_t now_us);
   // The frames one read of the bus gave, in order, error frames (CAN_ERR_FLAG)
   // included. A pair of fresh encoder readings becomes odometry stamped now_utime.
   void on_frames(const std::vector<canopen::Frame>& frames, std::int64_t now_us, std::int64_t now_utime);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 namespace pex::explorer {
@@ -20,20 +21,19 @@ ExplorerNode::ExplorerNode(ExplorerOptions options, Planning planning)
   if (planning == Planning::kWorkerThread) worker_ = std::make_unique<PlanWorker>();
 }
 
-std::string ExplorerNode::on_map(const pex::polygon_map_t& msg, std::int64_t now_utime) {
+void ExplorerNode::on_map(const pex::polygon_map_t& msg, std::int64_t now_utime) {
   DecodedMap decoded = decode_map(msg, options_.map);
-  if (!decoded.ok) return decoded.error;
+  if (!decoded.ok) throw std::invalid_argument(decoded.error);
   counters_.maps_accepted++;
   counters_.map_polygons_dropped += decoded.polygons_dropped;
   counters_.map_rings_reoriented += decoded.rings_reoriented;
   mission_.on_map(std::move(decoded.polygons), now_utime, msg.scan_utime);
-  return {};
 }
 
-std::string ExplorerNode::on_pose(const pex::pose_t& msg, std::int64_t now_utime) {
-  if (!std::isfinite(msg.x) || !std::isfinite(msg.y) || !std::isfinite(msg.theta)) return "non-finite pose";
+void ExplorerNode::on_pose(const pex::pose_t& msg, std::int64_t now_utime) {
+  if (!std::isfinite(msg.x) || !std::isfinite(msg.y) || !std::isfinite(msg.theta))
+    throw std::invalid_argument("non-finite pose");
   mission_.on_pose(planning::Pose2{msg.x, msg.y, msg.theta}, now_utime);
-  return {};
 }
 
 std::string ExplorerNode::checkpoint_text() const { return planning::to_text(mission_.checkpoint()); }
@@ -46,11 +46,12 @@ std::string ExplorerNode::restore(const std::string& text) {
   return {};
 }
 
-std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime) {
-  if (msg.nranges <= 0 || static_cast<std::size_t>(msg.nranges) != msg.ranges.size()) return "scan without ranges";
+void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime) {
+  if (msg.nranges <= 0 || static_cast<std::size_t>(msg.nranges) != msg.ranges.size())
+    throw std::invalid_argument("scan without ranges");
   if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) || !std::isfinite(msg.sensor_x) ||
       !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
-    return "scan geometry is not finite";
+    throw std::invalid_argument("scan geometry is not finite");
   // Returns in the robot's frame (the laser's mounting), for the guard.
   auto& points = scan_points_;
   points.clear();
@@ -66,12 +67,11 @@ std::string ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now
   scan_utime_ = now_utime;
   last_scan_ = msg;
   mission_.on_scan(now_utime);
-  return {};
 }
 
 std::string ExplorerNode::on_command(const pex::mission_cmd_t& msg, std::int64_t now_utime) {
   if (msg.command < pex::mission_cmd_t::CMD_START || msg.command > pex::mission_cmd_t::CMD_STOP)
-    return "refused: unknown mission command " + std::to_string(msg.command);
+    throw std::invalid_argument("unknown mission command " + std::to_string(msg.command));
   const auto command = static_cast<planning::MissionCommand>(msg.command);
   std::string why = mission_.on_command(command, now_utime);
   if (why.empty()) counters_.commands_applied++;

@@ -52,16 +52,16 @@ class ExplorerNode {
   enum class Planning { kWorkerThread, kInline };
   explicit ExplorerNode(ExplorerOptions options, Planning planning = Planning::kInline);
 
-  // Inputs with their arrival time. Return "" when accepted, else why the
-  // message was refused (the caller counts it as bad input).
-  std::string on_map(const pex::polygon_map_t& msg, std::int64_t now_utime);
-  std::string on_pose(const pex::pose_t& msg, std::int64_t now_utime);
+  // Inputs with their arrival time. A message refused (bad content) throws
+  // std::invalid_argument with the reason, and changes nothing.
+  void on_map(const pex::polygon_map_t& msg, std::int64_t now_utime);
+  void on_pose(const pex::pose_t& msg, std::int64_t now_utime);
   // A LIDAR_SCAN: the laser is alive (the mission stops without scans), and
   // its returns bound the command (the scan guard, planning/scan_guard.hpp).
-  std::string on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime);
-  // A MISSION_CMD. Returns "" when applied or already in effect; "refused: ..."
-  // for a command that is not a command (bad input); other text: why it does
-  // not apply now (e.g. resume while not paused).
+  void on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime);
+  // A MISSION_CMD. Returns "" when applied or already in effect, else why it
+  // does not apply now (e.g. resume while not paused); a command that is not a
+  // command is refused (std::invalid_argument).
   std::string on_command(const pex::mission_cmd_t& msg, std::int64_t now_utime);
   // Takes a finished plan from the worker (call when plan_fd() is readable).
   void on_plan_ready(std::int64_t now_utime);

@@ -155,10 +155,10 @@ TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {
   pex::pose_t pose{};
   pose.x = 10;
   pose.y = 1.5;
-  ASSERT_EQ(node.on_map(corridor(), 0), "");
-  ASSERT_EQ(node.on_pose(pose, 0), "");
+  ASSERT_NO_THROW(node.on_map(corridor(), 0));
+  ASSERT_NO_THROW(node.on_pose(pose, 0));
   node.step(0);
-  ASSERT_EQ(node.on_pose(pose, 100'000), "");
+  ASSERT_NO_THROW(node.on_pose(pose, 100'000));
   const auto cmd = node.step(100'000);
   EXPECT_GT(cmd.v, 0.0);
   EXPECT_EQ(cmd.source, "explorer");
@@ -179,10 +179,10 @@ TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {
 
   pex::pose_t bad = pose;
   bad.theta = std::nan("");
-  EXPECT_NE(node.on_pose(bad, 2'100'000), "");
+  EXPECT_THROW(node.on_pose(bad, 2'100'000), std::invalid_argument);
   auto broken = corridor();
   broken.rings[0].edge_type[0] = 9;
-  EXPECT_NE(node.on_map(broken, 2'100'000), "");
+  EXPECT_THROW(node.on_map(broken, 2'100'000), std::invalid_argument);
   EXPECT_EQ(node.counters().maps_accepted, 1);
 }
 
@@ -199,18 +199,18 @@ TEST(ExplorerNode, StopsWithoutLaserScans) {
   scan.nranges = 3;
   scan.ranges = {1.0f, 1.0f, 1.0f};
   pex::laser_scan_t empty{};
-  ASSERT_EQ(node.on_map(corridor(), 0), "");
+  ASSERT_NO_THROW(node.on_map(corridor(), 0));
   for (std::int64_t t = 0; t <= 200'000; t += 100'000) {
-    ASSERT_EQ(node.on_pose(pose, t), "");
-    EXPECT_NE(node.on_scan(empty, t), "");
+    ASSERT_NO_THROW(node.on_pose(pose, t));
+    EXPECT_THROW(node.on_scan(empty, t), std::invalid_argument);
     node.step(t);
   }
   EXPECT_TRUE(node.last_output().degraded);
   EXPECT_EQ(node.last_output().degraded_reason, "no laser scans");
-  ASSERT_EQ(node.on_scan(scan, 300'000), "");
-  ASSERT_EQ(node.on_pose(pose, 300'000), "");
+  ASSERT_NO_THROW(node.on_scan(scan, 300'000));
+  ASSERT_NO_THROW(node.on_pose(pose, 300'000));
   node.step(300'000);
-  ASSERT_EQ(node.on_pose(pose, 400'000), "");
+  ASSERT_NO_THROW(node.on_pose(pose, 400'000));
   EXPECT_GT(node.step(400'000).v, 0.0);
   EXPECT_FALSE(node.last_output().degraded);
 }
@@ -236,11 +236,11 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
     pex::pose_t pose{};
     pose.x = 10;
     pose.y = 1.5;
-    EXPECT_EQ(node.on_map(corridor(), 0), "");
+    EXPECT_NO_THROW(node.on_map(corridor(), 0));
     double v = 0.0;
     for (std::int64_t t = 0; t <= 2'000'000; t += 100'000) {
-      EXPECT_EQ(node.on_pose(pose, t), "");
-      EXPECT_EQ(node.on_scan(scan_of_wall_ahead(wall_m), t), "");
+      EXPECT_NO_THROW(node.on_pose(pose, t));
+      EXPECT_NO_THROW(node.on_scan(scan_of_wall_ahead(wall_m), t));
       v = node.step(t).v;
     }
     return std::pair{v, node.counters().guard_limited_steps};
@@ -302,9 +302,9 @@ TEST(ExplorerNode, TheLiveViewOpensADoorTheMapHasClosed) {
     ExplorerNode node(options);
     std::optional<Point> goal;
     for (std::int64_t t = 0; t <= 3'000'000 && !goal; t += 100'000) {
-      EXPECT_EQ(node.on_map(map, t), "");
-      EXPECT_EQ(node.on_pose(pose, t), "");
-      EXPECT_EQ(node.on_scan(scan, t), "");
+      EXPECT_NO_THROW(node.on_map(map, t));
+      EXPECT_NO_THROW(node.on_pose(pose, t));
+      EXPECT_NO_THROW(node.on_scan(scan, t));
       node.step(t);
       goal = node.last_output().goal;
     }
@@ -331,9 +331,9 @@ TEST(ExplorerNode, ItLooksAroundBeforeItCallsAFrontierUnreachable) {
   std::optional<Point> goal;
   for (std::int64_t t = 0; t <= 30'000'000 && !goal; t += 100'000) {
     pose.utime = t;
-    if (t % 1'000'000 == 0) EXPECT_EQ(node.on_map(two_rooms_door_closed(), t), "");
-    EXPECT_EQ(node.on_pose(pose, t), "");
-    EXPECT_EQ(node.on_scan(two_rooms_scan(pose), t), "");
+    if (t % 1'000'000 == 0) EXPECT_NO_THROW(node.on_map(two_rooms_door_closed(), t));
+    EXPECT_NO_THROW(node.on_pose(pose, t));
+    EXPECT_NO_THROW(node.on_scan(two_rooms_scan(pose), t));
     const auto cmd = node.step(t);
     EXPECT_EQ(cmd.v, 0.0) << "it stands until it has a goal";
     pose.theta += cmd.omega * 0.1;

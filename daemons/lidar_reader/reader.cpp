@@ -49,12 +49,12 @@ ReaderOptions load_options(runtime::ConfigReader& config) {
 }
 
 Reader::Reader(runtime::Node& node, const ReaderOptions& options) : node_(node), core_(options, outputs()) {
+  node_.collect_counters([this]() -> decltype(auto) { return core_.counters(); });
   // DEGRADED, not STARTING: the runtime promotes STARTING to OK when its loop
   // starts, and we are not OK before scans flow.
   node_.set_state(pex::daemon_status_t::STATE_DEGRADED, "connecting to " + options.host);
   node_.every(std::chrono::milliseconds(20), [this](std::int64_t) {
     core_.poll(node_.monotonic_us());
-    show_counters();
   });
 }
 
@@ -81,7 +81,6 @@ ReaderOutputs Reader::outputs() {
   };
   out.publish_scan = [this](const pex::laser_scan_t& msg) { node_.publish(runtime::channels::kLidarScan, msg); };
   out.report = [this](const ReaderHealth& health) {
-    show_counters();  // first: a change of state publishes DAEMON_STATUS at once
     node_.set_state(health.state, health.reason);
   };
   out.note = [](const std::string& text) { spdlog::info("{}", text); };
@@ -102,9 +101,6 @@ void Reader::on_readable() {
     if (r.bytes == 0) break;
     core_.on_bytes(std::string_view(buffer, r.bytes), now_us, node_.now_utime());
   }
-  show_counters();
 }
-
-void Reader::show_counters() { node_.show_counters(core_.counters()); }
 
 }  // namespace pex::lidar_reader

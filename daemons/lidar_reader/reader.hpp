@@ -25,7 +25,6 @@ class Reader {
   // Hands what the socket has to the core until it would block or closes.
   void on_readable();
   // The core's counters into DAEMON_STATUS.
-  void show_counters();
 
   runtime::Node& node_;
   hwio::Fd fd_;

@@ -45,57 +45,41 @@ int main(int argc, char** argv) {
     const auto timeout_us = static_cast<std::int64_t>(mapper->options().input_timeout_s * 1e6);
     watch->expect(std::string(ch::kLidarScan), timeout_us);
     watch->expect(pose_channel, timeout_us);
-    // Counters in DAEMON_STATUS mirror the mapper's after every event.
-    auto report = [&node, mapper] { node.show_counters(*mapper); };
+    node.collect_counters([mapper]() -> const Mapper& { return *mapper; });
     // MAP (planning map) and, unless switched off, MAP_FREE (explored free space).
     auto publish_maps = [&node, mapper](std::int64_t now_utime) {
       if (auto msg = mapper->map_message(now_utime)) node.publish(ch::kMap, *msg);
       if (mapper->options().publish_free_space)
         if (auto msg = mapper->free_space_message(now_utime)) node.publish(ch::kMapFree, *msg);
     };
-    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [&node, mapper, report, watch](const pex::laser_scan_t& scan) {
-      try {
-        mapper->on_scan(scan);
-      } catch (const std::invalid_argument& e) {
-        throw pex::runtime::BadInput(e.what());
-      }
+    // Content the mapper refuses (std::invalid_argument) the node counts, logs and drops.
+    node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [&node, mapper, watch](const pex::laser_scan_t& scan) {
+      mapper->on_scan(scan);
       watch->seen(ch::kLidarScan, node.monotonic_us());
-      report();
     });
     if (source == "slam") {
-      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, report, watch, publish_maps](const pex::slam_update_t& update) {
-        bool switched = false;
+      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, watch, publish_maps](const pex::slam_update_t& update) {
         const auto epoch_changes = mapper->counters().slam_epoch_changes;
-        try {
-          switched = mapper->on_slam_update(update);
-        } catch (const std::invalid_argument& e) {
-          throw pex::runtime::BadInput(e.what());
-        }
+        const bool switched = mapper->on_slam_update(update);
         if (mapper->counters().slam_epoch_changes != epoch_changes)
           spdlog::warn("SLAM started afresh (epoch {}): its frame is not the old map's, which is dropped", update.epoch);
         watch->seen(ch::kSlamUpdate, node.monotonic_us());
         // A new best particle: its map goes out now, consistent with its trajectory.
         if (switched) publish_maps(node.now_utime());
-        report();
       });
     } else if (source == "odometry") {
-      node.subscribe<pex::odometry_t>(ch::kOdometry, [&node, mapper, report, watch](const pex::odometry_t& odom) {
+      node.subscribe<pex::odometry_t>(ch::kOdometry, [&node, mapper, watch](const pex::odometry_t& odom) {
         mapper->on_pose({odom.utime, {odom.x, odom.y, odom.theta}});
         watch->seen(ch::kOdometry, node.monotonic_us());
-        report();
       });
     } else {
-      node.subscribe<pex::pose_t>(ch::kSimTruth, [&node, mapper, report, watch](const pex::pose_t& pose) {
+      node.subscribe<pex::pose_t>(ch::kSimTruth, [&node, mapper, watch](const pex::pose_t& pose) {
         mapper->on_pose({pose.utime, {pose.x, pose.y, pose.theta}});
         watch->seen(ch::kSimTruth, node.monotonic_us());
-        report();
       });
     }
     const auto period = std::chrono::microseconds(static_cast<std::int64_t>(1e6 / mapper->options().publish_rate_hz));
-    node.every(period, [publish_maps, report](std::int64_t now_utime) {
-      publish_maps(now_utime);
-      report();
-    });
+    node.every(period, publish_maps);
     node.every(std::chrono::milliseconds(250), [&node, watch](std::int64_t) {
       const std::string why = watch->stale(node.monotonic_us());
       node.set_state(why.empty() ? pex::daemon_status_t::STATE_OK : pex::daemon_status_t::STATE_DEGRADED, why);

@@ -293,9 +293,9 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   node_.watch_fd(can_->fd(), [this] { receive_can(); });
   node_.subscribe<pex::sim_fault_t>(runtime::channels::kSimFault, [this](const pex::sim_fault_t& msg) {
     if (msg.fault != pex::sim_fault_t::FAULT_LASER_STALL && msg.fault != pex::sim_fault_t::FAULT_LASER_REFUSE)
-      throw runtime::BadInput("unknown fault " + std::to_string(msg.fault));
+      throw std::invalid_argument("unknown fault " + std::to_string(msg.fault));
     if (!std::isfinite(msg.duration_s) || msg.duration_s < 0.0 || msg.duration_s > 3600.0)
-      throw runtime::BadInput("fault duration " + std::to_string(msg.duration_s) + " s not in [0, 3600]");
+      throw std::invalid_argument("fault duration " + std::to_string(msg.duration_s) + " s not in [0, 3600]");
     spdlog::warn("fault from {}: laser {} for {} s", msg.source,
                  msg.fault == pex::sim_fault_t::FAULT_LASER_STALL ? "stall" : "refuses connections", msg.duration_s);
     start_laser_fault(msg.fault, msg.duration_s);

@@ -63,29 +63,18 @@ int main(int argc, char** argv) {
       const std::string why = watch->stale(node.monotonic_us());
       node.set_state(why.empty() ? pex::daemon_status_t::STATE_OK : pex::daemon_status_t::STATE_DEGRADED, why);
     });
-    // Content the node refuses becomes BadInput: counted, logged, dropped.
+    node.collect_counters([slam]() -> const SlamNode& { return *slam; });
+    // Content the filter refuses (std::invalid_argument) the node counts, logs and drops.
     node.subscribe<pex::odometry_t>(ch::kOdometry, [slam, &node, watch](const pex::odometry_t& msg) {
       watch->seen(ch::kOdometry, node.monotonic_us());  // alive, even when a reading is held
-      try {
-        slam->on_odometry(msg);
-      } catch (const std::invalid_argument& e) {
-        node.show_counters(*slam);
-        throw pex::runtime::BadInput(e.what());
-      }
-      node.show_counters(*slam);
+      slam->on_odometry(msg);
     });
     node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [slam, &node, watch](const pex::laser_scan_t& msg) {
-      try {
-        slam->on_scan(msg);
-      } catch (const std::invalid_argument& e) {
-        throw pex::runtime::BadInput(e.what());
-      }
+      slam->on_scan(msg);
       watch->seen(ch::kLidarScan, node.monotonic_us());
-      node.show_counters(*slam);
     });
     node.on_shutdown([slam, &node, &poses_path, &checkpoint_out] {
       slam->flush();
-      node.show_counters(*slam);
       spdlog::info("{} filter updates, {} odometry steps replaced by the odometry check", slam->filter().generation() + 1,
                    slam->filter().corrected_odometry_steps());
       if (!checkpoint_out.empty()) {

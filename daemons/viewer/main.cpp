@@ -50,26 +50,23 @@ int main(int argc, char** argv) {
         const auto timeout_us = static_cast<std::int64_t>(options.input_timeout_s * 1e6);
         watch->expect(std::string(ch::kMap), timeout_us);
         watch->expect(options.pose_channel, timeout_us);
-        // A refused message leaves the state as it was; the node counts and logs it.
-        const auto take = [](const std::string& why) {
-          if (!why.empty()) throw pex::runtime::BadInput(why);
-        };
-        node.subscribe<pex::polygon_map_t>(ch::kMap, [&node, state, watch, take](const pex::polygon_map_t& m) {
-          take(state->on_map(m));
+        // A refused message (std::invalid_argument) leaves the state as it was; the node counts and logs it.
+        node.subscribe<pex::polygon_map_t>(ch::kMap, [&node, state, watch](const pex::polygon_map_t& m) {
+          state->on_map(m);
           watch->seen(ch::kMap, node.monotonic_us());
         });
         node.subscribe<pex::pose_t>(options.pose_channel,
-                                    [&node, state, watch, take, channel = options.pose_channel](const pex::pose_t& p) {
-                                      take(state->on_pose(p));
+                                    [&node, state, watch, channel = options.pose_channel](const pex::pose_t& p) {
+                                      state->on_pose(p);
                                       watch->seen(channel, node.monotonic_us());
                                     });
-        node.subscribe<pex::laser_scan_t>(ch::kLidarScan,
-                                          [state, take](const pex::laser_scan_t& s) { take(state->on_scan(s)); });
-        node.subscribe<pex::explore_state_t>(
-            ch::kExploreState, [state, take](const pex::explore_state_t& s) { take(state->on_explore_state(s)); });
-        node.subscribe<pex::daemon_status_t>(ch::kDaemonStatus, [&node, state, take](const pex::daemon_status_t& s) {
-          take(state->on_status(s, node.now_utime()));
+        node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [state](const pex::laser_scan_t& s) { state->on_scan(s); });
+        node.subscribe<pex::explore_state_t>(ch::kExploreState,
+                                             [state](const pex::explore_state_t& s) { state->on_explore_state(s); });
+        node.subscribe<pex::daemon_status_t>(ch::kDaemonStatus, [&node, state](const pex::daemon_status_t& s) {
+          state->on_status(s, node.now_utime());
         });
+        node.collect_counters([web] { return web->counters(); });
 
         // The page's buttons: MISSION_CMD, as pex-mission sends it.
         node.watch_fd(web->command_fd(), [&node, web] {
@@ -97,7 +94,6 @@ int main(int argc, char** argv) {
           if (version != *map_sent) map_json = state->map_json().dump();
           web->publish(version, std::move(map_json), state->live_json(now_utime).dump());
           *map_sent = version;
-          node.show_counters(web->counters());
           node.counter("map_version") = version;
           const std::string why = watch->stale(node.monotonic_us());
           node.set_state(why.empty() ? pex::daemon_status_t::STATE_OK : pex::daemon_status_t::STATE_DEGRADED, why);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "geometry/point.hpp"
 #include "map_files.hpp"
@@ -38,23 +39,24 @@ const char* daemon_state_name(int state) { return pex::runtime::daemon_state_nam
 
 ViewerState::ViewerState(ViewerStateOptions options) : options_(options) {}
 
-std::string ViewerState::on_map(const pex::polygon_map_t& map) {
-  if (auto why = map_files::check_map(map); !why.empty()) return why;
+void ViewerState::on_map(const pex::polygon_map_t& map) {
+  if (auto why = map_files::check_map(map); !why.empty()) throw std::invalid_argument(why);
   std::int64_t vertices = 0;
   for (const auto& ring : map.rings) vertices += ring.nvertices;
   if (vertices > options_.max_map_vertices)
-    return std::to_string(vertices) + " vertices, more than " + std::to_string(options_.max_map_vertices);
+    throw std::invalid_argument(std::to_string(vertices) + " vertices, more than " +
+                                std::to_string(options_.max_map_vertices));
   for (const auto& ring : map.rings)
     for (std::size_t i = 0; i < ring.x.size(); ++i)
-      if (!plausible(ring.x[i]) || !plausible(ring.y[i])) return "a vertex 1000 km or more away";
+      if (!plausible(ring.x[i]) || !plausible(ring.y[i])) throw std::invalid_argument("a vertex 1000 km or more away");
   map_ = map;
   ++map_version_;
   ++maps_;
-  return {};
 }
 
-std::string ViewerState::on_pose(const pex::pose_t& pose) {
-  if (!plausible(pose.x) || !plausible(pose.y) || !finite(pose.theta)) return "non-finite or absurd";
+void ViewerState::on_pose(const pex::pose_t& pose) {
+  if (!plausible(pose.x) || !plausible(pose.y) || !finite(pose.theta))
+    throw std::invalid_argument("non-finite or absurd");
   pose_ = pose;
   ++poses_;
   if (trajectory_.empty() || std::hypot(pose.x - trajectory_.back().first, pose.y - trajectory_.back().second) >=
@@ -68,17 +70,16 @@ std::string ViewerState::on_pose(const pex::pose_t& pose) {
     for (std::size_t i = last % 2; i <= last; i += 2) thinned.push_back(trajectory_[i]);
     trajectory_ = std::move(thinned);
   }
-  return {};
 }
 
-std::string ViewerState::on_scan(const pex::laser_scan_t& scan) {
+void ViewerState::on_scan(const pex::laser_scan_t& scan) {
   if (scan.nranges < 0 || static_cast<std::size_t>(scan.nranges) != scan.ranges.size())
-    return "nranges " + std::to_string(scan.nranges) + " but " + std::to_string(scan.ranges.size()) +
-           " ranges";
+    throw std::invalid_argument("nranges " + std::to_string(scan.nranges) + " but " +
+                                std::to_string(scan.ranges.size()) + " ranges");
   if (!finite(scan.angle_min) || !finite(scan.angle_increment) || !finite(scan.range_min) ||
       !finite(scan.range_max) || !finite(scan.sensor_x) || !finite(scan.sensor_y) || !finite(scan.sensor_theta))
-    return "non-finite angles, limits or sensor pose";
-  if (!pose_) return {};  // nothing to draw it from yet: not the scan's fault
+    throw std::invalid_argument("non-finite angles, limits or sensor pose");
+  if (!pose_) return;  // nothing to draw it from yet: not the scan's fault
   const geometry::Point sensor =
       geometry::transform({pose_->x, pose_->y, pose_->theta}, geometry::Point(scan.sensor_x, scan.sensor_y));
   const double sx = sensor.x(), sy = sensor.y();
@@ -94,37 +95,34 @@ std::string ViewerState::on_scan(const pex::laser_scan_t& scan) {
   }
   scan_utime_ = scan.utime;
   ++scans_;
-  return {};
 }
 
-std::string ViewerState::on_explore_state(const pex::explore_state_t& state) {
+void ViewerState::on_explore_state(const pex::explore_state_t& state) {
   const auto npath = static_cast<std::size_t>(std::max(state.npath, 0));
   const auto nfrontiers = static_cast<std::size_t>(std::max(state.nfrontiers, 0));
   if (state.npath < 0 || state.path_x.size() != npath || state.path_y.size() != npath)
-    return "npath disagrees with its arrays";
+    throw std::invalid_argument("npath disagrees with its arrays");
   if (state.nfrontiers < 0 || state.frontier_x.size() != nfrontiers || state.frontier_y.size() != nfrontiers ||
       state.frontier_reason.size() != nfrontiers)
-    return "nfrontiers disagrees with its arrays";
+    throw std::invalid_argument("nfrontiers disagrees with its arrays");
   for (std::size_t i = 0; i < npath; ++i)
-    if (!plausible(state.path_x[i]) || !plausible(state.path_y[i])) return "non-finite path";
+    if (!plausible(state.path_x[i]) || !plausible(state.path_y[i])) throw std::invalid_argument("non-finite path");
   for (std::size_t i = 0; i < nfrontiers; ++i)
     if (!plausible(state.frontier_x[i]) || !plausible(state.frontier_y[i]))
-      return "non-finite frontier";
+      throw std::invalid_argument("non-finite frontier");
   if (state.has_goal && (!plausible(state.goal_x) || !plausible(state.goal_y)))
-    return "non-finite goal";
+    throw std::invalid_argument("non-finite goal");
   mission_ = state;
   ++states_;
-  return {};
 }
 
-std::string ViewerState::on_status(const pex::daemon_status_t& status, std::int64_t received_utime) {
+void ViewerState::on_status(const pex::daemon_status_t& status, std::int64_t received_utime) {
   const auto n = static_cast<std::size_t>(std::max(status.ncounters, 0));
   if (status.ncounters < 0 || status.counter_names.size() != n || status.counter_values.size() != n)
-    return "ncounters disagrees with its arrays";
-  if (status.name.empty() || status.name.size() > 64) return "empty or overlong name";
+    throw std::invalid_argument("ncounters disagrees with its arrays");
+  if (status.name.empty() || status.name.size() > 64) throw std::invalid_argument("empty or overlong name");
   statuses_[status.name] = {status, received_utime};
   ++statuses_heard_;
-  return {};
 }
 
 json ViewerState::map_json() const {

@@ -40,15 +40,15 @@ class ViewerState {
  public:
   explicit ViewerState(ViewerStateOptions options = {});
 
-  // "" when taken, else why the message is refused (nothing changed); the
-  // daemon's log line names the channel.
-  std::string on_map(const pex::polygon_map_t& map);
-  std::string on_pose(const pex::pose_t& pose);
+  // A message refused throws std::invalid_argument with the reason and
+  // changes nothing; the daemon's log line names the channel.
+  void on_map(const pex::polygon_map_t& map);
+  void on_pose(const pex::pose_t& pose);
   // The scan is drawn from the newest pose (ignored before the first).
-  std::string on_scan(const pex::laser_scan_t& scan);
-  std::string on_explore_state(const pex::explore_state_t& state);
+  void on_scan(const pex::laser_scan_t& scan);
+  void on_explore_state(const pex::explore_state_t& state);
   // `received_utime`: when the viewer heard it, on the clock later passed to live_json().
-  std::string on_status(const pex::daemon_status_t& status, std::int64_t received_utime);
+  void on_status(const pex::daemon_status_t& status, std::int64_t received_utime);
 
   // Bumped by every accepted MAP: a page needs map_json() again only when it changed.
   std::int64_t map_version() const { return map_version_; }

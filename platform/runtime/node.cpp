@@ -121,7 +121,7 @@ void Node::on_sim_clock(const void* data, int size) {
     // Keep the last good time: a clock that jumps back would re-run timers and
     // make every timeout measured across the jump negative.
     ++counters_["sim_clock_rejected"];
-    throw BadInput(why);
+    throw std::invalid_argument(why);
   }
   last_clock_steady_us_ = steady_us();
   // The problem (waiting, silence) ends before the timers run, so what they
@@ -142,7 +142,7 @@ void Node::take_clock_ticks() {
     try {
       on_sim_clock(data, size);
       ++msgs_in_;
-    } catch (const BadInput& e) {
+    } catch (const std::invalid_argument& e) {
       reject(channels::kSimClock, std::string(channels::kSimClock) + ": " + e.what());
     }
   });
@@ -205,13 +205,17 @@ void Node::dispatch(std::string_view channel, const void* data, int size, int64_
   for (auto& h : it->second) {
     try {
       h(data, size, recv_utime);
-    } catch (const BadInput& e) {
+    } catch (const std::invalid_argument& e) {
       reject(channel, std::string(channel) + ": " + e.what());
     } catch (const std::exception& e) {
       error(channel, std::string(channel) + ": handler failed: " + e.what());
     }
   }
   if (msgs_rejected_ == rejected_before && errors_ == errors_before) ++msgs_in_;
+}
+
+void Node::refresh_counters() {
+  for (const auto& source : counter_sources_) source();
 }
 
 void Node::every(std::chrono::microseconds period, std::function<void(int64_t)> fn) {
@@ -284,6 +288,7 @@ void Node::set_state(int8_t state, std::string reason) {
 int64_t& Node::counter(const std::string& name) { return counters_[name]; }
 
 void Node::publish_status() {
+  refresh_counters();
   pex::daemon_status_t s;
   // Live, the heartbeat is the process's health in real time: wall-clock
   // stamped even on a "sim" clock, which may not have started or may be stopped.

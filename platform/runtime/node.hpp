@@ -14,13 +14,15 @@
 // monotonic clock, so health shows even when the simulator is paused or gone.
 //
 // Every subscription decodes defensively: a message that fails to decode, or
-// whose handler throws (bad content), is counted as rejected, logged at most
-// once a second per channel, and dropped; the daemon keeps its state and goes on.
+// whose handler refuses it (throws std::invalid_argument: bad content), is
+// counted as rejected, logged at most once a second per channel, and dropped;
+// the daemon keeps its state and goes on.
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,13 +38,12 @@ class LogFile;
 
 namespace pex::runtime {
 
-// Thrown by handlers for input they refuse (NaN ranges, oversize arrays, ...).
-// The node counts it as a rejected message; any other std::exception counts
-// as an error of the daemon, and is also survived.
-class BadInput : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// The one way to refuse input, in a library or a handler: throw
+// std::invalid_argument with the reason (NaN ranges, oversize arrays, a
+// polygon that crosses itself, ...). The node counts it as a rejected message;
+// any other std::exception counts as an error of the daemon, and is also
+// survived. Libraries need nothing of the runtime for it, and a handler passes
+// their refusals on untouched.
 
 // Why `size` bytes are not one whole message of type `type_name` (fingerprint
 // `hash`), whose decode() returned `used`: for the rejection's log line.
@@ -105,9 +106,10 @@ class Node {
       Msg msg{};  // value-initialised: lcm-gen types have no member initialisers
       // The decoders check every count against the bytes left before they
       // allocate (cmake/PexLcmBoundedDecode.cmake), so hostile bytes end here
-      // as rejected input, through dispatch like any other BadInput.
+      // as rejected input, through dispatch like any other refusal.
       const int used = msg.decode(data, 0, size);
-      if (used != size) throw BadInput(decode_failure(data, size, used, Msg::getHash(), Msg::getTypeName()));
+      if (used != size)
+        throw std::invalid_argument(decode_failure(data, size, used, Msg::getHash(), Msg::getTypeName()));
       handler(msg);
     });
   }
@@ -154,11 +156,19 @@ class Node {
   void error(std::string_view what_key, const std::string& text);   // own error
   void set_state(int8_t state, std::string reason = {});            // daemon_status_t::STATE_*
   int64_t& counter(const std::string& name);                        // daemon-specific counter
-  // A component's counters into DAEMON_STATUS. The component names each one
-  // once, beside its value, in `visit_counters(v) const`: v.event(name, n)
-  // for an event count (shown once it has counted, as the node's own are)
-  // and v.total(name, n) for a total or a state (always shown). The one way
-  // a daemon shows what its library counts: no list copied into main.cpp.
+  // A component's counters in DAEMON_STATUS: `source()` returns (a reference
+  // to) an object whose `visit_counters(v) const` names each counter once,
+  // beside its value: v.event(name, n) for an event count (shown once it has
+  // counted, as the node's own are) and v.total(name, n) for a total or a
+  // state (always shown). The node reads every source before each
+  // DAEMON_STATUS it publishes (a state change publishes one at once) and when
+  // counters() is asked, so a daemon registers a component once and never
+  // copies a counter by hand; a source costs nothing between heartbeats.
+  template <class Source>
+  void collect_counters(Source source) {
+    counter_sources_.push_back([this, source] { show_counters(source()); });
+  }
+  // A component's counters, once, now (what collect_counters does at those points).
   template <class Counters>
   void show_counters(const Counters& counters) {
     struct Shown {
@@ -170,7 +180,11 @@ class Node {
     } shown{*this};
     counters.visit_counters(shown);
   }
-  const std::map<std::string, int64_t>& counters() const { return counters_; }  // as DAEMON_STATUS carries them
+  // As DAEMON_STATUS carries them (every collect_counters source read first).
+  const std::map<std::string, int64_t>& counters() {
+    refresh_counters();
+    return counters_;
+  }
   int64_t msgs_rejected() const { return msgs_rejected_; }
   int64_t errors() const { return errors_; }
   // The state DAEMON_STATUS carries: the daemon's own, made at least DEGRADED
@@ -205,6 +219,7 @@ class Node {
   void every_on_system_clock(std::chrono::microseconds period, std::function<void(int64_t)> fn);
   void add_timer(std::vector<Timer>& timers, std::chrono::microseconds period, std::function<void(int64_t)> fn);
   void fire_due_timers(std::vector<Timer>& timers, int64_t now_us);
+  void refresh_counters();  // every collect_counters source, now
   // The one path by which a driven clock (offline: log time; "sim": SIM_CLOCK)
   // moves: sets the time and fires the node's due timers (inside the live
   // loop, at the end of the loop's turn instead: see run()).
@@ -230,6 +245,7 @@ class Node {
   std::vector<Watch> watches_;
   std::vector<std::function<void()>> shutdown_hooks_;
   std::map<std::string, int64_t> counters_;
+  std::vector<std::function<void()>> counter_sources_;  // collect_counters
   RateLimitedLog rate_limited_;
   int next_watch_id_ = 1;
   int signal_fd_ = -1;

@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 #include <pex/daemon_status_t.hpp>
 #include <pex/pose_t.hpp>
 #include <pex/sim_clock_t.hpp>
@@ -17,7 +19,7 @@
 #include "runtime/log_file_error.hpp"
 #include "runtime/channels.hpp"
 
-using pex::runtime::BadInput;
+
 using pex::runtime::ClockSource;
 using pex::runtime::LogFileError;
 using pex::runtime::Node;
@@ -82,6 +84,32 @@ TEST(Node, ShowCountersShowsTotalsAlwaysAndEventsOnceTheyHaveCounted) {
   EXPECT_EQ(node.counters().at("held"), 5);
 }
 
+TEST(Node, CollectedCountersAreReadWithoutBeingShownByHand) {
+  auto c = std::make_shared<ShownCounters>();
+  Node node(NodeOptions{"t", "", true, "", 1.0});
+  node.collect_counters([c]() -> const ShownCounters& { return *c; });
+  // A handler that counts a refusal in its component and refuses the message:
+  // nothing in it shows the counters, the node reads them when it reports.
+  node.subscribe<pex::pose_t>("P", [c](const pex::pose_t& p) {
+    c->held = static_cast<int64_t>(std::abs(p.x));
+    if (p.x < 0) {
+      ++c->refused;
+      throw std::invalid_argument("negative x");
+    }
+  });
+  const auto good = encode(pose(1, 7.0));
+  node.dispatch("P", good.data(), static_cast<int>(good.size()), 1);
+  EXPECT_EQ(node.counters().at("held"), 7);
+  EXPECT_EQ(node.counters().count("refused"), 0u);
+  const auto bad = encode(pose(2, -9.0));
+  node.dispatch("P", bad.data(), static_cast<int>(bad.size()), 2);
+  EXPECT_EQ(node.msgs_rejected(), 1);
+  EXPECT_EQ(node.errors(), 1);
+  EXPECT_EQ(node.counters().at("held"), 9);
+  ASSERT_EQ(node.counters().count("refused"), 1u);
+  EXPECT_EQ(node.counters().at("refused"), 1);
+}
+
 TEST(Node, MalformedBytesAreCountedAndDropped) {
   Node node(NodeOptions{"t", "", true, "", 1.0});
   int calls = 0;
@@ -102,7 +130,7 @@ TEST(Node, MalformedBytesAreCountedAndDropped) {
 TEST(Node, HandlerExceptionsAreSurvived) {
   Node node(NodeOptions{"t", "", true, "", 1.0});
   node.subscribe<pex::pose_t>("P", [&](const pex::pose_t& p) {
-    if (p.x < 0) throw BadInput("negative x");
+    if (p.x < 0) throw std::invalid_argument("negative x");
     if (p.x > 100) throw std::runtime_error("internal");
   });
   const auto bad = encode(pose(1, -1));
