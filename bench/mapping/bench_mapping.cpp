@@ -122,7 +122,7 @@ void insert_benchmark(benchmark::State& state, bool typed, bool with_planning = 
     return;
   }
   std::size_t k = 0;
-  double tiles_touched = 0.0, boost_fallbacks = 0.0;
+  double tiles_touched = 0.0;
   for (auto _ : state) {
     state.PauseTiming();
     PolygonMap copy = f.map;  // copy-on-write: shares every tile
@@ -131,7 +131,6 @@ void insert_benchmark(benchmark::State& state, bool typed, bool with_planning = 
     auto result = copy.insert(scan);
     benchmark::DoNotOptimize(result);
     tiles_touched += result.tiles_touched;
-    boost_fallbacks += result.boost_fallbacks;
     if (with_planning) benchmark::DoNotOptimize(copy.planning_vertex_count());
     state.PauseTiming();
     {
@@ -142,7 +141,6 @@ void insert_benchmark(benchmark::State& state, bool typed, bool with_planning = 
   state.counters["map_vertices"] = static_cast<double>(f.map.planning_vertex_count());
   state.counters["tiles"] = static_cast<double>(f.map.tile_count());
   state.counters["tiles_touched"] = tiles_touched / static_cast<double>(std::max<std::size_t>(1, k));
-  state.counters["boost_fallbacks"] = boost_fallbacks / static_cast<double>(std::max<std::size_t>(1, k));
 }
 
 void BM_InsertTyped(benchmark::State& state) { insert_benchmark(state, true); }

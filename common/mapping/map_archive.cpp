@@ -69,7 +69,9 @@ void write_polygon_map(archive::ByteWriter& out, const PolygonMap& map) {
   out.put<double>(map.options().tile_origin_m);
   out.put<std::int64_t>(map.scans_inserted());
   out.put<std::int64_t>(map.failed_tile_updates());
-  out.put<std::int64_t>(map.boost_fallbacks());
+  // Reserved, always 0: once the count of overlays redone with Boost, which
+  // none is since issue 16. Kept so maps saved before read as they did.
+  out.put<std::int64_t>(0);
   out.put<std::uint64_t>(map.tiles().size());
   for (const auto& [key, tile] : map.tiles()) {
     out.put<std::int32_t>(key.first);
@@ -85,9 +87,10 @@ PolygonMap read_polygon_map(archive::ByteReader& in, const PolygonMapOptions& op
     throw ArchiveError("the map was saved with tiles of " + std::to_string(tile_size) + " m at " +
                        std::to_string(tile_origin) + " m, the configuration has " +
                        std::to_string(options.tile_size_m) + " m at " + std::to_string(options.tile_origin_m) + " m");
-  const auto scans = in.get<std::int64_t>(), failed = in.get<std::int64_t>(), fallbacks = in.get<std::int64_t>();
+  const auto scans = in.get<std::int64_t>(), failed = in.get<std::int64_t>();
+  (void)in.get<std::int64_t>();  // reserved (see write_polygon_map)
   PolygonMap map(options);
-  map.restore_counters(scans, failed, fallbacks);
+  map.restore_counters(scans, failed);
   const auto tiles = in.get_count(2 * sizeof(std::int32_t) + 2 * sizeof(std::uint64_t));
   for (std::uint64_t i = 0; i < tiles; ++i) {
     const PolygonMap::TileKey key{in.get<std::int32_t>(), in.get<std::int32_t>()};

@@ -324,7 +324,7 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
       tiles_, [layer](const Tile& tile) -> const TypedMultiPolygon& { return layer == Layer::kFree ? tile.free : tile.planning(); },
       tiles_tolerance);
   auto united = unite_all(std::move(parts.parts));
-  if (!united) return {.error = "the edge overlay could not unite the tiles"};
+  if (!united) return {.error = "the edge overlay could not unite the tiles", .polygons = {}};
   TypedMultiPolygon merged = std::move(*united);
   result.stray_border_edges = border_to_frontier(merged, options_.assign_edge_types);
   if (!options_.assign_edge_types) border_to_frontier(parts.inside, false);
@@ -338,12 +338,12 @@ MergeResult PolygonMap::merge(Layer layer, double simplify_epsilon_m) const {
                 std::make_move_iterator(parts.inside.end()));
   std::string why;
   if (!simplify_and_check(merged, changed, tiles_tolerance ? 0.0 : simplify_epsilon_m, why))
-    return {.error = "merged map invalid: " + why};
+    return {.error = "merged map invalid: " + why, .polygons = {}};
   // The holes set aside and the islands in them lie strictly inside their
   // tile's box, where the merged map is the tile's own polygon, unchanged:
   // they sit in it as they sat in the tile.
   if (!put_back_holes(merged, std::move(parts.aside)))
-    return {.error = "a hole set aside has no polygon to return to"};
+    return {.error = "a hole set aside has no polygon to return to", .polygons = {}};
   merged.insert(merged.end(), std::make_move_iterator(parts.in_aside_holes.begin()),
                 std::make_move_iterator(parts.in_aside_holes.end()));
   result.polygons = std::move(merged);
@@ -357,11 +357,9 @@ void PolygonMap::restore_tile(const TileKey& key, TypedMultiPolygon free, TypedM
                                              planning_options);
 }
 
-void PolygonMap::restore_counters(std::int64_t scans_inserted, std::int64_t failed_tile_updates,
-                                  std::int64_t boost_fallbacks) {
+void PolygonMap::restore_counters(std::int64_t scans_inserted, std::int64_t failed_tile_updates) {
   scans_inserted_ = scans_inserted;
   failed_tile_updates_ = failed_tile_updates;
-  boost_fallbacks_ = boost_fallbacks;
 }
 
 MergeResult PolygonMap::free_space(std::optional<double> simplify_epsilon_m) const {

@@ -59,9 +59,6 @@ struct InsertResult {
   double free_area_before_m2 = 0.0;
   double free_area_after_union_m2 = 0.0;
   ReassignStats reassign;
-  // Always 0: no overlay is redone with Boost.Geometry any more (issue 16).
-  // Kept while the mapper's DAEMON_STATUS still reports the counter.
-  int boost_fallbacks = 0;
 };
 
 struct MergeResult {
@@ -72,10 +69,6 @@ struct MergeResult {
   // Tiles whose planning layer could not be derived from their free and
   // obstacle layers: they took part with their last good planning layer.
   std::int64_t stale_planning_tiles = 0;
-  // Always false / 0: the merge and the planning layers use the edge overlay
-  // only (issue 16). Kept while the mapper's DAEMON_STATUS still reports them.
-  bool boost_cascade = false;
-  std::int64_t boost_planning_tiles = 0;
 };
 
 // A scan polygon and its obstacle band, ready to insert. The band depends on
@@ -119,9 +112,6 @@ class PolygonMap {
   std::size_t memory_bytes() const;
   std::int64_t scans_inserted() const { return scans_inserted_; }
   std::int64_t failed_tile_updates() const { return failed_tile_updates_; }
-  // Always 0 since issue 16 (InsertResult::boost_fallbacks); restored from
-  // older checkpoints as saved.
-  std::int64_t boost_fallbacks() const { return boost_fallbacks_; }
   const PolygonMapOptions& options() const { return options_; }
 
   using TileKey = mapping::TileKey;
@@ -132,7 +122,7 @@ class PolygonMap {
   // free and obstacle layers, valid and clipped to the tile's box); the
   // planning layer is derived again on first use, as after an insert.
   void restore_tile(const TileKey& key, TypedMultiPolygon free, TypedMultiPolygon obstacles);
-  void restore_counters(std::int64_t scans_inserted, std::int64_t failed_tile_updates, std::int64_t boost_fallbacks);
+  void restore_counters(std::int64_t scans_inserted, std::int64_t failed_tile_updates);
 
  private:
   enum class Layer { kFree, kPlanning };
@@ -143,7 +133,6 @@ class PolygonMap {
   std::map<TileKey, std::shared_ptr<const Tile>> tiles_;
   std::int64_t scans_inserted_ = 0;
   std::int64_t failed_tile_updates_ = 0;
-  std::int64_t boost_fallbacks_ = 0;
 };
 
 }  // namespace pex::mapping

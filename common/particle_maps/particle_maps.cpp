@@ -87,7 +87,6 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   }
   // The inserts: each touches its own map only, so they can run side by side.
   std::vector<char> failed(particles.size(), 0);
-  std::vector<int> fallbacks(particles.size(), 0);
   // Inserts differ in cost (a particle's scan may touch more tiles), so each
   // worker takes the next one as it is free rather than a fixed share.
   std::atomic<std::size_t> next_insert{0};
@@ -97,7 +96,6 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
       const auto result =
           next[i].insert(transformed(prepared, geometry::compose(particles[i].pose, scan.sensor_in_base)));
       failed[i] = result.ok ? 0 : 1;
-      fallbacks[i] = result.boost_fallbacks;
     }
   };
   const std::size_t workers =
@@ -110,7 +108,6 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
     if (copy_of[i] != i) next[i] = next[copy_of[i]];
   r.inserts = static_cast<int>(to_insert.size());
   for (char f : failed) r.insert_failures += f;
-  for (int f : fallbacks) r.boost_fallbacks += f;
   maps_ = std::move(next);
   ++updates_;
   r.ok = true;

@@ -46,7 +46,6 @@ struct UpdateResult {
   bool scan_inserted = false;  // false: the scan gave no polygon (maps copied only)
   int inserts = 0;             // distinct inserts done (equal children share one)
   int insert_failures = 0;     // inserts where some tile kept its old state
-  int boost_fallbacks = 0;     // overlays redone with Boost.Geometry (mapping::InsertResult)
 };
 
 // The scan polygon moved by a rigid transform (rotation about the origin by

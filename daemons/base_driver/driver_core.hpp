@@ -66,7 +66,7 @@ struct DriverCounters {
   std::int64_t odometry_jumps = 0;
   std::int64_t stopped = 1;            // 1 while the wheels are held at zero
 
-  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     v.event("commands", commands);

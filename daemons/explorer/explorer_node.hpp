@@ -31,7 +31,7 @@ struct ExplorerCounters {
   std::int64_t map_rings_reoriented = 0;
   std::int64_t commands_applied = 0;
 
-  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     v.total("maps_accepted", maps_accepted);
@@ -87,7 +87,7 @@ class ExplorerNode {
   const LatencyStats& plan_cpu_ms() const { return plan_cpu_ms_; }
   const LatencyStats& control_ms() const { return control_ms_; }
   // The node's and the mission's counters and the latency percentiles (in
-  // us), for DAEMON_STATUS and the exploration benchmark (runtime::Node::show_counters).
+  // us), for DAEMON_STATUS and the exploration benchmark (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     auto us = [](double ms) { return static_cast<std::int64_t>(std::llround(ms * 1000.0)); };

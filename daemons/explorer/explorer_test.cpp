@@ -331,7 +331,9 @@ TEST(ExplorerNode, ItLooksAroundBeforeItCallsAFrontierUnreachable) {
   std::optional<Point> goal;
   for (std::int64_t t = 0; t <= 30'000'000 && !goal; t += 100'000) {
     pose.utime = t;
-    if (t % 1'000'000 == 0) EXPECT_NO_THROW(node.on_map(two_rooms_door_closed(), t));
+    if (t % 1'000'000 == 0) {
+      EXPECT_NO_THROW(node.on_map(two_rooms_door_closed(), t));
+    }
     EXPECT_NO_THROW(node.on_pose(pose, t));
     EXPECT_NO_THROW(node.on_scan(two_rooms_scan(pose), t));
     const auto cmd = node.step(t);

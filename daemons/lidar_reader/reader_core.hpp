@@ -70,7 +70,7 @@ struct ReaderCounters {
   std::int64_t truncated_telegrams = 0;  // cut off by a new STX
   std::int64_t oversize_telegrams = 0;   // longer than max_telegram_bytes
 
-  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     v.event("connect_attempts", connect_attempts);

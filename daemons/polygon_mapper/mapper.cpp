@@ -114,7 +114,6 @@ std::string Mapper::start_from(const mapping::TypedMultiPolygon& polygons) {
   for (const auto& polygon : polygons) {
     const auto result = map.insert(polygon);
     counters_.failed_tile_updates += result.tiles_failed;
-    counters_.boost_fallbacks += result.boost_fallbacks;
   }
   if (options_.pose_source == "slam") {
     restored_ = std::move(map);
@@ -209,7 +208,6 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   epoch_ = update.epoch;
   if (!result.scan_inserted) ++counters_.scan_polygon_errors;
   counters_.failed_tile_updates += result.insert_failures;
-  counters_.boost_fallbacks += result.boost_fallbacks;
   ++counters_.slam_updates;
   ++counters_.scans_inserted;
   best_ = update.best;
@@ -287,7 +285,6 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   }
   const auto result = map_.insert(polygon.polygon);
   counters_.failed_tile_updates = map_.failed_tile_updates();
-  counters_.boost_fallbacks = map_.boost_fallbacks();
   ++counters_.scans_inserted;
   last_insert_pose_ = robot;
   last_insert_scan_utime_ = scan.utime;
@@ -334,7 +331,6 @@ std::optional<pex::polygon_map_t> Mapper::map_message(std::int64_t now_utime) {
   if (dirty_) {
     const auto merged = map().planning_map();
     counters_.stale_planning_tiles = merged.stale_planning_tiles;
-    counters_.boost_planning_tiles = merged.boost_planning_tiles;
     take_merge(merged, message_, dirty_);
   }
   return stamped(message_, now_utime);
@@ -346,7 +342,6 @@ std::optional<pex::polygon_map_t> Mapper::free_space_message(std::int64_t now_ut
 }
 
 void Mapper::take_merge(const mapping::MergeResult& merged, std::optional<pex::polygon_map_t>& message, bool& dirty) {
-  if (merged.boost_cascade) ++counters_.merge_boost_fallbacks;
   if (merged.ok) {
     message = to_message(merged.polygons);
     dirty = false;

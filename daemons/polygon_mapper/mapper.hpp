@@ -82,11 +82,6 @@ struct MapperCounters {
   std::int64_t scans_without_pose = 0;
   std::int64_t scan_polygon_errors = 0;
   std::int64_t failed_tile_updates = 0;
-  // Overlays our edge overlay could not do (or whose result failed a check),
-  // redone with Boost.Geometry's (docs/mapping.md).
-  std::int64_t boost_fallbacks = 0;
-  std::int64_t merge_boost_fallbacks = 0;  // merges whose tiles Boost's cascade united
-  std::int64_t boost_planning_tiles = 0;   // tiles of the last merge with Boost's planning layer
   std::int64_t merge_failures = 0;
   // Tiles of the last published map whose planning layer could not be
   // derived (they show their last good planning layer).
@@ -102,7 +97,7 @@ struct MapperCounters {
   // of the old one were dropped, never mixed with the new.
   std::int64_t slam_epoch_changes = 0;
 
-  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     v.total("scans_inserted", scans_inserted);
@@ -110,9 +105,6 @@ struct MapperCounters {
     v.total("scans_without_pose", scans_without_pose);
     v.total("scan_polygon_errors", scan_polygon_errors);
     v.total("failed_tile_updates", failed_tile_updates);
-    v.total("boost_fallbacks", boost_fallbacks);
-    v.total("merge_boost_fallbacks", merge_boost_fallbacks);
-    v.total("boost_planning_tiles", boost_planning_tiles);
     v.total("merge_failures", merge_failures);
     v.total("stale_planning_tiles", stale_planning_tiles);
     v.total("slam_updates", slam_updates);
@@ -149,7 +141,7 @@ class Mapper {
   std::optional<pex::polygon_map_t> free_space_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
-  // The counters and the map's size, for DAEMON_STATUS (runtime::Node::show_counters).
+  // The counters and the map's size, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     counters_.visit_counters(v);

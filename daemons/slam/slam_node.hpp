@@ -82,7 +82,7 @@ class SlamNode {
   const slam::ParticleFilter& filter() const { return filter_; }
   std::int64_t scans_processed() const { return scans_processed_; }
   std::int64_t republished() const { return republished_; }
-  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     v.total("scans_processed", scans_processed_);

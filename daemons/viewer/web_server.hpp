@@ -36,7 +36,7 @@ struct WebCounters {
   std::int64_t clients_refused = 0;   // beyond max_clients
   std::int64_t bad_requests = 0;      // unknown command, unknown path
 
-  // By name, for DAEMON_STATUS (runtime::Node::show_counters).
+  // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
     v.total("http_requests", requests);
