@@ -52,7 +52,11 @@ for t in $tools; do
       expect 65 "$t: a map file that is not one" "$bin/$t" export --map "$tmp/tiny.clf" --pgm "$tmp/x.pgm"
       expect 73 "$t: PGM into a missing folder" "$bin/$t" export --map "$tmp/map.geojson" --pgm /no/such/dir/x.pgm ;;
     pex-explore-report)
-      expect 66 "$t: no such world" "$bin/$t" --world "$tmp/none.wkt" --log "$tmp/empty.lcm" ;;
+      expect 66 "$t: no such world" "$bin/$t" --world "$tmp/none.wkt" --log "$tmp/empty.lcm"
+      printf 'START 1.5 1.5 0\nLINESTRING(0 0, 3 0, 3 3, 0 3, 0 0)\n' >"$tmp/room.wkt"
+      expect 66 "$t: no such replayed SLAM log" "$bin/$t" --world "$tmp/room.wkt" --log "$tmp/empty.lcm" \
+        --slam-poses-from "$tmp/none.lcm"
+      expect 65 "$t: an empty run log" "$bin/$t" --world "$tmp/room.wkt" --log "$tmp/empty.lcm" ;;
   esac
 done
 if ((fails)); then echo "$fails failure(s)"; exit 1; fi

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -56,6 +57,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "MAP_FREE", "MAP"}));
   app.add_option("--start-pose", start_pose, "X_M Y_M THETA_RAD: the start pose, if not the world's START line")
       ->expected(3);
+  std::string slam_poses_from;
+  app.add_option("--slam-poses-from", slam_poses_from,
+                 "take SLAM_POSE for the pose audit from this log instead of the run's: the run's record replayed "
+                 "through another SLAM configuration (pex-slam --log RUN.lcm --out THIS.lcm)");
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
   app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed, violet: not reachable, gold: beyond the walls) to this SVG");
   if (const auto code = pex::cli::parse_command_line(app, "pex-explore-report", argc, argv)) return *code;
@@ -76,8 +81,14 @@ int main(int argc, char** argv) {
                                                 : ScoredMap::kAuto;
 
   std::string error;
-  const auto log = pex::explore_report::read_log(log_path, &error);
+  std::optional<pex::explore_report::LogContents> replayed;
+  if (!slam_poses_from.empty()) {
+    replayed = pex::explore_report::read_log(slam_poses_from, &error);
+    if (!replayed) return fail(error.rfind("cannot open", 0) == 0 ? 66 : 65, error);
+  }
+  auto log = pex::explore_report::read_log(log_path, &error);
   if (!log) return fail(error.rfind("cannot open", 0) == 0 ? 66 : 65, error);
+  if (replayed) log->slam_poses = std::move(replayed->slam_poses);
 
   pex::mapping::MultiPolygon reachable, world_free;
   try {
