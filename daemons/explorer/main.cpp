@@ -40,13 +40,13 @@ int main(int argc, char** argv) {
         const auto& options = explorer->options();
 
         node.collect_counters([explorer]() -> const ExplorerNode& { return *explorer; });  // DAEMON_STATUS, the benchmark
-        // Inputs the explorer refuses (std::invalid_argument) the node counts, logs and drops.
 
         // The mission survives a restart (kill -9, a crash, a reboot).
         pex::runtime::keep_checkpoint(node, {options.checkpoint_file, options.checkpoint_period_s, "mission",
                                              [explorer](const std::string& text) { return explorer->restore(text); },
                                              [explorer] { return explorer->checkpoint_text(); }});
 
+        // Inputs the explorer refuses (std::invalid_argument) the node counts, logs and drops.
         node.subscribe<pex::polygon_map_t>(ch::kMap, [&node, explorer](const pex::polygon_map_t& msg) {
           explorer->on_map(msg, node.now_utime());
         });
