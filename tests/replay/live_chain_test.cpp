@@ -45,9 +45,11 @@ TEST(LiveChain, IntelHeadThroughLogplayerSlamAndPerParticleMapper) {
   const std::string head = dir + "/head.lcm";
   ASSERT_EQ(run_to_completion({bin_path("pex-carmen2lcm"), dir + "/head.clf", head}).exit_code, 0);
 
-  // Offline reference: the same handlers fed from the log.
-  const auto offline = run_to_completion({bin_path("pex-slam"), "--config", source_path("config/slam.toml"), "--log",
-                                          head, "--out", dir + "/offline.lcm", "--log-level", "warn"},
+  // Offline reference: the same handlers fed from the log, with the motion
+  // model the robot's overlay below has too (the logs' robots': GMapping's).
+  const auto offline = run_to_completion({bin_path("pex-slam"), "--config", source_path("config/slam.toml"), "--config",
+                                          source_path("config/datasets/slam.toml"), "--log", head, "--out",
+                                          dir + "/offline.lcm", "--log-level", "warn"},
                                          120s);
   ASSERT_EQ(offline.exit_code, 0) << offline.output;
   int offline_updates = 0;
