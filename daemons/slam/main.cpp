@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
       slam->on_scan(msg);
       watch->seen(ch::kLidarScan, node.monotonic_us());
     });
-    node.on_shutdown([slam, &node, &poses_path, &checkpoint_out] {
+    node.on_shutdown([slam, &poses_path, &checkpoint_out] {
       slam->flush();
       spdlog::info("{} filter updates, {} odometry steps replaced by the odometry check", slam->filter().generation() + 1,
                    slam->filter().corrected_odometry_steps());
