@@ -144,8 +144,12 @@ int Plan::reachable_count() const {
   return n;
 }
 
+bool GoalFocus::matches(const GoalCandidate& c) const {
+  return !c.blacklisted && std::min(distance(c.position, goal), distance(c.frontier_point, frontier)) <= radius_m;
+}
+
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
-                      const PlannerOptions& options, const TypedMultiPolygon* passable) {
+                      const PlannerOptions& options, const TypedMultiPolygon* passable, const GoalFocus* focus) {
   Plan plan;
   // 1. The C-space, the robot's own node, and the C-space piece it is in: a
   // polygon of the C-space is one connected piece, so only its points are reachable.
@@ -213,34 +217,47 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     targets.push_back(*position);
   }
 
-  // 3. Shortest paths from the robot (for the tour, between all candidates
-  // too) and each candidate's cost.
-  // One sparse graph over the reflex vertices (path_matrix.hpp): an order
-  // of magnitude fewer segment tests than the lazy all-pairs Dijkstra of
-  // shortest_paths on big maps; the greedy strategy needs only its first row.
-  PathMatrixOptions matrix_options;
-  matrix_options.between_targets = options.strategy == GoalStrategy::kTour;
-  PathMatrix matrix = shortest_path_matrix(cspace, *start, targets, matrix_options);
+  // 3. Shortest paths from the robot and each candidate's cost: path length
+  // plus the turn the first leg needs (from the robot's own point, which is
+  // outside the C-space when start had to be snapped). The tour needs every
+  // path, and between the candidates too: one sparse graph over the reflex
+  // vertices (path_matrix.hpp). Greedy needs the cheapest candidate and the
+  // followed goal's path only: a lazy search that stops there.
+  const double lead_m = distance(robot_point, *start);
+  auto cost_of = [&](double length_from_start_m, const std::vector<Point>& path_from_start) {
+    const Point& a = lead_m > 0.0 ? robot_point : path_from_start[0];
+    const Point& b = lead_m > 0.0 || path_from_start.size() < 2 ? path_from_start[0] : path_from_start[1];
+    double turn = 0.0;
+    if (distance(a, b) > 1e-9) turn = std::abs(geometry::wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta_rad));
+    return length_from_start_m + lead_m + options.turn_cost_m_per_rad * turn;
+  };
+  PathMatrix matrix;
+  if (options.strategy == GoalStrategy::kTour) {
+    matrix = shortest_path_matrix(cspace, *start, targets);
+  } else {
+    CheapestTargetQuery query;
+    query.cost = [&](std::size_t i, double length_m, const std::vector<Point>& path) {
+      return plan.candidates[i].blacklisted ? std::numeric_limits<double>::infinity() : cost_of(length_m, path);
+    };
+    if (focus) {
+      query.required.resize(plan.candidates.size());
+      for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.required[i] = focus->matches(plan.candidates[i]);
+    }
+    matrix = shortest_paths_to_cheapest(cspace, *start, targets, query);
+  }
   plan.stats.segment_tests = matrix.segment_tests;
-  std::vector<double>& length_m = matrix.from_start_m;
-  std::vector<std::vector<Point>>& path = matrix.path_from_start;
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     auto& c = plan.candidates[i];
-    if (!std::isfinite(length_m[i])) continue;
+    if (!std::isfinite(matrix.from_start_m[i])) {
+      // Not searched (greedy stopped at the cheapest): reachable if in the robot's piece.
+      c.reachable = !matrix.all_searched && own_piece >= 0 && cspace.piece_of(c.position) == own_piece;
+      continue;
+    }
     c.reachable = true;
-    c.path = std::move(path[i]);
-    c.path_length_m = length_m[i];
-    if (distance(robot_point, *start) > 0.0) {
-      c.path.insert(c.path.begin(), robot_point);
-      c.path_length_m += distance(robot_point, *start);
-    }
-    double turn = 0.0;
-    if (c.path.size() >= 2) {
-      const Point& a = c.path[0];
-      const Point& b = c.path[1];
-      if (distance(a, b) > 1e-9) turn = std::abs(geometry::wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta_rad));
-    }
-    c.cost = c.path_length_m + options.turn_cost_m_per_rad * turn;
+    c.cost = cost_of(matrix.from_start_m[i], matrix.path_from_start[i]);
+    c.path = std::move(matrix.path_from_start[i]);
+    c.path_length_m = matrix.from_start_m[i] + lead_m;
+    if (lead_m > 0.0) c.path.insert(c.path.begin(), robot_point);
   }
 
   // 4. The goal: the cheapest candidate (greedy), or the first of the
@@ -261,7 +278,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
         for (std::size_t k = keep; k < order.size(); ++k) first_leg[order[k]] = std::numeric_limits<double>::infinity();
       }
     }
-    std::vector<double> between = matrix.between_m;
+    std::vector<double>& between = matrix.between_m;
     const std::size_t n = plan.candidates.size();
     for (std::size_t i = 0; i < n; ++i)  // keep the matrix finite where the solver needs it (reachable rows)
       for (std::size_t j = 0; j < n; ++j)

@@ -69,7 +69,11 @@ struct GoalCandidate {
   int chain = -1;               // frontier chain index
   double chain_length_m = 0.0;  // length of that frontier chain
   bool blacklisted = false;
-  bool reachable = false;
+  bool reachable = false;       // in the robot's piece of the C-space: a path exists
+  // The shortest path, its length and cost (path length plus the turn
+  // tie-break). +inf and empty when not reachable, and, with the greedy
+  // strategy, for a reachable candidate its search did not need: one that
+  // costs more than the goal and is not the focus (plan_exploration).
   double path_length_m = std::numeric_limits<double>::infinity();
   double cost = std::numeric_limits<double>::infinity();
   std::vector<Point> path;      // robot position first, candidate last
@@ -106,6 +110,16 @@ struct Plan {
   const GoalCandidate* best_candidate() const { return best >= 0 ? &candidates[static_cast<std::size_t>(best)] : nullptr; }
 };
 
+// The goal a robot follows (Mission's goal commitment): the candidates the
+// mission will take for it — within radius_m of the goal or of its frontier
+// point, and not blacklisted — get their paths in every plan, whatever they cost.
+struct GoalFocus {
+  Point goal;
+  Point frontier;
+  double radius_m = 0.0;
+  bool matches(const GoalCandidate& c) const;
+};
+
 // Plans on `map` (the planning map: free space whose edges are typed obstacle
 // or frontier) from `robot`. Candidates near a point of `blacklist` are kept
 // in the plan (so a caller can still recognise them) but never chosen.
@@ -113,9 +127,12 @@ struct Plan {
 // map opened by the newest scan: live_view.hpp): the C-space is built from
 // it, while the frontiers and what is in view of them still come from `map`
 // (a live view covers frontiers it has not mapped yet, and its own edges are
-// no walls to see through). Pure and deterministic.
+// no walls to see through). The greedy strategy searches paths only as far
+// as the cheapest candidate and those `focus` matches (shortest_paths_to_cheapest);
+// the tour needs them all. Pure and deterministic.
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
-                      const PlannerOptions& options, const TypedMultiPolygon* passable = nullptr);
+                      const PlannerOptions& options, const TypedMultiPolygon* passable = nullptr,
+                      const GoalFocus* focus = nullptr);
 
 // A path from `robot` to `target` (e.g. the mission's start pose) in the
 // C-space of `map`: the plan's one candidate is `target` moved into the

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "planning/test_maps.hpp"
 
 namespace pex::planning {
@@ -142,9 +144,32 @@ TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
   ASSERT_EQ(tour.tour.size(), 3u);
   EXPECT_NEAR(tour.candidates[static_cast<std::size_t>(tour.tour[1])].frontier_point.x(), 11.0, 0.01);
   EXPECT_NEAR(tour.candidates[static_cast<std::size_t>(tour.tour[2])].frontier_point.x(), 15.0, 0.01);
-  // The same paths either way: only the choice differs.
-  for (std::size_t i = 0; i < tour.candidates.size(); ++i)
-    EXPECT_NEAR(tour.candidates[i].path_length_m, greedy.candidates[i].path_length_m, 1e-6);
+  // The same paths either way, where greedy searched them: only the choice
+  // differs. Greedy stops at its goal: a candidate it did not search is
+  // reachable, without a path, and no cheaper than its goal.
+  int unsearched = 0;
+  for (std::size_t i = 0; i < tour.candidates.size(); ++i) {
+    const auto& g = greedy.candidates[i];
+    EXPECT_EQ(g.reachable, tour.candidates[i].reachable);
+    if (std::isfinite(g.path_length_m)) {
+      EXPECT_NEAR(tour.candidates[i].path_length_m, g.path_length_m, 1e-6);
+      continue;
+    }
+    ++unsearched;
+    EXPECT_TRUE(g.path.empty());
+    EXPECT_GE(tour.candidates[i].path_length_m, greedy.best_candidate()->cost);
+  }
+  EXPECT_GT(unsearched, 0);
+
+  // The goal being followed gets its path although another is cheaper.
+  const auto far = static_cast<std::size_t>(tour.tour[2]);
+  o.strategy = GoalStrategy::kGreedy;
+  const GoalFocus focus{tour.candidates[far].position, tour.candidates[far].frontier_point, 0.3};
+  const Plan followed = plan_exploration(corridor_with_windows(), robot, {}, o, nullptr, &focus);
+  EXPECT_EQ(followed.best, greedy.best);
+  EXPECT_NEAR(followed.candidates[far].path_length_m, tour.candidates[far].path_length_m, 1e-6);
+  EXPECT_FALSE(followed.candidates[far].path.empty());
+  o.strategy = GoalStrategy::kTour;
 
   // A blacklisted candidate is not in the tour.
   const Plan without = plan_exploration(corridor_with_windows(), robot, {tour.best_candidate()->position}, o);

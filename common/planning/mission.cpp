@@ -65,7 +65,7 @@ PlanResult compute_plan(const PlanRequest& request) {
   const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
   result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options)
                              : plan_exploration(*request.map, request.pose, request.blacklist, request.options,
-                                                live ? &opened : nullptr);
+                                                live ? &opened : nullptr, request.focus ? &*request.focus : nullptr);
   return result;
 }
 
@@ -319,6 +319,7 @@ void Mission::request_plan(std::int64_t now_utime, Purpose purpose, bool tight) 
   r.tight = tight;
   if (tight) r.options.cspace.clearance_margin_m = 0.0;
   if (purpose == Purpose::kHome) r.home = Point(home_->x_m, home_->y_m);
+  if (purpose == Purpose::kFollow && goal_) r.focus = GoalFocus{*goal_, goal_frontier_, options_.goal_match_radius_m};
   outstanding_id_ = r.id;
   outstanding_purpose_ = purpose;
   outstanding_tight_ = tight;

@@ -152,6 +152,7 @@ struct PlanRequest {
   PlannerOptions options;      // clearance margin already dropped when tight
   bool tight = false;          // planned without the clearance margin
   std::optional<Point> home;   // set: a path to this point, not frontier goals
+  std::optional<GoalFocus> focus;  // the goal being followed: its path is wanted in the plan
   // The newest scan's free space near the robot (live_view.hpp), united into
   // `map` before planning; null or empty: the map alone. The mission leaves it
   // empty; the explorer adds it from the newest LIDAR_SCAN.

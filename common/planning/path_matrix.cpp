@@ -363,4 +363,69 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
   return out;
 }
 
+PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Point& start,
+                                      const std::vector<Point>& targets, const CheapestTargetQuery& query) {
+  const std::int64_t tests_before = cspace.segment_tests();
+  const auto& reflex = cspace.reflex_nodes();
+  const auto r = static_cast<std::uint32_t>(reflex.size());
+  const std::size_t n = targets.size();
+  // Nodes as in shortest_path_matrix: 0..r-1 reflex, r the start, r + 1 + i target i.
+  std::vector<Point> nodes(reflex.begin(), reflex.end());
+  nodes.push_back(start);
+  nodes.insert(nodes.end(), targets.begin(), targets.end());
+  const std::uint32_t source = r;
+  const auto total = static_cast<std::uint32_t>(nodes.size());
+  const Corners corners(cspace, nodes);
+
+  PathMatrix out;
+  out.from_start_m.assign(n, kInf);
+  out.path_from_start.resize(n);
+  out.reflex_nodes = r;
+  std::vector<double> dist(total, kInf);
+  std::vector<std::int32_t> parent(total, -1);
+  std::vector<char> settled(total, 0);
+  std::size_t required_left = 0;
+  for (const char q : query.required) required_left += q != 0;
+  double best_cost = kInf;
+  NodeHeap heap(total);
+  dist[source] = 0.0;
+  heap.push_or_decrease(source, dist);
+  while (!heap.empty()) {
+    const std::uint32_t u = heap.pop(dist);
+    const double d = dist[u];
+    if (required_left == 0 && d > best_cost) {
+      out.all_searched = false;
+      break;
+    }
+    settled[u] = 1;
+    if (u > source) {  // a target: a path end
+      const std::size_t t = u - source - 1;
+      std::vector<Point>& path = out.path_from_start[t];
+      for (std::int32_t v = static_cast<std::int32_t>(u); v >= 0; v = parent[static_cast<std::size_t>(v)])
+        path.push_back(nodes[static_cast<std::size_t>(v)]);
+      std::reverse(path.begin(), path.end());
+      out.from_start_m[t] = d;
+      if (t < query.required.size() && query.required[t]) --required_left;
+      best_cost = std::min(best_cost, query.cost(t, d, path));
+      continue;
+    }
+    // The edges shortest_path_matrix would keep: reflex-reflex pruned at both
+    // ends, start-reflex and reflex-target at the reflex end, start-target straight.
+    for (std::uint32_t v = 0; v < total; ++v) {
+      if (settled[v] || v == u) continue;
+      const double ux = nodes[v].x() - nodes[u].x(), uy = nodes[v].y() - nodes[u].y();
+      const double candidate = d + std::sqrt(ux * ux + uy * uy);
+      if (!(candidate < dist[v])) continue;
+      if (u < r && corners.drops(u, ux, uy)) continue;
+      if (v < r && corners.drops(v, -ux, -uy)) continue;
+      if (!cspace.segment_free(nodes[u], nodes[v])) continue;
+      dist[v] = candidate;
+      parent[v] = static_cast<std::int32_t>(u);
+      heap.push_or_decrease(v, dist);
+    }
+  }
+  out.segment_tests = cspace.segment_tests() - tests_before;
+  return out;
+}
+
 }  // namespace pex::planning

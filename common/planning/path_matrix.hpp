@@ -18,6 +18,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -50,6 +51,9 @@ struct PathMatrix {
   std::int64_t reflex_nodes = 0;
   std::int64_t graph_edges = 0;    // undirected edges of the sparse graph
   std::int64_t segment_tests = 0;  // visibility tests made
+  // false: shortest_paths_to_cheapest stopped before it settled every
+  // target; a +inf in from_start_m may then be a target it did not search.
+  bool all_searched = true;
 
   std::size_t size() const { return from_start_m.size(); }
   double between(std::size_t i, std::size_t j) const { return between_m[i * size() + j]; }
@@ -62,5 +66,28 @@ struct PathMatrix {
 // Pure and deterministic: ties go to the lower node index.
 PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
                                 const std::vector<Point>& targets, const PathMatrixOptions& options = {});
+
+// What a greedy choice needs of the start's row, without the whole graph.
+// `cost(i, length_m, path)` is target i's cost once its shortest path (start
+// first) is known; it must be at least length_m, or +inf for a target that is
+// no choice (blacklisted). `required[i]` (empty: none) marks targets whose
+// path is wanted whatever their cost (the goal the robot follows).
+struct CheapestTargetQuery {
+  std::function<double(std::size_t target, double length_m, const std::vector<Point>& path)> cost;
+  std::vector<char> required;
+};
+
+// Dijkstra from `start` over the same graph as shortest_path_matrix (same
+// pruning, same lengths), but lazy: the edges of a node are tested only when
+// it is settled, and only those that would improve a tentative distance. It
+// stops once every required target is settled and the next node is farther
+// than the least cost of a settled target: no target left can cost less. The
+// targets settled by then have their lengths and paths in from_start_m /
+// path_from_start, the others +inf and no path (not searched, whether
+// reachable or not: ConfigurationSpace::piece_of tells). between_m is empty.
+// On an open map whose cheapest target is near, it settles a few nodes of
+// hundreds (docs/exploration.md, "Planning time"). Pure and deterministic.
+PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Point& start,
+                                      const std::vector<Point>& targets, const CheapestTargetQuery& query);
 
 }  // namespace pex::planning

@@ -224,6 +224,84 @@ TEST(PathMatrix, AgreesWithShortestPathsOnRandomMaps) {
   EXPECT_LT(pruned_edges * 3, all_edges) << pruned_edges << " of " << all_edges;
 }
 
+// The lazy search that stops at the cheapest target, against the matrix's
+// row on random maps: what it settles has the matrix's lengths and paths,
+// it finds the cheapest target and the required ones, and it tests fewer
+// segments.
+TEST(CheapestTarget, FindsTheMatrixCheapestAndTheRequiredTargets) {
+  std::mt19937_64 rng(20261126);
+  std::int64_t lazy_tests = 0, matrix_tests = 0;
+  int stopped_early = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const auto map = random_map(rng, 4 + trial);
+    CSpaceOptions o;
+    o.robot_radius_m = 0.1 + 0.05 * (trial % 4);
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, o).ok);
+    const auto points = random_points(rng, cs, 25);
+    const Point start = points[0];
+    const std::vector<Point> targets(points.begin() + 1, points.end());
+    const auto m = shortest_path_matrix(cs, start, targets, PathMatrixOptions{.between_targets = false});
+    // A cost that is not the length alone (at least the length, as the
+    // contract asks); every third target no choice; the farthest required.
+    auto cost = [&](std::size_t i, double length_m, const std::vector<Point>&) {
+      return i % 3 == 2 ? std::numeric_limits<double>::infinity() : length_m + 0.5 * static_cast<double>(i % 4);
+    };
+    CheapestTargetQuery query;
+    query.cost = cost;
+    query.required.assign(targets.size(), 0);
+    std::size_t farthest = 0;
+    for (std::size_t i = 0; i < targets.size(); ++i)
+      if (std::isfinite(m.from_start_m[i]) && m.from_start_m[i] > m.from_start_m[farthest]) farthest = i;
+    query.required[farthest] = 1;
+    const auto lazy = shortest_paths_to_cheapest(cs, start, targets, query);
+
+    std::size_t cheapest = targets.size();
+    double least = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      if (!std::isfinite(m.from_start_m[i])) continue;
+      const double c = cost(i, m.from_start_m[i], m.path_from_start[i]);
+      if (c < least) least = c, cheapest = i;
+    }
+    ASSERT_LT(cheapest, targets.size());
+    EXPECT_NEAR(lazy.from_start_m[cheapest], m.from_start_m[cheapest], 1e-9) << trial;
+    EXPECT_NEAR(lazy.from_start_m[farthest], m.from_start_m[farthest], 1e-9) << trial;
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      if (!std::isfinite(lazy.from_start_m[i])) {
+        // Not settled: not reachable, or no cheaper than the cheapest.
+        EXPECT_TRUE(!std::isfinite(m.from_start_m[i]) || m.from_start_m[i] >= least - 1e-9) << trial << " " << i;
+        EXPECT_TRUE(lazy.path_from_start[i].empty());
+        continue;
+      }
+      EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9) << trial << " " << i;
+      const auto& path = lazy.path_from_start[i];
+      ASSERT_GE(path.size(), 2u);
+      EXPECT_NEAR(polyline_length(path), lazy.from_start_m[i], 1e-9);
+      for (std::size_t k = 1; k < path.size(); ++k) EXPECT_TRUE(cs.segment_free(path[k - 1], path[k]));
+    }
+    stopped_early += lazy.all_searched ? 0 : 1;
+    lazy_tests += lazy.segment_tests;
+    matrix_tests += m.segment_tests;
+  }
+  EXPECT_GT(stopped_early, 0);
+  EXPECT_LT(lazy_tests, matrix_tests) << lazy_tests << " against " << matrix_tests;
+}
+
+TEST(CheapestTarget, WithoutAChoiceItSearchesEveryTarget) {
+  std::mt19937_64 rng(5);
+  const auto map = random_map(rng, 6);
+  ConfigurationSpace cs;
+  ASSERT_TRUE(cs.build(map, CSpaceOptions{}).ok);
+  const auto points = random_points(rng, cs, 10);
+  const std::vector<Point> targets(points.begin() + 1, points.end());
+  CheapestTargetQuery query;
+  query.cost = [](std::size_t, double, const std::vector<Point>&) { return std::numeric_limits<double>::infinity(); };
+  const auto lazy = shortest_paths_to_cheapest(cs, points[0], targets, query);
+  const auto m = shortest_path_matrix(cs, points[0], targets, PathMatrixOptions{.between_targets = false});
+  EXPECT_TRUE(lazy.all_searched);
+  for (std::size_t i = 0; i < targets.size(); ++i) EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9);
+}
+
 TEST(PathMatrix, Deterministic) {
   std::mt19937_64 rng(7);
   const auto map = random_map(rng, 8);

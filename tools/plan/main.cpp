@@ -6,15 +6,25 @@
 // prints every frontier goal candidate (where, reachable or why not, path
 // length) and the C-space pieces, and can draw map, C-space, candidates and
 // the chosen path to SVG: how to see why a mission ended where it did.
+//
+// pex-plan --log IN.lcm --every-map [--config ...] [--strategy tour]
+// Plans, as the explorer's worker does (the newest pose and LIDAR_SCAN's live
+// view at each MAP), on every MAP of a mission's log, and prints the planner's
+// CPU time per plan (p50 / p99 / max) and the slowest maps' utimes: the plan-time
+// benchmark on a real mission's maps (docs/exploration.md, "Planning time").
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <sysexits.h>  // EX_USAGE 64, EX_DATAERR 65, EX_NOINPUT 66, EX_UNAVAILABLE 69, EX_CANTCREAT 73, EX_CONFIG 78
 
 #include <lcm/lcm-cpp.hpp>
+#include <pex/explore_state_t.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/laser_scan_t.hpp>
 #include <pex/pose_t.hpp>
@@ -24,16 +34,119 @@
 #include "explorer_options.hpp"
 #include "map_message.hpp"
 #include "plan_report.hpp"
+#include "plan_worker.hpp"
 #include "planning/cspace.hpp"
 #include "planning/live_view.hpp"
+#include "planning/mission.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/config.hpp"
+
+namespace {
+
+// --every-map: each MAP planned at the newest pose and scan before it, as the
+// explorer's worker plans the map it has (it plans once per replan period, so a
+// mission's plans are a subset of these). Greedy plans search the followed
+// goal's path too (GoalFocus): the goal of the log's EXPLORE_STATE while it
+// is MOVING, or, in a log without it, the goal committed to as the mission
+// does (kept while a candidate matches it, else the new plan's best). Not the
+// tight fallback nor the blacklist: the blacklist only drops candidates, the
+// fallback is a second plan.
+int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::string& map_channel,
+                   const std::string& pose_channel, const pex::explorer::ExplorerOptions& options,
+                   const pex::planning::PlannerOptions& planner) {
+  std::optional<pex::pose_t> pose;
+  std::optional<pex::laser_scan_t> scan;
+  struct Timed {
+    double cpu_ms;
+    std::int64_t utime;
+    std::size_t vertices;
+  };
+  std::vector<Timed> timed;
+  std::size_t bad_maps = 0, failed = 0;
+  std::optional<pex::planning::GoalFocus> focus;
+  bool logged_goals = false;  // EXPLORE_STATE seen: its goal is the focus
+  for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
+    if (e->channel == pex::runtime::channels::kLidarScan) {
+      pex::laser_scan_t s;
+      if (s.decode(e->data, 0, e->datalen) >= 0) scan = std::move(s);
+    } else if (e->channel == pose_channel) {
+      pex::pose_t p;
+      if (p.decode(e->data, 0, e->datalen) >= 0) pose = p;
+    } else if (e->channel == pex::runtime::channels::kExploreState) {
+      pex::explore_state_t state;
+      if (state.decode(e->data, 0, e->datalen) < 0) continue;
+      logged_goals = true;
+      focus.reset();
+      if (state.phase == pex::explore_state_t::PHASE_MOVING && state.has_goal) {
+        const pex::planning::Point goal(state.goal_x, state.goal_y);
+        focus = pex::planning::GoalFocus{goal, goal, options.mission.goal_match_radius_m};
+      }
+    } else if (e->channel == map_channel && pose) {
+      pex::polygon_map_t m;
+      if (m.decode(e->data, 0, e->datalen) < 0) {
+        ++bad_maps;
+        continue;
+      }
+      const auto decoded = pex::explorer::decode_map(m, options.map);
+      if (!decoded.ok) {
+        ++bad_maps;
+        continue;
+      }
+      const pex::geometry::Pose2 robot{pose->x, pose->y, pose->theta};
+      pex::planning::PlanRequest request;
+      request.map = std::make_shared<const pex::planning::TypedMultiPolygon>(decoded.polygons);
+      request.pose = robot;
+      request.options = planner;
+      if (scan) request.live_view = pex::explorer::live_view_of(*scan, robot, options.live_view);
+      request.focus = focus;
+      // Timed as the explorer times its worker: the thread's CPU, live view union included.
+      const double started = pex::explorer::thread_cpu_ms();
+      const auto result = pex::planning::compute_plan(request);
+      const double cpu_ms = pex::explorer::thread_cpu_ms() - started;
+      if (!result.plan.ok) ++failed;
+      timed.push_back({cpu_ms, m.utime, pex::mapping::vertex_count(decoded.polygons)});
+      if (logged_goals) continue;
+      const auto& candidates = result.plan.candidates;
+      const bool kept = focus && std::any_of(candidates.begin(), candidates.end(),
+                                             [&](const auto& c) { return focus->matches(c) && c.reachable; });
+      if (!kept) focus.reset();
+      if (const auto* best = result.plan.best_candidate(); best && !kept)
+        focus = pex::planning::GoalFocus{best->position, best->frontier_point, options.mission.goal_match_radius_m};
+    }
+  }
+  if (timed.empty()) {
+    std::fprintf(stderr, "pex-plan: no %s with a %s before it in %s\n", map_channel.c_str(), pose_channel.c_str(),
+                 log_path.c_str());
+    return EX_DATAERR;
+  }
+  std::vector<double> ms;
+  std::size_t most_vertices = 0;
+  for (const auto& t : timed) {
+    ms.push_back(t.cpu_ms);
+    most_vertices = std::max(most_vertices, t.vertices);
+  }
+  std::sort(ms.begin(), ms.end());
+  auto quantile = [&](double q) { return ms[static_cast<std::size_t>(q * static_cast<double>(ms.size() - 1))]; };
+  std::printf("strategy %s: %zu plans (%zu without a goal), %zu MAP messages refused; maps up to %zu vertices\n",
+              pex::planning::to_string(planner.strategy), timed.size(), failed, bad_maps, most_vertices);
+  std::printf("plan CPU ms: p50 %.2f  p90 %.2f  p99 %.2f  max %.2f\n", quantile(0.5), quantile(0.9), quantile(0.99),
+              ms.back());
+  std::sort(timed.begin(), timed.end(), [](const Timed& a, const Timed& b) { return a.cpu_ms > b.cpu_ms; });
+  std::printf("slowest (plan one with --utime):\n");
+  for (std::size_t i = 0; i < std::min<std::size_t>(5, timed.size()); ++i)
+    std::printf("  utime %lld  %.2f ms  %zu vertices\n", static_cast<long long>(timed[i].utime), timed[i].cpu_ms,
+                timed[i].vertices);
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Run the explorer's planner on a logged MAP and show why it chose what it chose"};
   std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path;
   std::int64_t at_utime = -1;
-  bool tight = false;
+  bool tight = false, every_map = false;
+  std::string strategy;
   app.add_option("--log", log_path, "LCM log with MAP and pose messages")->required();
   app.add_option("--config", config_path, "explorer config (planner options); default: the defaults in code");
   app.add_option("--map-channel", map_channel, "channel of the pex.polygon_map_t messages");
@@ -41,6 +154,9 @@ int main(int argc, char** argv) {
   app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
   app.add_flag("--tight", tight, "plan without the clearance margin (the explorer's tight fallback)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
+  app.add_flag("--every-map", every_map, "plan on every MAP of the log and print the plan CPU time percentiles");
+  app.add_option("--strategy", strategy, "goal strategy (greedy | tour); default: the config's")
+      ->check(CLI::IsMember({"greedy", "tour"}));
   if (const auto code = pex::cli::parse_command_line(app, "pex-plan", argc, argv)) return *code;
 
   pex::explorer::ExplorerOptions options;
@@ -53,12 +169,15 @@ int main(int argc, char** argv) {
   }
   pex::planning::PlannerOptions planner = options.mission.planner;
   if (tight) planner.cspace.clearance_margin_m = 0.0;
+  if (!strategy.empty())
+    planner.strategy = *pex::planning::parse_goal_strategy(strategy);
 
   lcm::LogFile log(log_path, "r");
   if (!log.good()) {
     std::fprintf(stderr, "pex-plan: cannot read %s\n", log_path.c_str());
     return EX_NOINPUT;
   }
+  if (every_map) return time_every_map(log, log_path, map_channel, pose_channel, options, planner);
   std::optional<pex::polygon_map_t> map;
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
