@@ -2,10 +2,15 @@
 # scripts/test.sh — install what is missing, build, run every test with ctest.
 #   BUILD_DIR (default build), JOBS (default: number of cores), CTEST_ARGS (extra ctest arguments)
 #
-# scripts/test.sh --sanitize: the same sources built with AddressSanitizer and
-# UndefinedBehaviorSanitizer (GCC, -O1, any finding aborts the test) in
-# build-asan (SAN_BUILD_DIR), then the unit tests (every test without a label,
-# which includes each fuzz target's corpus replayed: fuzz/README.md) run there.
+# After every test, the sanitizer job (what CI runs of it): the parsers of
+# outside bytes — CoLa telegrams, CAN frames, LCM messages, LCM log files,
+# CARMEN lines — built with AddressSanitizer and UndefinedBehaviorSanitizer
+# (GCC, -O1, any finding aborts) in build-asan (SAN_BUILD_DIR), and their fuzz
+# corpora (every seed and every input that once crashed: fuzz/README.md)
+# replayed there. About a minute on two cores; SANITIZER_JOB=0 skips it.
+#
+# scripts/test.sh --sanitize: all the unit tests so (every test without a
+# label, each fuzz target's corpus replay included), not just the parsers.
 # Integration, replay, systemd and package tests are left out: they run real
 # daemons for minutes on the simulated clock (docs/reliability.md, "Sanitizers").
 #   SAN_CTEST_ARGS (extra ctest arguments for that run)
@@ -21,18 +26,23 @@ done
 bash scripts/deps.sh
 JOBS=${JOBS:-$(nproc)}
 
-if $sanitize; then
-  SAN_BUILD_DIR=${SAN_BUILD_DIR:-build-asan}
-  san="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+SAN_BUILD_DIR=${SAN_BUILD_DIR:-build-asan}
+# configure_sanitized: the sanitizer build's configuration (GCC, -O1 -g).
+configure_sanitized() {
+  local san="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
   cmake -S . -B "$SAN_BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" \
     -DCMAKE_CXX_FLAGS="$san" -DCMAKE_C_FLAGS="$san" \
     -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DPEX_BENCHMARKS=OFF
+}
+# detect_leaks: the tests' own leaks are findings too. halt_on_error: one
+# finding fails the test that met it.
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1:abort_on_error=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+
+if $sanitize; then
+  configure_sanitized
   cmake --build "$SAN_BUILD_DIR" -j"$JOBS" --target pex_unit_tests
-  # detect_leaks: the tests' own leaks are findings too. halt_on_error: one
-  # finding fails the test that met it.
-  export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1:abort_on_error=1}
-  export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
   # shellcheck disable=SC2086
   # Only the unit tests were built (target pex_unit_tests): the other test
   # programs' placeholders (<target>_NOT_BUILT) are left out with them.
@@ -46,3 +56,16 @@ cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release
 cmake --build "$BUILD_DIR" -j"$JOBS"
 # shellcheck disable=SC2086
 ctest --test-dir "$BUILD_DIR" -j"$JOBS" --output-on-failure ${CTEST_ARGS:-}
+
+if [ "${SANITIZER_JOB:-1}" != 0 ]; then
+  parsers=(cola canopen lcm_message lcm_log carmen)
+  echo "== sanitizer job: ${parsers[*]} under ASan + UBSan ($SAN_BUILD_DIR)"
+  configure_sanitized >/dev/null
+  targets=() tests=()
+  for p in "${parsers[@]}"; do targets+=("fuzz_${p}_replay"); tests+=("fuzz_corpus[.]$p"); done
+  cmake --build "$SAN_BUILD_DIR" -j"$JOBS" --target "${targets[@]}"
+  regex="^($(IFS='|'; echo "${tests[*]}"))\$"
+  ctest --test-dir "$SAN_BUILD_DIR" -j"$JOBS" --output-on-failure -R "$regex" --no-tests=error
+  [ "$(ctest --test-dir "$SAN_BUILD_DIR" -N -R "$regex" | sed -n 's/^Total Tests: //p')" = "${#parsers[@]}" ] ||
+    { echo "sanitizer job: expected ${#parsers[@]} corpus replays" >&2; exit 1; }
+fi
