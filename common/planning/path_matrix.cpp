@@ -258,18 +258,24 @@ void dijkstra(const Graph& g, std::uint32_t source, std::uint32_t first_point, c
   while (!heap.empty()) heap.pop(dist);
 }
 
+// The graph's nodes: 0..r-1 the reflex vertices, r the start, r + 1 + i target i.
+std::vector<Point> graph_nodes(const ConfigurationSpace& cspace, const Point& start,
+                               const std::vector<Point>& targets) {
+  const auto& reflex = cspace.reflex_nodes();
+  std::vector<Point> nodes(reflex.begin(), reflex.end());
+  nodes.push_back(start);
+  nodes.insert(nodes.end(), targets.begin(), targets.end());
+  return nodes;
+}
+
 }  // namespace
 
 PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
                                 const std::vector<Point>& targets, const PathMatrixOptions& options) {
   const std::int64_t tests_before = cspace.segment_tests();
-  const auto& reflex = cspace.reflex_nodes();
-  const auto r = static_cast<std::uint32_t>(reflex.size());
+  const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
   const std::size_t n = targets.size();
-  // Nodes 0..r-1: reflex vertices; r: the start; r + 1 + i: target i.
-  std::vector<Point> nodes(reflex.begin(), reflex.end());
-  nodes.push_back(start);
-  nodes.insert(nodes.end(), targets.begin(), targets.end());
+  const std::vector<Point> nodes = graph_nodes(cspace, start, targets);
   const std::uint32_t first_point = r;
   const auto total = static_cast<std::uint32_t>(nodes.size());
 
@@ -366,13 +372,9 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
 PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Point& start,
                                       const std::vector<Point>& targets, const CheapestTargetQuery& query) {
   const std::int64_t tests_before = cspace.segment_tests();
-  const auto& reflex = cspace.reflex_nodes();
-  const auto r = static_cast<std::uint32_t>(reflex.size());
+  const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
   const std::size_t n = targets.size();
-  // Nodes as in shortest_path_matrix: 0..r-1 reflex, r the start, r + 1 + i target i.
-  std::vector<Point> nodes(reflex.begin(), reflex.end());
-  nodes.push_back(start);
-  nodes.insert(nodes.end(), targets.begin(), targets.end());
+  const std::vector<Point> nodes = graph_nodes(cspace, start, targets);
   const std::uint32_t source = r;
   const auto total = static_cast<std::uint32_t>(nodes.size());
   const Corners corners(cspace, nodes);
