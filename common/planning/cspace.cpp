@@ -295,6 +295,17 @@ double ConfigurationSpace::distance_to_boundary(const Point& p) const {
   return best;
 }
 
+bool ConfigurationSpace::boundary_within(const Point& p, double radius_m) const {
+  if (!tree_ || tree_->empty()) return false;
+  // Every edge nearer than radius_m has its box in this window.
+  const mapping::Box window(Point(p.x() - radius_m, p.y() - radius_m), Point(p.x() + radius_m, p.y() + radius_m));
+  for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) {
+    const Edge& e = edges_[it->second];
+    if (segment_distance(p, e.a, e.b) < radius_m) return true;
+  }
+  return false;
+}
+
 // Cells of about the edges' mean spacing (about as many cells as edges),
 // each listing the edges that pass through it (for_cells_along).
 void ConfigurationSpace::build_grid() {
@@ -405,13 +416,13 @@ std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t ed
     direction = left_normal(edges_[edge].a, edges_[edge].b);
   }
   const Point candidate(q.x() + step * direction.x(), q.y() + step * direction.y());
-  if (!covers(candidate) || distance_to_boundary(candidate) < 0.5 * delta) return std::nullopt;
+  if (boundary_within(candidate, 0.5 * delta) || !covers(candidate)) return std::nullopt;
   return candidate;
 }
 
 std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, double max_distance_m) const {
   if (!tree_ || !std::isfinite(p.x()) || !std::isfinite(p.y())) return std::nullopt;
-  if (covers(p) && distance_to_boundary(p) >= 0.5 * options_.interior_offset_m) return p;
+  if (!boundary_within(p, 0.5 * options_.interior_offset_m) && covers(p)) return p;
   const mapping::Box window(Point(p.x() - max_distance_m, p.y() - max_distance_m),
                             Point(p.x() + max_distance_m, p.y() + max_distance_m));
   double best = std::numeric_limits<double>::infinity();

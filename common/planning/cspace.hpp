@@ -88,6 +88,9 @@ class ConfigurationSpace {
   int piece_of(const Point& p) const;
   // Distance from p to the nearest boundary edge (+inf if there is none).
   double distance_to_boundary(const Point& p) const;
+  // distance_to_boundary(p) < radius_m, from the edges near p only (no
+  // nearest-edge search: the nodes' and candidates' interior test).
+  bool boundary_within(const Point& p, double radius_m) const;
   // True if the segment a-b crosses or touches no boundary edge. With both
   // ends in the C-space's interior this means the whole segment is in it.
   bool segment_free(const Point& a, const Point& b) const;

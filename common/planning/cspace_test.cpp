@@ -281,6 +281,34 @@ TEST(ConfigurationSpace, PieceOfAgreesWithCoveredBy) {
   EXPECT_GT(outside, 1000);
 }
 
+// boundary_within() (edges near the point only) against distance_to_boundary()
+// at random points of scanned maps, at radii from a millimetre to a metre, and
+// near the boundary, where the answer changes.
+TEST(ConfigurationSpace, BoundaryWithinAgreesWithTheDistance) {
+  CSpaceOptions options;
+  options.robot_radius_m = 0.27;
+  std::mt19937_64 rng(11);
+  int near = 0, far = 0;
+  for (const auto& map : oracle_maps()) {
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, options).ok);
+    PointSampler sample(map);
+    for (int k = 0; k < 2000; ++k) {
+      Point p = sample(rng);
+      if (k % 2 == 1) {  // a point within a few millimetres of a vertex
+        const auto& e = cs.edges()[rng() % cs.edges().size()];
+        p = Point(e.a.x() + 1e-3 * static_cast<double>(rng() % 7) - 3e-3, e.a.y() + 1e-3 * static_cast<double>(rng() % 7) - 3e-3);
+      }
+      const double radius = k % 3 == 0 ? 1e-3 : (k % 3 == 1 ? 0.05 : 1.0);
+      const bool expected = cs.distance_to_boundary(p) < radius;
+      ASSERT_EQ(cs.boundary_within(p, radius), expected) << p.x() << "," << p.y() << " r " << radius;
+      (expected ? near : far)++;
+    }
+  }
+  EXPECT_GT(near, 500);
+  EXPECT_GT(far, 500);
+}
+
 // segment_free() (a grid walk) against a test of every boundary edge, on
 // random segments of scanned maps: long and short, axis-parallel, and ending
 // on C-space vertices (touching counts as not free).

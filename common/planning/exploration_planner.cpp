@@ -172,6 +172,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   plan.stats.frontier_chains = static_cast<int>(chains.size());
   const auto points = frontier_candidates(chains, options.frontier, &plan.stats.chains_too_short);
   std::vector<Point> targets;
+  std::vector<int> pieces;  // per candidate: its C-space piece
   for (const auto& fp : points) {
     std::optional<Point> position = cspace.nearest_interior_point(fp.point, options.candidate_snap_distance_m);
     bool out_of_view = false;
@@ -180,9 +181,11 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       out_of_view = true;
     }
     bool approach = false;
-    if (own_piece >= 0 && options.approach_range_m > 0.0 && (!position || cspace.piece_of(*position) != own_piece)) {
+    int piece = position ? cspace.piece_of(*position) : -1;
+    if (own_piece >= 0 && options.approach_range_m > 0.0 && piece != own_piece) {
       if (auto a = approach_point(cspace, own_piece, fp.point, options.approach_range_m, obstacles)) {
         position = a;
+        piece = own_piece;  // an approach point lies in the robot's piece by construction
         approach = true;
         ++plan.stats.approach_candidates;
       }
@@ -215,6 +218,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       if (distance(b, c.position) <= options.blacklist_radius_m) c.blacklisted = true;
     plan.candidates.push_back(std::move(c));
     targets.push_back(*position);
+    pieces.push_back(piece);
   }
 
   // 3. Shortest paths from the robot and each candidate's cost: path length
@@ -239,6 +243,8 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     query.cost = [&](std::size_t i, double length_m, const std::vector<Point>& path) {
       return plan.candidates[i].blacklisted ? std::numeric_limits<double>::infinity() : cost_of(length_m, path);
     };
+    query.choice.resize(plan.candidates.size());
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.choice[i] = !plan.candidates[i].blacklisted;
     if (focus) {
       query.required.resize(plan.candidates.size());
       for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.required[i] = focus->matches(plan.candidates[i]);
@@ -250,7 +256,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     auto& c = plan.candidates[i];
     if (!std::isfinite(matrix.from_start_m[i])) {
       // Not searched (greedy stopped at the cheapest): reachable if in the robot's piece.
-      c.reachable = !matrix.all_searched && own_piece >= 0 && cspace.piece_of(c.position) == own_piece;
+      c.reachable = !matrix.all_searched && own_piece >= 0 && pieces[i] == own_piece;
       continue;
     }
     c.reachable = true;

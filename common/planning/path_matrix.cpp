@@ -168,7 +168,8 @@ Graph compress(const EdgeList& edges, std::size_t nodes) {
   return g;
 }
 
-// A 4-ary min-heap of node ids keyed by dist[] (ties: lower id first), with
+// A 4-ary min-heap of node ids keyed by a vector of the caller's (dist[] in
+// Dijkstra, dist + a lower bound in A*; ties: lower id first), with
 // decrease-key: each node is in it at most once, so a search pops each node
 // once (a heap of (distance, node) pairs with lazy deletion pops every
 // improvement, about three times as many, and the pops were most of the
@@ -388,14 +389,36 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   std::vector<char> settled(total, 0);
   std::size_t required_left = 0;
   for (const char q : query.required) required_left += q != 0;
+  // A*: the heap's key is dist + the straight-line distance to the nearest
+  // target that may be chosen or is required, a lower bound on what is left
+  // of any path to such a target, and consistent (edges are straight), so a
+  // node's distance is final when it is popped, as in Dijkstra. A far goal
+  // is searched along the way to it, not in a disc around the robot.
+  std::vector<Point> aims;
+  for (std::size_t t = 0; t < n; ++t) {
+    const bool required = t < query.required.size() && query.required[t];
+    const bool choice = query.choice.empty() || (t < query.choice.size() && query.choice[t]);
+    if (required || choice) aims.push_back(targets[t]);
+  }
+  std::vector<double> key(total, kInf), aim_distance(total, -1.0);
+  auto lower_bound_left = [&](std::uint32_t v) {
+    if (aim_distance[v] < 0.0) {
+      double least = aims.empty() ? 0.0 : kInf;
+      for (const Point& a : aims) least = std::min(least, length(nodes[v], a));
+      aim_distance[v] = least;
+    }
+    return aim_distance[v];
+  };
   double best_cost = kInf;
   NodeHeap heap(total);
   dist[source] = 0.0;
-  heap.push_or_decrease(source, dist);
+  key[source] = lower_bound_left(source);
+  heap.push_or_decrease(source, key);
   while (!heap.empty()) {
-    const std::uint32_t u = heap.pop(dist);
+    const std::uint32_t u = heap.pop(key);
     const double d = dist[u];
-    if (required_left == 0 && d > best_cost) {
+    // Every path to a target through what is left costs at least key[u].
+    if (required_left == 0 && key[u] > best_cost) {
       out.all_searched = false;
       break;
     }
@@ -422,8 +445,9 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
       if (v < r && corners.drops(v, -ux, -uy)) continue;
       if (!cspace.segment_free(nodes[u], nodes[v])) continue;
       dist[v] = candidate;
+      key[v] = candidate + lower_bound_left(v);
       parent[v] = static_cast<std::int32_t>(u);
-      heap.push_or_decrease(v, dist);
+      heap.push_or_decrease(v, key);
     }
   }
   out.segment_tests = cspace.segment_tests() - tests_before;

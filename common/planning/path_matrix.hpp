@@ -75,18 +75,23 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
 struct CheapestTargetQuery {
   std::function<double(std::size_t target, double length_m, const std::vector<Point>& path)> cost;
   std::vector<char> required;
+  // Per target: may it be chosen (cost not always +inf)? Empty: every target.
+  // Only steers the search (A*'s lower bound aims at these and the required).
+  std::vector<char> choice;
 };
 
-// Dijkstra from `start` over the same graph as shortest_path_matrix (same
+// A search from `start` over the same graph as shortest_path_matrix (same
 // pruning, same lengths), but lazy: the edges of a node are tested only when
-// it is settled, and only those that would improve a tentative distance. It
-// stops once every required target is settled and the next node is farther
-// than the least cost of a settled target: no target left can cost less. The
+// it is settled, and only those that would improve a tentative distance; A*,
+// with the straight-line distance to the nearest target it aims at (`choice`
+// and `required`) as the lower bound. It stops once every required target is
+// settled and every path left, by that bound, is longer than the least cost
+// of a settled target: no target left can cost less. The
 // targets settled by then have their lengths and paths in from_start_m /
 // path_from_start, the others +inf and no path (not searched, whether
 // reachable or not: ConfigurationSpace::piece_of tells). between_m is empty.
-// On an open map whose cheapest target is near, it settles a few nodes of
-// hundreds (docs/exploration.md, "Planning time"). Pure and deterministic.
+// On an open map it settles a few nodes of hundreds, those towards the
+// cheapest target (docs/exploration.md, "Planning time"). Pure and deterministic.
 PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Point& start,
                                       const std::vector<Point>& targets, const CheapestTargetQuery& query);
 

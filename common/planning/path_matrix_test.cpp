@@ -249,6 +249,7 @@ TEST(CheapestTarget, FindsTheMatrixCheapestAndTheRequiredTargets) {
     };
     CheapestTargetQuery query;
     query.cost = cost;
+    for (std::size_t i = 0; i < targets.size(); ++i) query.choice.push_back(i % 3 != 2);
     query.required.assign(targets.size(), 0);
     std::size_t farthest = 0;
     for (std::size_t i = 0; i < targets.size(); ++i)
