@@ -6,13 +6,14 @@
 # JSON line per run (pex-explore-report) and writes the table into
 # docs/exploration.md between the "exploration-benchmark" markers.
 #   STRATEGIES (default "greedy tour"), SPEED (default 10), MISSION_S (mission
-#   clock limit per run, default 4000), OUT (default out/bench-explore),
+#   clock limit per run, default 8000: campus's greedy mission took 5907 s to
+#   its end on 2026-11-26, docs/exploration.md), OUT (default out/bench-explore),
 #   JOBS (runs side by side, default 1), TABLE_ONLY=1 (tabulate the runs in OUT)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 STRATEGIES=${STRATEGIES:-greedy tour}
 SPEED=${SPEED:-10}
-MISSION_S=${MISSION_S:-4000}
+MISSION_S=${MISSION_S:-8000}
 OUT=${OUT:-out/bench-explore}
 BIN=${BIN:-build/bin}
 worlds=("$@")
