@@ -54,9 +54,11 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
     out += format("  %zu: frontier (%.2f, %.2f) -> (%.2f, %.2f)%s, chain %d (%.2f m): ", i, c.frontier_point.x(),
                   c.frontier_point.y(), c.position.x(), c.position.y(), c.approach ? " approach point" : "", c.chain,
                   c.chain_length_m);
-    if (c.reachable)
+    if (c.reachable && std::isfinite(c.path_length_m))
       out += format("path %.2f m, cost %.2f%s%s\n", c.path_length_m, c.cost, c.blacklisted ? ", blacklisted" : "",
                     static_cast<int>(i) == plan.best ? "  <- best" : "");
+    else if (c.reachable)  // greedy stopped at the goal: this one costs more
+      out += format("reachable, path not searched (costs more than the goal)%s\n", c.blacklisted ? ", blacklisted" : "");
     else
       out += "no path\n";
   }

@@ -44,6 +44,30 @@ TEST(PlanReport, DescribesPiecesCandidatesAndTheBestOne) {
   std::size_t lines = 0;
   for (std::size_t at = text.find("frontier ("); at != std::string::npos; at = text.find("frontier (", at + 1)) ++lines;
   EXPECT_EQ(lines, f.plan.candidates.size());
+  // Greedy searches paths only up to its goal: the others say so, no "inf m".
+  EXPECT_EQ(text.find("inf"), std::string::npos) << text;
+  std::size_t unsearched = 0;
+  for (const auto& c : f.plan.candidates) unsearched += c.reachable && c.path.empty() ? 1 : 0;
+  std::size_t said = 0;
+  for (std::size_t at = text.find("not searched"); at != std::string::npos; at = text.find("not searched", at + 1)) ++said;
+  EXPECT_EQ(said, unsearched);
+}
+
+TEST(PlanReport, ACandidateGreedyDidNotSearchSaysSo) {
+  // A 20 m corridor, frontiers at both ends, the robot near the left one:
+  // greedy stops at it and leaves the right one reachable, not searched.
+  Fixture f;
+  const TypedMultiPolygon map{typed_polygon(
+      rectangle(0, 0, 20, 3, {EdgeType::kObstacle, EdgeType::kFrontier, EdgeType::kObstacle, EdgeType::kFrontier}))};
+  const pex::geometry::Pose2 robot{2.0, 1.5, 0.0};
+  const Plan plan = plan_exploration(map, robot, {}, f.options);
+  ASSERT_EQ(plan.candidates.size(), 2u);
+  ConfigurationSpace cspace;
+  cspace.build(map, f.options.cspace);
+  const std::string text = pex::plan_tool::describe(f.msg, f.pose, cspace, plan);
+  EXPECT_NE(text.find("<- best"), std::string::npos) << text;
+  EXPECT_NE(text.find("reachable, path not searched"), std::string::npos) << text;
+  EXPECT_EQ(text.find("inf"), std::string::npos) << text;
 }
 
 TEST(PlanReport, AFailedPlanSaysWhy) {
