@@ -77,7 +77,8 @@ mapping::Ring from_clipper(const ClipperLib::Path& path) {
 
 }  // namespace
 
-mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double distance_m, int points_per_circle) {
+mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double distance_m, int points_per_circle,
+                                     bool type_edges) {
   mapping::TypedOpResult result;
   if (!(distance_m > 0.0) || points_per_circle < 4) {
     result.error = "bad offset (distance must be > 0, points_per_circle >= 4)";
@@ -123,6 +124,18 @@ mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double
     // y-up frame; correct() only closes and orders what needs it.
     bg::correct(polygon);
     geometry.push_back(std::move(polygon));
+  }
+  if (!type_edges) {
+    for (auto& polygon : geometry) {
+      mapping::TypedPolygon typed;
+      auto edges_of = [](const mapping::Ring& ring) { return ring.empty() ? 0 : ring.size() - 1; };  // closed rings
+      typed.edge_types.emplace_back(edges_of(polygon.outer()), EdgeType::kObstacle);
+      for (const auto& hole : polygon.inners()) typed.edge_types.emplace_back(edges_of(hole), EdgeType::kObstacle);
+      typed.geometry = std::move(polygon);
+      result.polygons.push_back(std::move(typed));
+    }
+    result.ok = true;
+    return result;
   }
   // Each output edge takes the type of the map edge it was offset from.
   mapping::EdgeTypeIndex index;
@@ -179,7 +192,8 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
   const double shrink_m = options.robot_radius_m + options.clearance_margin_m;
   if (shrink_m > 0.0) {
     auto offset = options.boost_offset ? mapping::typed_offset(free_space, -shrink_m, options.points_per_circle)
-                                       : offset_inward(free_space, shrink_m, options.points_per_circle);
+                                       : offset_inward(free_space, shrink_m, options.points_per_circle,
+                                                       options.edge_types);
     if (!offset.ok) {
       result.error = "offset by the robot radius failed: " + offset.error;
       return result;

@@ -38,6 +38,12 @@ struct CSpaceOptions {
   // moved this far into the interior, so segment tests between them never
   // have to decide a touch at an end point.
   double interior_offset_m = 1e-3;
+  // true: each C-space edge typed as the map edge it was offset from
+  // (mapping::assign_types), for whoever draws or reads the C-space's types.
+  // false: every edge kObstacle. Planning reads no C-space edge type (the
+  // frontiers come from the map) and typing was a fifth of a plan's time on
+  // campus (docs/exploration.md, "Planning time").
+  bool edge_types = false;
   // true: offset with Boost.Geometry's buffer (mapping::typed_offset), the
   // reference the tests compare offset_inward() with; several times slower
   // on ragged real maps.
@@ -48,10 +54,12 @@ struct CSpaceOptions {
 // joins of at least `points_per_circle` vertices per full circle and chords
 // within 1 mm of the arc (a chord cuts into the clearance), computed by Clipper
 // (ClipperLib::ClipperOffset, on a 10 um integer grid), each output edge
-// typed as the map edge it was offset from (mapping::assign_types). The same
-// set as mapping::typed_offset(free_space, -distance_m, points_per_circle)
-// up to the placement of the round joins' vertices and the grid.
-mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double distance_m, int points_per_circle);
+// typed as the map edge it was offset from (mapping::assign_types), or, with
+// type_edges false, typed kObstacle. The same set as
+// mapping::typed_offset(free_space, -distance_m, points_per_circle) up to the
+// placement of the round joins' vertices and the grid.
+mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double distance_m, int points_per_circle,
+                                     bool type_edges = true);
 
 class ConfigurationSpace {
  public:

@@ -37,8 +37,10 @@ TEST(ConfigurationSpace, SquareRoomShrinksByTheRadius) {
 TEST(ConfigurationSpace, EdgeTypesSurviveTheOffset) {
   using E = EdgeType;
   ConfigurationSpace cs;
+  CSpaceOptions typed = disk(0.5);
+  typed.edge_types = true;
   ASSERT_TRUE(cs.build({typed_polygon(rectangle(0, 0, 10, 4, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}))},
-                       disk(0.5))
+                       typed)
                   .ok);
   int frontier_edges = 0;
   for (const auto& e : cs.edges()) {
@@ -279,6 +281,32 @@ TEST(ConfigurationSpace, PieceOfAgreesWithCoveredBy) {
   }
   EXPECT_GT(inside, 1000);
   EXPECT_GT(outside, 1000);
+}
+
+// Without edge types (the planner's C-space) the same free space as with
+// them: the same pieces, the area within the simplification's epsilon times
+// the perimeter (the typed simplification keeps the vertices where types
+// change), every edge kObstacle.
+TEST(ConfigurationSpace, UntypedIsTheTypedSpaceWithoutTypes) {
+  CSpaceOptions untyped;
+  untyped.robot_radius_m = 0.27;
+  CSpaceOptions typed = untyped;
+  typed.edge_types = true;
+  int frontier_edges = 0;
+  for (const auto& map : oracle_maps()) {
+    ConfigurationSpace a, b;
+    ASSERT_TRUE(a.build(map, untyped).ok);
+    ASSERT_TRUE(b.build(map, typed).ok);
+    ASSERT_EQ(a.polygons().size(), b.polygons().size());
+    mapping::MultiPolygon ga, gb, diff;
+    for (const auto& p : a.polygons()) ga.push_back(p.geometry);
+    for (const auto& p : b.polygons()) gb.push_back(p.geometry);
+    boost::geometry::sym_difference(ga, gb, diff);
+    EXPECT_LT(boost::geometry::area(diff), untyped.simplify_epsilon_m * boost::geometry::perimeter(gb));
+    for (const auto& e : a.edges()) ASSERT_EQ(e.type, EdgeType::kObstacle);
+    for (const auto& e : b.edges()) frontier_edges += e.type == EdgeType::kFrontier ? 1 : 0;
+  }
+  EXPECT_GT(frontier_edges, 0);  // the typed ones do have frontier edges: the maps are scans
 }
 
 // boundary_within() (edges near the point only) against distance_to_boundary()
