@@ -62,7 +62,7 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
     std::size_t vertices;
   };
   std::vector<Timed> timed;
-  std::size_t bad_maps = 0, failed = 0;
+  std::size_t bad_maps = 0, failed = 0;  // failed: no plan at all (Plan::error), not merely no goal
   std::optional<pex::planning::GoalFocus> focus;
   bool logged_goals = false;  // EXPLORE_STATE seen: its goal is the focus
   for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
@@ -127,7 +127,7 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   }
   std::sort(ms.begin(), ms.end());
   auto quantile = [&](double q) { return ms[static_cast<std::size_t>(q * static_cast<double>(ms.size() - 1))]; };
-  std::printf("strategy %s: %zu plans (%zu without a goal), %zu MAP messages refused; maps up to %zu vertices\n",
+  std::printf("strategy %s: %zu plans (%zu failed), %zu MAP messages refused; maps up to %zu vertices\n",
               pex::planning::to_string(planner.strategy), timed.size(), failed, bad_maps, most_vertices);
   std::printf("plan CPU ms: p50 %.2f  p90 %.2f  p99 %.2f  max %.2f\n", quantile(0.5), quantile(0.9), quantile(0.99),
               ms.back());
