@@ -126,14 +126,7 @@ mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double
     geometry.push_back(std::move(polygon));
   }
   if (!type_edges) {
-    for (auto& polygon : geometry) {
-      mapping::TypedPolygon typed;
-      auto edges_of = [](const mapping::Ring& ring) { return ring.empty() ? 0 : ring.size() - 1; };  // closed rings
-      typed.edge_types.emplace_back(edges_of(polygon.outer()), EdgeType::kObstacle);
-      for (const auto& hole : polygon.inners()) typed.edge_types.emplace_back(edges_of(hole), EdgeType::kObstacle);
-      typed.geometry = std::move(polygon);
-      result.polygons.push_back(std::move(typed));
-    }
+    result.polygons = mapping::with_uniform_type(geometry, EdgeType::kObstacle);
     result.ok = true;
     return result;
   }
