@@ -144,8 +144,8 @@ int Plan::reachable_count() const {
   return n;
 }
 
-bool GoalFocus::matches(const GoalCandidate& c) const {
-  return !c.blacklisted && std::min(distance(c.position, goal), distance(c.frontier_point, frontier)) <= radius_m;
+double GoalFocus::distance_to(const GoalCandidate& c) const {
+  return std::min(distance(c.position, goal), distance(c.frontier_point, frontier));
 }
 
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,

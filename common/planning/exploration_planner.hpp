@@ -117,7 +117,10 @@ struct GoalFocus {
   Point goal;
   Point frontier;
   double radius_m = 0.0;
-  bool matches(const GoalCandidate& c) const;
+  // How near c is to the goal: to the goal point or to its frontier point,
+  // whichever is nearer. The mission takes the nearest match for its goal.
+  double distance_to(const GoalCandidate& c) const;
+  bool matches(const GoalCandidate& c) const { return !c.blacklisted && distance_to(c) <= radius_m; }
 };
 
 // Plans on `map` (the planning map: free space whose edges are typed obstacle

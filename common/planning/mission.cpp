@@ -526,13 +526,15 @@ void Mission::give_up_goal(const std::string& why) {
 
 void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   list_frontiers(plan);
+  // The same match the planner searched paths for (PlanRequest::focus).
+  const GoalFocus focus{*goal_, goal_frontier_, options_.goal_match_radius_m};
   int match = -1;
   double match_distance = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
-    if (c.blacklisted) continue;
-    const double d = std::min(distance(c.position, *goal_), distance(c.frontier_point, goal_frontier_));
-    if (d <= options_.goal_match_radius_m && d < match_distance) {
+    if (!focus.matches(c)) continue;
+    const double d = focus.distance_to(c);
+    if (d < match_distance) {
       match_distance = d;
       match = static_cast<int>(i);
     }
