@@ -19,8 +19,17 @@ inline int floor_to_int(float v) {
 
 }  // namespace
 
+int CowGridMapOptions::max_tiles_per_axis() const {
+  const double tiles = std::ceil(max_extent_m / (resolution_m * CowGridMap::kTileSize));
+  // A NaN or absurd option still gives a table an int can index.
+  if (!(tiles >= 1.0)) return 1;
+  return tiles < 1e6 ? static_cast<int>(tiles) : 1'000'000;
+}
+
 CowGridMap::CowGridMap(const CowGridMapOptions& options)
-    : options_(options), inverse_resolution_(1.0 / options.resolution_m) {}
+    : options_(options),
+      inverse_resolution_(1.0 / options.resolution_m),
+      max_tiles_per_axis_(options.max_tiles_per_axis()) {}
 
 std::unique_ptr<ParticleMap> CowGridMap::clone() const { return std::make_unique<CowGridMap>(*this); }
 
@@ -46,17 +55,37 @@ const CowGridMap::Cell* CowGridMap::cell_at(double x_m, double y_m) const {
               static_cast<int>(std::floor(y_m * inverse_resolution_)));
 }
 
-void CowGridMap::grow_to_include(int tx, int ty) {
-  if (tiles_w_ > 0 && tx >= tile_x0_ && tx < tile_x0_ + tiles_w_ && ty >= tile_y0_ &&
-      ty < tile_y0_ + tiles_h_)
-    return;
-  // Grow with a margin so a robot driving off the edge does not reallocate per scan.
-  constexpr int kMargin = 8;
-  int x0 = tiles_w_ > 0 ? std::min(tile_x0_, tx - kMargin) : tx - kMargin;
-  int y0 = tiles_h_ > 0 ? std::min(tile_y0_, ty - kMargin) : ty - kMargin;
-  int x1 = tiles_w_ > 0 ? std::max(tile_x0_ + tiles_w_, tx + 1 + kMargin) : tx + 1 + kMargin;
-  int y1 = tiles_h_ > 0 ? std::max(tile_y0_ + tiles_h_, ty + 1 + kMargin) : ty + 1 + kMargin;
-  std::vector<std::shared_ptr<Tile>> grown(static_cast<std::size_t>(x1 - x0) * (y1 - y0));
+bool CowGridMap::grow_to_include(int tx, int ty) {
+  const bool empty = tiles_w_ == 0;
+  if (!empty && tx >= tile_x0_ && tx < tile_x0_ + tiles_w_ && ty >= tile_y0_ && ty < tile_y0_ + tiles_h_)
+    return true;
+  // The table that holds what it holds and (tx, ty); 64-bit, so far tiles cannot overflow.
+  const std::int64_t need_x0 = empty ? tx : std::min(tile_x0_, tx);
+  const std::int64_t need_y0 = empty ? ty : std::min(tile_y0_, ty);
+  const std::int64_t need_x1 = empty ? std::int64_t{tx} + 1 : std::max<std::int64_t>(tile_x0_ + tiles_w_, tx + 1);
+  const std::int64_t need_y1 = empty ? std::int64_t{ty} + 1 : std::max<std::int64_t>(tile_y0_ + tiles_h_, ty + 1);
+  if (need_x1 - need_x0 > max_tiles_per_axis_ || need_y1 - need_y0 > max_tiles_per_axis_) return false;
+  // Grow with a margin on the sides that grow, so a robot driving off the edge
+  // does not reallocate per scan, as far as the extent allows.
+  constexpr std::int64_t kMargin = 8;
+  auto with_margin = [this, empty](std::int64_t lo, std::int64_t hi, int old_lo, int old_hi, int& out_lo,
+                                   int& out_hi) {
+    std::int64_t margin_lo = empty || lo < old_lo ? kMargin : 0;
+    std::int64_t margin_hi = empty || hi > old_hi ? kMargin : 0;
+    // Give back margin where the extent needs it (lo..hi itself fits).
+    std::int64_t excess = (hi - lo) + margin_lo + margin_hi - max_tiles_per_axis_;
+    if (excess > 0) {
+      const std::int64_t from_lo = std::min(margin_lo, excess);
+      margin_lo -= from_lo;
+      margin_hi -= excess - from_lo;
+    }
+    out_lo = static_cast<int>(lo - margin_lo);
+    out_hi = static_cast<int>(hi + margin_hi);
+  };
+  int x0, x1, y0, y1;
+  with_margin(need_x0, need_x1, tile_x0_, tile_x0_ + tiles_w_, x0, x1);
+  with_margin(need_y0, need_y1, tile_y0_, tile_y0_ + tiles_h_, y0, y1);
+  std::vector<std::shared_ptr<Tile>> grown(static_cast<std::size_t>(x1 - x0) * static_cast<std::size_t>(y1 - y0));
   for (int y = 0; y < tiles_h_; ++y)
     for (int x = 0; x < tiles_w_; ++x)
       grown[static_cast<std::size_t>(y + tile_y0_ - y0) * (x1 - x0) + (x + tile_x0_ - x0)] =
@@ -66,12 +95,13 @@ void CowGridMap::grow_to_include(int tx, int ty) {
   tile_y0_ = y0;
   tiles_w_ = x1 - x0;
   tiles_h_ = y1 - y0;
+  return true;
 }
 
-CowGridMap::Tile& CowGridMap::mutable_tile(int ix, int iy, int& index) {
+CowGridMap::Tile* CowGridMap::mutable_tile(int ix, int iy, int& index) {
   const int tx = ix >> kTileBits;
   const int ty = iy >> kTileBits;
-  grow_to_include(tx, ty);
+  if (!grow_to_include(tx, ty)) return nullptr;
   auto& slot = tiles_[static_cast<std::size_t>(ty - tile_y0_) * tiles_w_ + (tx - tile_x0_)];
   if (!slot)
     slot = std::make_shared<Tile>();
@@ -79,7 +109,7 @@ CowGridMap::Tile& CowGridMap::mutable_tile(int ix, int iy, int& index) {
     slot = std::make_shared<Tile>(*slot);  // copy on write
   index = ((iy & (kTileSize - 1)) << kTileBits) | (ix & (kTileSize - 1));
   slot->occupied |= std::uint64_t{1} << index;  // the caller adds a hit
-  return *slot;
+  return slot.get();
 }
 
 void CowGridMap::update_normal(Cell& cell, const Scatter& scatter) const {
@@ -105,7 +135,8 @@ void CowGridMap::update_normal(Cell& cell, const Scatter& scatter) const {
   cell.normal_y = static_cast<std::int8_t>(std::lround(127.0 * ny / norm));
 }
 
-void CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
+std::size_t CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
+  std::size_t left_out = 0;
   const double c = std::cos(pose.theta_rad);
   const double s = std::sin(pose.theta_rad);
   for (const BeamPoint& beam : scan.beams) {
@@ -113,10 +144,16 @@ void CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
     const double y = pose.y_m + s * beam.hit_x_m + c * beam.hit_y_m;
     const double fx = x * inverse_resolution_;
     const double fy = y * inverse_resolution_;
-    // Far outside any building: refuse rather than allocate a huge tile table.
-    if (!(std::abs(fx) < 1e8 && std::abs(fy) < 1e8)) continue;
     int index = 0;
-    Tile& tile = mutable_tile(static_cast<int>(std::floor(fx)), static_cast<int>(std::floor(fy)), index);
+    // The first test keeps the float -> int conversion defined.
+    Tile* const held = std::abs(fx) < 1e8 && std::abs(fy) < 1e8
+                           ? mutable_tile(static_cast<int>(std::floor(fx)), static_cast<int>(std::floor(fy)), index)
+                           : nullptr;
+    if (!held) {
+      ++left_out;
+      continue;
+    }
+    Tile& tile = *held;
     Cell& cell = tile.cells[static_cast<std::size_t>(index)];
     Scatter& scatter = tile.scatter[static_cast<std::size_t>(index)];
     if (cell.hits < std::numeric_limits<std::uint16_t>::max()) ++cell.hits;
@@ -133,6 +170,7 @@ void CowGridMap::insert(const Pose2& pose, const ScanPoints& scan) {
     scatter.syy += dy * dy2;
     update_normal(cell, scatter);
   }
+  return left_out;
 }
 
 PoseEvaluation CowGridMap::evaluate(const Pose2& pose, const ScanPoints& scan) const {
@@ -359,8 +397,8 @@ PoseEvaluation CowGridMap::evaluate_terms(const Pose2& pose, const ScanPoints& s
 namespace {
 // One bit per cell of a tile says which cells follow.
 static_assert(CowGridMap::kTileSize * CowGridMap::kTileSize == 64);
-// A tile table bigger than this is refused when read (a damaged size must not
-// allocate gigabytes): 16 M slots, 4 km x 4 km of 5 cm cells.
+// A tile table bigger than this is refused when read, whatever the options (a
+// damaged size must not allocate gigabytes): 16 M slots, 1.6 km x 1.6 km of 5 cm cells.
 constexpr std::uint64_t kMaxSlots = std::uint64_t{1} << 24;
 }  // namespace
 
@@ -445,6 +483,7 @@ std::vector<std::unique_ptr<CowGridMap>> CowGridMap::read_shared(archive::ByteRe
     map->tiles_h_ = in.get<std::int32_t>();
     const std::string which = "map " + std::to_string(m);
     if (map->tiles_w_ < 0 || map->tiles_h_ < 0 || (map->tiles_w_ == 0) != (map->tiles_h_ == 0) ||
+        map->tiles_w_ > map->max_tiles_per_axis_ || map->tiles_h_ > map->max_tiles_per_axis_ ||
         static_cast<std::uint64_t>(map->tiles_w_) * static_cast<std::uint64_t>(map->tiles_h_) > kMaxSlots)
       throw archive::ArchiveError(which + " has a tile table of " + std::to_string(map->tiles_w_) + " x " +
                                   std::to_string(map->tiles_h_));

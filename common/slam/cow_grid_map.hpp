@@ -49,6 +49,15 @@ struct CowGridMapOptions {
   double along_line_weight = 0.1;
   // Hits on a line: the smaller scatter eigenvalue at most this fraction of the larger.
   double line_flatness = 0.1;
+  // The map's width and height at most this (m), measured on its tile table
+  // (the tiles written and a margin of up to 8 tiles the table grows by): end
+  // points that would make it wider are left out (counted by insert). The tile table is dense, one
+  // 16-byte slot per tile of 8 x 8 cells, per particle: at 5 cm cells 400 m is
+  // at most 16 MB a map. Without a bound one pose far away (a bad odometry
+  // reading) asked for 128 GB.
+  double max_extent_m = 400.0;
+  // Tiles along each axis that max_extent_m allows (at least 1).
+  int max_tiles_per_axis() const;
 };
 
 class CowGridMap final : public ParticleMap {
@@ -84,7 +93,8 @@ class CowGridMap final : public ParticleMap {
   explicit CowGridMap(const CowGridMapOptions& options);
 
   std::unique_ptr<ParticleMap> clone() const override;
-  void insert(const Pose2& robot_pose, const ScanPoints& scan) override;
+  // Returns the end points left out: beyond options().max_extent_m.
+  std::size_t insert(const Pose2& robot_pose, const ScanPoints& scan) override;
   PoseEvaluation evaluate(const Pose2& robot_pose, const ScanPoints& scan) const override;
   // The likelihood alone: no exp() per beam for the score.
   double log_likelihood(const Pose2& robot_pose, const ScanPoints& scan) const override;
@@ -145,12 +155,16 @@ class CowGridMap final : public ParticleMap {
   }
   // The tile holding cell (ix, iy), made and copied on write as needed, with
   // the cell marked occupied (the caller adds a hit); `index` is the cell's.
-  Tile& mutable_tile(int ix, int iy, int& index);
+  // nullptr: the cell lies beyond the map's extent.
+  Tile* mutable_tile(int ix, int iy, int& index);
   void update_normal(Cell& cell, const Scatter& scatter) const;
-  void grow_to_include(int tx, int ty);
+  // false: including tile (tx, ty) would make the table wider or higher than
+  // max_tiles_per_axis_; nothing changed.
+  bool grow_to_include(int tx, int ty);
 
   CowGridMapOptions options_;
   double inverse_resolution_;
+  int max_tiles_per_axis_;
   int tile_x0_ = 0, tile_y0_ = 0, tiles_w_ = 0, tiles_h_ = 0;
   std::vector<std::shared_ptr<Tile>> tiles_;  // row-major, tiles_h_ x tiles_w_
 };

@@ -34,9 +34,12 @@ void OdometrySync::store(const Reading& reading) {
 bool OdometrySync::add_odometry(std::int64_t utime, const Pose2& pose, double heading_variance_rad2) {
   why_.clear();
   const StepLimits& l = options_.limits;
-  if (!is_finite(pose) || std::abs(pose.x_m) > l.max_abs_coordinate_m || std::abs(pose.y_m) > l.max_abs_coordinate_m) {
+  if (!is_finite(pose) || std::abs(pose.x_m) > l.max_abs_coordinate_m ||
+      std::abs(pose.y_m) > l.max_abs_coordinate_m || std::abs(pose.theta_rad) > l.max_abs_heading_rad) {
     ++refused_odometry_;
-    why_ = "odometry pose is not finite or not on this planet";
+    why_ = "odometry pose is not finite or not on this planet (|x|, |y| at most " +
+           std::to_string(l.max_abs_coordinate_m) + " m, |theta| at most " + std::to_string(l.max_abs_heading_rad) +
+           " rad)";
     return false;
   }
   const Reading reading{utime, pose, heading_variance_rad2};

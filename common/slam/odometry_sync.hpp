@@ -47,6 +47,12 @@ struct StepLimits {
   double slack_m = 0.05;         // added to every bound (noise)
   double slack_rad = 0.05;
   double max_abs_coordinate_m = 1e6;  // beyond: refused as not a pose
+  // Beyond: refused as not a heading. An odometry that does not wrap its
+  // heading stays far below (16 000 turns); past it, cos and sin of the raw
+  // value and of its wrap disagree enough that a reset frame anchored on it
+  // moves the robot by kilometres (a heading of -7.8e202 rad at x = 131 km put
+  // SLAM's grid 36 km away: the fuzz finding of 2026-11-26).
+  double max_abs_heading_rad = 1e5;
 };
 
 struct OdometrySyncOptions {

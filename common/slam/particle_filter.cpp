@@ -67,7 +67,7 @@ bool ParticleFilter::process(const RangeScan& scan, const Pose2& odometry) {
 
 void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry) {
   auto map = map_factory_();
-  map->insert(odometry, points);
+  points_beyond_map_extent_ += static_cast<std::int64_t>(map->insert(odometry, points));
   auto root = std::make_shared<const TrajectoryNode>(odometry, 0, nullptr);
   particles_.clear();
   particles_.resize(static_cast<std::size_t>(options_.particle_count));
@@ -192,7 +192,7 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
     stats.resampled = true;
   }
   for (Particle& p : particles_) {
-    p.map->insert(p.pose, points);
+    stats.points_beyond_map_extent += p.map->insert(p.pose, points);
     p.pose_at_update = p.pose;
     p.trajectory = std::make_shared<const TrajectoryNode>(p.pose, generation_, std::move(p.trajectory));
   }
@@ -200,6 +200,7 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   linear_since_update_m_ = 0.0;
   angular_since_update_rad_ = 0.0;
   stats.generation = generation_;
+  points_beyond_map_extent_ += static_cast<std::int64_t>(stats.points_beyond_map_extent);
   last_update_ = stats;
 }
 

@@ -106,6 +106,7 @@ struct UpdateStats {
   int failed_matches = 0;
   double odometry_scale = 1.0;  // the translation scale the odometry check chose (1: as measured)
   double odometry_check_ratio = 0.0;  // best other scale's match score / the measured step's (0: not checked)
+  std::size_t points_beyond_map_extent = 0;  // end points the particles' maps left out (CowGridMapOptions::max_extent_m)
 };
 
 class ParticleFilter {
@@ -182,8 +183,13 @@ class ParticleFilter {
   double angular_since_update_rad_ = 0.0;
   UpdateStats last_update_;
   std::int64_t corrected_odometry_steps_ = 0;
+  std::int64_t points_beyond_map_extent_ = 0;
 
  public:
+  // End points left out of the particles' maps, summed over the particles,
+  // since this filter started (not checkpointed): nonzero means the robot is
+  // at the edge of the extent the maps may cover.
+  std::int64_t points_beyond_map_extent() const { return points_beyond_map_extent_; }
   // Updates whose odometry step the check replaced (OdometryCheckOptions).
   std::int64_t corrected_odometry_steps() const { return corrected_odometry_steps_; }
 };

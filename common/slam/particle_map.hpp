@@ -25,8 +25,9 @@ class ParticleMap {
   // A copy whose later changes do not show in this map (nor the reverse);
   // implementations share unchanged structure.
   virtual std::unique_ptr<ParticleMap> clone() const = 0;
-  // Integrates a scan taken from `robot_pose`.
-  virtual void insert(const Pose2& robot_pose, const ScanPoints& scan) = 0;
+  // Integrates a scan taken from `robot_pose`. Returns how many of its end
+  // points the map left out (a map of bounded extent: beyond it).
+  virtual std::size_t insert(const Pose2& robot_pose, const ScanPoints& scan) = 0;
   // Score and likelihood of `scan` taken from `robot_pose`. Must be a pure
   // function of the map, the pose and the scan.
   virtual PoseEvaluation evaluate(const Pose2& robot_pose, const ScanPoints& scan) const = 0;

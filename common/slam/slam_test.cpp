@@ -138,7 +138,7 @@ class RecordingMap final : public ParticleMap {
  public:
   explicit RecordingMap(Pose2 target) : target_(target) {}
   std::unique_ptr<ParticleMap> clone() const override { return std::make_unique<RecordingMap>(*this); }
-  void insert(const Pose2&, const ScanPoints&) override {}
+  std::size_t insert(const Pose2&, const ScanPoints&) override { return 0; }
   PoseEvaluation evaluate(const Pose2& pose, const ScanPoints&) const override {
     scored.push_back(pose);
     const double dx = pose.x_m - target_.x_m, dy = pose.y_m - target_.y_m;
@@ -171,6 +171,34 @@ TEST(ScanMatcher, TheClimbNeverScoresAgainThePoseItJustLeft) {
       times += std::abs(p.x_m - x) < 1e-9 && std::abs(p.y_m) < 1e-9 && std::abs(p.theta_rad) < 1e-9;
     EXPECT_EQ(times, 1) << "x = " << x;
   }
+}
+
+TEST(CowGridMap, EndPointsBeyondTheExtentAreLeftOutAndCounted) {
+  CowGridMapOptions options;
+  options.max_extent_m = 20.0;  // 50 tiles of 0.4 m
+  ASSERT_EQ(options.max_tiles_per_axis(), 50);
+  CowGridMap map(options);
+  const Pose2 home{0.0, 0.0, 0.0};
+  const ScanPoints points = to_scan_points(scan_from(home), {});  // a 12 m x 8 m room around home
+  EXPECT_EQ(map.insert(home, points), 0u);
+  const std::size_t tiles = map.tile_count();
+  const std::size_t bytes = map.referenced_bytes();
+  // A scan 36 km away (a bad pose) adds nothing and allocates no table for it.
+  const Pose2 far{36'000.0, -36'000.0, 1.0};
+  EXPECT_EQ(map.insert(far, points), points.beams.size());
+  EXPECT_EQ(map.tile_count(), tiles);
+  EXPECT_EQ(map.referenced_bytes(), bytes);
+  EXPECT_EQ(map.cell_at(far.x_m + 6.01, far.y_m), nullptr);
+  // Driving away: the map grows up to the extent and no further; what lies
+  // within it is still inserted. The room seen from x spans [x - 0, x + 6]; the
+  // table starts 8 tiles (3.2 m) before the first scan's end points, so up to
+  // x = 10 every end point lies within 20 m of its first tile.
+  for (double x = 1.0; x <= 10.0; x += 1.0) EXPECT_EQ(map.insert({x, 0.0, 0.0}, points), 0u) << x;
+  EXPECT_GT(map.insert({14.0, 0.0, 0.0}, points), 0u);  // partly beyond
+  EXPECT_EQ(map.insert({30.0, 0.0, 0.0}, points), points.beams.size());
+  EXPECT_LE(map.referenced_bytes(), 50u * 50u * (sizeof(CowGridMap::Tile) + sizeof(std::shared_ptr<CowGridMap::Tile>)));
+  EXPECT_NE(map.cell_at(6.01, 0.0), nullptr);   // the first wall is still there
+  EXPECT_EQ(map.cell_at(36.01, 0.0), nullptr);  // the farthest wall was not
 }
 
 TEST(CowGridMap, TheLikelihoodAloneEqualsEvaluatesBitForBit) {
@@ -511,6 +539,26 @@ TEST(OdometrySync, AnAbsurdReadingIsHeldAndCountedAndMovesNothing) {
   drive(sync, t, x, 10);  // and on as before: the held ones were outliers
   EXPECT_NEAR(sync.newest_pose()->x_m, before.x_m + 0.1, 1e-9);
   EXPECT_EQ(sync.odometry_resets(), 0u);
+}
+
+TEST(OdometrySync, AHeadingThatIsNoHeadingIsRefusedAndCannotMoveTheFrame) {
+  // The slam_input fuzz finding of 2026-11-26: a "restarted odometry" (its
+  // heading variance shrank) at x = 131 km with a heading of -7.8e202 rad,
+  // then readings back near the origin that made a second reset. cos and sin
+  // of such a heading and of its wrap disagree: the frame anchored on it put
+  // the robot 36 km away.
+  OdometrySync sync;
+  ASSERT_TRUE(sync.add_odometry(20'000, {0.0, 0.0, 0.0}, 1e-4));
+  EXPECT_FALSE(sync.add_odometry(40'000, {131072.0, 0.0, -7.83836e202}, 1.6e-309));
+  EXPECT_NE(sync.why().find("theta"), std::string::npos) << sync.why();
+  EXPECT_EQ(sync.refused_odometry(), 1u);
+  sync.add_odometry(60'000, {4.45, 2.9, 2.05}, 1e-4);
+  sync.add_odometry(60'000, {0.0, 0.0, 0.0}, 1e-4);
+  sync.add_odometry(60'000, {0.0, 0.0, 0.25}, 1e-4);
+  const Pose2 now = *sync.newest_pose();
+  EXPECT_LT(std::hypot(now.x_m, now.y_m), 1.0);
+  // A heading that merely is not wrapped (an integrator that counts turns) is a heading.
+  EXPECT_TRUE(sync.add_odometry(80'000, {0.0, 0.0, 0.25 + 2.0 * 3.141592653589793 * 1000.0}, 1e-4));
 }
 
 TEST(OdometrySync, AResetOdometryIsAnchoredWhereTheRobotWas) {

@@ -92,6 +92,7 @@ class SlamNode {
     v.total("scans_without_odometry", static_cast<std::int64_t>(sync_.stale_pairings()));
     v.total("odometry_resets", static_cast<std::int64_t>(sync_.odometry_resets()));
     v.event("odometry_impossible_steps", static_cast<std::int64_t>(sync_.impossible_steps()));
+    v.event("points_beyond_map_extent", filter_.points_beyond_map_extent());
   }
   // The filter's lineage (slam_update_t.epoch): 0 before the first update.
   std::int64_t epoch() const { return epoch_; }

@@ -46,6 +46,7 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   f.grid.along_line_weight = grid.get<double>("along_line_weight", f.grid.along_line_weight, in_range(0.0, 1.0));
   f.grid.line_flatness = grid.get<double>("line_flatness", f.grid.line_flatness, in_range(0.0, 1.0));
   f.grid.check_free_before_hit = grid.get<bool>("check_free_before_hit", f.grid.check_free_before_hit);
+  f.grid.max_extent_m = grid.get<double>("max_extent_m", f.grid.max_extent_m, in_range(10.0, 1000.0));
 
   auto matcher = config.section("matcher");
   f.matcher.linear_step_m = matcher.get<double>("linear_step_m", f.matcher.linear_step_m, positive<double>());
