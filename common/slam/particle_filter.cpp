@@ -141,6 +141,9 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
     ++corrected_odometry_steps_;
   }
   const Pose2 step_std = motion_noise_std(odometry_step, options_.motion);
+  const ScanConstraint constraint =
+      options_.constraint.enabled ? scan_constraint(points, options_.constraint) : ScanConstraint{};
+  stats.unconstrained_directions = static_cast<int>(std::lround(constraint.unconstrained.trace()));
   std::vector<int> evaluations(n, 0);
   std::vector<char> failed(n, 0);
   const std::uint64_t generation_seed = mix(options_.seed ^ mix(static_cast<std::uint64_t>(generation_ + 1)));
@@ -149,9 +152,19 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
       Particle& p = particles_[i];
       std::mt19937_64 rng(mix(generation_seed + i));
       const Pose2 predicted = compose(p.pose_at_update, odometry_step);
-      const MatchResult match = i == checked && measured_match
-                                    ? *measured_match
-                                    : match_scan(*p.map, match_points, p.pose, options_.matcher);
+      MatchResult match = i == checked && measured_match ? *measured_match
+                                                         : match_scan(*p.map, match_points, p.pose, options_.matcher);
+      if (constraint.degenerate()) {
+        // Along what the scan does not constrain, the particle's motion-model
+        // sample (p.pose) is the estimate, not where the climb ended.
+        const double c = std::cos(match.pose.theta_rad), s = std::sin(match.pose.theta_rad);
+        Eigen::Matrix2d rotation;
+        rotation << c, -s, s, c;
+        const Eigen::Vector2d gap(p.pose.x_m - match.pose.x_m, p.pose.y_m - match.pose.y_m);
+        const Eigen::Vector2d shift = rotation * constraint.unconstrained * rotation.transpose() * gap;
+        match.pose.x_m += shift.x();
+        match.pose.y_m += shift.y();
+      }
       evaluations[i] = match.evaluations;
       double increment = 0.0;
       if (match.evaluation.score > options_.matcher.minimum_score) {
@@ -201,6 +214,7 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   angular_since_update_rad_ = 0.0;
   stats.generation = generation_;
   points_beyond_map_extent_ += static_cast<std::int64_t>(stats.points_beyond_map_extent);
+  unconstrained_updates_ += stats.unconstrained_directions > 0;
   last_update_ = stats;
 }
 

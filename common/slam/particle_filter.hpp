@@ -22,6 +22,7 @@
 #include "slam/motion_model.hpp"
 #include "slam/particle_map.hpp"
 #include "slam/scan.hpp"
+#include "slam/scan_constraint.hpp"
 #include "slam/scan_matcher.hpp"
 
 namespace pex::slam {
@@ -66,6 +67,9 @@ struct ParticleFilterOptions {
   ScanConversionOptions scan;
   CowGridMapOptions grid;
   OdometryCheckOptions odometry_check;
+  // Where the scan does not constrain the position (a corridor's length), a
+  // particle's match is replaced by its motion-model sample (scan_constraint.hpp).
+  ScanConstraintOptions constraint;
 };
 
 // Low-variance (systematic) resampling: parent index of each of the
@@ -107,6 +111,7 @@ struct UpdateStats {
   double odometry_scale = 1.0;  // the translation scale the odometry check chose (1: as measured)
   double odometry_check_ratio = 0.0;  // best other scale's match score / the measured step's (0: not checked)
   std::size_t points_beyond_map_extent = 0;  // end points the particles' maps left out (CowGridMapOptions::max_extent_m)
+  int unconstrained_directions = 0;  // 0, 1 (a corridor) or 2: where the match gave way to the odometry
 };
 
 class ParticleFilter {
@@ -184,12 +189,16 @@ class ParticleFilter {
   UpdateStats last_update_;
   std::int64_t corrected_odometry_steps_ = 0;
   std::int64_t points_beyond_map_extent_ = 0;
+  std::int64_t unconstrained_updates_ = 0;
 
  public:
   // End points left out of the particles' maps, summed over the particles,
   // since this filter started (not checkpointed): nonzero means the robot is
   // at the edge of the extent the maps may cover.
   std::int64_t points_beyond_map_extent() const { return points_beyond_map_extent_; }
+  // Updates whose scan left a direction unconstrained (ScanConstraintOptions),
+  // since this filter started (not checkpointed).
+  std::int64_t unconstrained_updates() const { return unconstrained_updates_; }
   // Updates whose odometry step the check replaced (OdometryCheckOptions).
   std::int64_t corrected_odometry_steps() const { return corrected_odometry_steps_; }
 };

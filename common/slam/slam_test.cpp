@@ -17,6 +17,7 @@
 #include "slam/motion_model.hpp"
 #include "slam/odometry_sync.hpp"
 #include "slam/particle_filter.hpp"
+#include "slam/scan_constraint.hpp"
 #include "slam/scan_matcher.hpp"
 #include "slam/trajectory_recorder.hpp"
 
@@ -852,6 +853,80 @@ TEST(OdometrySyncCheckpoint, ARestoredPairingKeepsTheResetFrameAndTheWaitingScan
 // FR079's odometry integrates the wheels' speed without its sign: driving
 // backwards shows as driving forwards. Forward 1.2 m, back 1.2 m: the
 // odometry says 2.4 m forward; the check must bring the robot back to its start.
+// A scan from `pose` between two endless walls at y = +-1.5 m (range noise
+// of sigma_m, seeded): a corridor with nothing along it.
+RangeScan corridor_scan(const Pose2& pose, std::int64_t utime, double sigma_m = 0.0, std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma_m > 0.0 ? sigma_m : 1.0);
+  RangeScan scan;
+  scan.utime = utime;
+  scan.angle_min_rad = -std::numbers::pi / 2;
+  scan.angle_increment_rad = std::numbers::pi / 360;
+  scan.range_min_m = 0.05;
+  scan.range_max_m = 30.0;
+  for (int i = 0; i <= 360; ++i) {
+    const double dy = std::sin(pose.theta_rad + scan.angle_min_rad + i * scan.angle_increment_rad);
+    double r = std::numeric_limits<double>::infinity();
+    if (dy > 1e-9) r = (1.5 - pose.y_m) / dy;
+    if (dy < -1e-9) r = (-1.5 - pose.y_m) / dy;
+    if (sigma_m > 0.0) r += noise(rng);
+    scan.ranges_m.push_back(static_cast<float>(r));
+  }
+  return scan;
+}
+
+TEST(ScanConstraint, ACorridorLeavesItsLengthUnconstrainedARoomNothing) {
+  const ScanConstraintOptions options;
+  // Along x, noisy as a laser is (1.2 cm): every end point is on a line.
+  const ScanConstraint corridor =
+      scan_constraint(to_scan_points(corridor_scan({0.0, 0.0, 0.0}, 0, 0.012), {}), options);
+  EXPECT_GT(corridor.line_points, 200);
+  EXPECT_NEAR(corridor.unconstrained(0, 0), 1.0, 1e-6);  // x: the corridor's length
+  EXPECT_NEAR(corridor.unconstrained(1, 1), 0.0, 1e-6);
+  EXPECT_GT(corridor.information(1, 1), 200.0);
+  // Turned by 0.5 rad in the corridor: the unconstrained direction, in the
+  // robot's frame, is the corridor's (x of the world) seen from there.
+  const ScanConstraint turned = scan_constraint(to_scan_points(corridor_scan({0.0, 0.0, 0.5}, 0), {}), options);
+  EXPECT_NEAR(turned.unconstrained(0, 0), std::cos(0.5) * std::cos(0.5), 1e-3);
+  EXPECT_NEAR(turned.unconstrained(0, 1), -std::cos(0.5) * std::sin(0.5), 1e-3);
+  // The test room (walls every way, a pillar, diagonals): nothing left out.
+  const ScanConstraint room = scan_constraint(to_scan_points(scan_from({0.0, 0.0, 0.0}), {}), options);
+  EXPECT_FALSE(room.degenerate());
+  // No end points: nothing is constrained.
+  const ScanConstraint empty = scan_constraint(ScanPoints{}, options);
+  EXPECT_TRUE(empty.unconstrained.isApprox(Eigen::Matrix2d::Identity()));
+}
+
+TEST(ParticleFilter, AlongACorridorTheOdometryIsTheEstimate) {
+  // Exact odometry, 8 m down an endless corridor with laser noise: along it
+  // the scans hold nothing, so the estimate must be the odometry's (within
+  // the motion model's noise), wherever the climb ends.
+  auto run = [](double min_information_beams) {
+    ParticleFilterOptions options = small_filter(3);
+    options.motion.srr = options.motion.srt = options.motion.str = 0.02;
+    options.motion.stt = 0.05;
+    options.constraint.enabled = true;
+    options.constraint.min_information_beams = min_information_beams;
+    ParticleFilter filter(options);
+    Pose2 truth{0.0, 0.2, 0.0};
+    for (int i = 0; i <= 80; ++i) {
+      filter.process(corridor_scan(truth, i * 100'000, 0.012, static_cast<std::uint64_t>(i)), truth);
+      truth.x_m += 0.1;
+    }
+    truth.x_m -= 0.1;
+    const Pose2 best = filter.best_pose(truth);
+    return std::make_pair(best.x_m - truth.x_m, filter.unconstrained_updates());
+  };
+  const auto [along_error, unconstrained] = run(ScanConstraintOptions{}.min_information_beams);
+  const auto [along_error_off, none] = run(0.0);
+  std::cout << "8 m down a corridor, error along it: " << along_error << " m taking the odometry there ("
+            << unconstrained << " updates), " << along_error_off << " m matching\n";
+  EXPECT_GT(unconstrained, 20);
+  EXPECT_EQ(none, 0);
+  EXPECT_LT(std::abs(along_error), 0.05);
+  EXPECT_GT(std::abs(along_error_off), 0.15);  // why: the climb slides (0.31 m with this seed)
+}
+
 TEST(ParticleFilter, OdometryThatCountsReversingAsForwardIsCorrectedByTheCheck) {
   auto run = [](bool check) {
     ParticleFilterOptions options = small_filter(7);

@@ -75,8 +75,10 @@ int main(int argc, char** argv) {
     });
     node.on_shutdown([slam, &poses_path, &checkpoint_out] {
       slam->flush();
-      spdlog::info("{} filter updates, {} odometry steps replaced by the odometry check", slam->filter().generation() + 1,
-                   slam->filter().corrected_odometry_steps());
+      spdlog::info("{} filter updates, {} odometry steps replaced by the odometry check, {} along the odometry "
+                   "where the scan constrained no position",
+                   slam->filter().generation() + 1, slam->filter().corrected_odometry_steps(),
+                   slam->filter().unconstrained_updates());
       if (!checkpoint_out.empty()) {
         const std::string bytes = slam->checkpoint();
         if (const auto why = pex::runtime::write_file_atomically(checkpoint_out, bytes); !why.empty())

@@ -89,6 +89,7 @@ class SlamNode {
     v.total("filter_updates", filter_.generation() + 1);
     v.total("updates_republished", republished_);
     v.total("corrected_odometry_steps", filter_.corrected_odometry_steps());
+    v.total("unconstrained_updates", filter_.unconstrained_updates());
     v.total("scans_without_odometry", static_cast<std::int64_t>(sync_.stale_pairings()));
     v.total("odometry_resets", static_cast<std::int64_t>(sync_.odometry_resets()));
     v.event("odometry_impossible_steps", static_cast<std::int64_t>(sync_.impossible_steps()));

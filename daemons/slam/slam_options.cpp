@@ -91,6 +91,15 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   f.odometry_check.min_translation_m =
       check.get<double>("min_translation_m", f.odometry_check.min_translation_m, non_negative<double>());
   f.odometry_check.margin = check.get<double>("margin", f.odometry_check.margin, non_negative<double>());
+  auto constraint = config.section("constraint");
+  f.constraint.enabled = constraint.get<bool>("enabled", f.constraint.enabled);
+  f.constraint.neighbours = constraint.get<int>("neighbours", f.constraint.neighbours, in_range(1, 20));
+  f.constraint.neighbour_radius_m =
+      constraint.get<double>("neighbour_radius_m", f.constraint.neighbour_radius_m, in_range(0.01, 5.0));
+  f.constraint.line_flatness = constraint.get<double>("line_flatness", f.constraint.line_flatness, in_range(0.0, 1.0));
+  f.constraint.range_noise_m = constraint.get<double>("range_noise_m", f.constraint.range_noise_m, in_range(0.0, 1.0));
+  f.constraint.min_information_beams =
+      constraint.get<double>("min_information_beams", f.constraint.min_information_beams, in_range(0.0, 10000.0));
   o.republish_period_s = config.get<double>("republish_period_s", o.republish_period_s, non_negative<double>());
   o.republish_max_travel_m =
       config.get<double>("republish_max_travel_m", o.republish_max_travel_m, in_range(0.0, 10.0));
