@@ -72,11 +72,14 @@ inline bool ray_crosses(const Point& p, const Point& a, const Point& b) {
 // A sufficient test of validity, several times cheaper than bg::is_valid:
 // true only when every ring is closed, has at least 3 distinct vertices, no
 // repeated consecutive point and the right orientation, no two edges of any
-// rings come within 1e-9 m of each other except consecutive edges at their
+// rings come within the clearance of each other except consecutive edges at their
 // shared vertex (no crossing, no touching, no spike), every hole lies inside
 // its own outer ring and outside its siblings, and no polygon lies inside
-// another except inside one of its holes. Such a multi-polygon is valid by
-// OGC's rules. false means "not shown": the caller asks bg::is_valid, which
+// another except inside one of its holes. The clearance is 4e-8 of the
+// larger side of the box of all the rings, at least 1e-9 m. Such a
+// multi-polygon is valid by OGC's rules; bg::is_valid, which merges features
+// below about 1e-7 of that side, may still call a feature between the two a
+// spike (typed_polygon.cpp). false means "not shown": the caller asks bg::is_valid, which
 // also accepts rings touching at points. Used where validity is checked on
 // every insert (PolygonMap); tests keep bg::is_valid (is_valid above).
 bool is_clearly_valid(std::span<const TypedPolygon> polygons);

@@ -163,4 +163,32 @@ TEST(ClearValidity, TouchingRingsAreLeftToBoost) {
 }
 
 }  // namespace
+// Boost's is_valid merges features below about 1e-7 of the geometry's box
+// (its rescaling): a notch of a few nanometres at a vertex is a spike to it.
+// Such a polygon is left to Boost, at any place and size of the box; a notch
+// of a micrometre is clearly valid (what the float end points of scans make
+// every insert, which must not all go to Boost).
+TEST(ClearValidity, AFeatureBoostMergesIsLeftToBoost) {
+  auto notched = [](double offset_m, double box_m, double notch_m) {
+    // A triangle-like ring with a V at its bottom vertex: two edges of
+    // notch_m at 70 degrees between them.
+    const double half = 0.5 * (M_PI - 70.0 * M_PI / 180.0);
+    const Point v(offset_m + 2.0, offset_m);
+    const Point a(offset_m + 2.0 - notch_m * std::cos(half), offset_m + notch_m * std::sin(half));
+    const Point b(offset_m + 2.0 + notch_m * std::cos(half), offset_m + notch_m * std::sin(half));
+    return make({v, b, {offset_m + 3.0 + box_m, offset_m + 2.0 + box_m}, {offset_m + 1.0 - box_m, offset_m + 2.0 + box_m}, a},
+                std::vector<EdgeType>(5, E::kObstacle));
+  };
+  for (const double offset : {0.0, 1000.0}) {
+    for (const double box : {0.0, 100.0}) {
+      const TypedMultiPolygon nano{notched(offset, box, 2e-9)};
+      EXPECT_FALSE(bg::is_valid(geometry_of(nano))) << offset << " " << box;
+      EXPECT_FALSE(is_clearly_valid(nano)) << offset << " " << box;
+    }
+    const TypedMultiPolygon micro{notched(offset, 0.0, 1e-6)};
+    EXPECT_TRUE(bg::is_valid(geometry_of(micro)));
+    EXPECT_TRUE(is_clearly_valid(micro)) << offset;
+  }
+}
+
 }  // namespace pex::mapping
