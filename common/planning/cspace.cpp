@@ -85,16 +85,16 @@ mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double
     return result;
   }
   // Round joins: Clipper puts their vertices on the arc and takes as many as
-  // keep the chords within ArcTolerance of it: points_per_circle gives the
-  // tolerance. A chord cuts into the clearance by up to that much, so the
-  // offset is that much farther: the chords keep distance_m from the corner
-  // (the walls then keep distance_m plus the tolerance, 6 mm at 16 vertices
-  // per circle and 0.30 m). Fewer join vertices are most of a ragged map's
-  // offset cost (Clipper's union of the offset edges).
-  const double arc_error_m = distance_m * (1.0 - std::cos(std::numbers::pi / points_per_circle));
-  const double delta = (distance_m + arc_error_m) * kClipperUnitsPerM;
+  // keep the chords within ArcTolerance of it. A chord cuts into the
+  // clearance by that much (6 mm with 16 vertices per circle at 0.32 m, where
+  // Boost's joins lost 1-2 mm on the maps of the tests), so the tolerance is
+  // also at most kMaxArcErrorM; the C-space's simplification removes most
+  // of the extra vertices again.
+  constexpr double kMaxArcErrorM = 1e-3;
+  const double delta = distance_m * kClipperUnitsPerM;
   ClipperLib::ClipperOffset offset;
-  offset.ArcTolerance = arc_error_m * kClipperUnitsPerM;
+  offset.ArcTolerance =
+      std::min(distance_m * (1.0 - std::cos(std::numbers::pi / points_per_circle)), kMaxArcErrorM) * kClipperUnitsPerM;
   ClipperLib::PolyTree tree;
   try {
     for (const auto& polygon : free_space) {

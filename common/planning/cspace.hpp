@@ -51,9 +51,8 @@ struct CSpaceOptions {
 };
 
 // The free space shrunk by distance_m (> 0): Minkowski offset with round
-// joins of about `points_per_circle` vertices per full circle, offset
-// farther by their chords' error (distance_m (1 - cos(pi / points_per_circle)))
-// so that no chord comes nearer a map corner than distance_m, computed by Clipper
+// joins of at least `points_per_circle` vertices per full circle and chords
+// within 1 mm of the arc (a chord cuts into the clearance), computed by Clipper
 // (ClipperLib::ClipperOffset, on a 10 um integer grid), each output edge
 // typed as the map edge it was offset from (mapping::assign_types), or, with
 // type_edges false, typed kObstacle. The same set as
