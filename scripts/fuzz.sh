@@ -17,7 +17,7 @@ cd "$(dirname "$0")/.."
 PEX_DEPS_FUZZ=1 bash scripts/deps.sh
 FUZZ_BUILD_DIR=${FUZZ_BUILD_DIR:-build-fuzz}
 JOBS=${JOBS:-2}
-all_targets=(cola sim_cola canopen lcm_message lcm_log world carmen map_message config typed_ops slam_input)
+all_targets=(cola sim_cola canopen lcm_message lcm_log world carmen map_message config typed_ops scan_polygon slam_input)
 target=${1:-all}
 seconds=${2:-60}
 if [ "$target" = all ]; then
