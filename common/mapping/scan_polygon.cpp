@@ -153,9 +153,14 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
   const double step = std::abs(angle_increment);
   std::size_t n = ranges.size();
   const double two_pi = 2.0 * std::numbers::pi;
-  if (static_cast<double>(n - 1) * step >= two_pi - 0.5 * step)
-    n = static_cast<std::size_t>(std::floor((two_pi - 0.5 * step) / step));
-  if (n < 2) return fail("angle_increment too large");
+  if (static_cast<double>(n - 1) * step >= two_pi - 0.5 * step) {
+    // Beams within one turn; negative (a step beyond 4 pi) or fewer than 2
+    // is refused before it becomes a count (the scan_polygon fuzz finding:
+    // -1 converted to size_t).
+    const double within_a_turn = std::floor((two_pi - 0.5 * step) / step);
+    if (!(within_a_turn >= 2.0)) return fail("angle_increment too large");
+    n = static_cast<std::size_t>(within_a_turn);
+  }
   const bool reversed = angle_increment < 0.0;
   const double first_angle = reversed ? angle_min + angle_increment * static_cast<double>(n - 1) : angle_min;
   auto range_at = [&](std::size_t k) { return ranges[reversed ? n - 1 - k : k]; };

@@ -215,6 +215,11 @@ TEST(ScanToPolygon, RefusesBadInputWithAnError) {
   expect_error(scan_to_polygon(ranges, 0, 0.0, {}, o));
   expect_error(scan_to_polygon(ranges, std::nan(""), 0.1, {}, o));
   expect_error(scan_to_polygon(ranges, 0, 0.1, {std::nan(""), 0, 0}, o));
+  // Steps of a turn or more: no two beams within one turn (a step beyond
+  // 4 pi made the beam count -1, converted to size_t: the fuzzer's finding).
+  expect_error(scan_to_polygon(ranges, 0, 7.0, {}, o));
+  expect_error(scan_to_polygon(ranges, 0, -20.0, {}, o));
+  expect_error(scan_to_polygon(ranges, 0, 1e300, {}, o));
   o.max_beams = 5;
   expect_error(scan_to_polygon(ranges, 0, 0.1, {}, o));
 }
