@@ -84,6 +84,19 @@ std::optional<std::string> area_out_of_bounds(std::span<const RingRef> a, std::s
          std::to_string(hi) + "] m2 (degenerate operands)";
 }
 
+// Boost's overlay (TypedOpOptions::boost_overlay) is held to the same area
+// bounds: on valid operands its union can come back empty (the typed_ops
+// fuzzer, 2026-11-26: a union of 0 m2 of operands of 4 and 3.75 m2).
+void refuse_out_of_bounds(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
+                          TypedOpResult& result) {
+  if (!result.ok) return;
+  if (auto bad_area = area_out_of_bounds(a, b, op, result.polygons)) {
+    result.ok = false;
+    result.error = "Boost's overlay: " + *bad_area;
+    result.polygons.clear();
+  }
+}
+
 // Our edge overlay (edge_overlay.hpp): `result` filled (ok, or the error),
 // its output retyped as assign_types would type it when the options ask for
 // uniform or plain types, checked against the area bounds always and for
@@ -291,6 +304,7 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
         index.build();
       }
       result = finish(std::move(geometry), index, kClipSearchRadius, options);
+      refuse_out_of_bounds(a_rings, b_rings, OverlayOp::kUnion, result);
     } else {
       edge_overlay(a_rings, b_rings, OverlayOp::kUnion, options, result);
     }
@@ -336,7 +350,11 @@ TypedOpResult typed_difference(const TypedMultiPolygon& a, const TypedMultiPolyg
   std::vector<RingRef> a_rings, b_rings;
   add_rings(a, a_rings);
   add_rings(b, b_rings);
-  if (options.boost_overlay) return boost_difference(a, b, a_type, b_type, options);
+  if (options.boost_overlay) {
+    TypedOpResult result = boost_difference(a, b, a_type, b_type, options);
+    refuse_out_of_bounds(a_rings, b_rings, OverlayOp::kDifference, result);
+    return result;
+  }
   TypedOpResult result;
   edge_overlay(a_rings, b_rings, OverlayOp::kDifference, options, result, {a_type, b_type});
   return result;
@@ -383,6 +401,7 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
         index.build();
       }
       piece = finish(std::move(geometry), index, kClipSearchRadius, clip_options);
+      refuse_out_of_bounds(polygon_rings, box_rings, OverlayOp::kIntersection, piece);
     } else {
       edge_overlay(polygon_rings, box_rings, OverlayOp::kIntersection, clip_options, piece);
     }
