@@ -312,13 +312,35 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
     if (!put_back_holes(result.polygons, std::move(aside)))
       return failed("union: a hole set aside has no polygon to return to");
   }
+  // The overlay's output was checked alone; a copied polygon may touch it
+  // (valid operands may touch at a point), and the overlay splits an edge at
+  // a point up to kOverlaySnap from it, which tilts the edge by as much: a
+  // neighbour touching it then overlaps (the typed_ops fuzzer, 2026-11-26).
+  // So the output is checked again with the copied polygons whose boxes meet
+  // it (copies of a and b never meet: a copy of a meets no polygon of b).
+  // PolygonMap checks each tile at the end of an insert instead (validate off).
+  const std::size_t produced = result.polygons.size();
+  std::vector<Box> produced_boxes;
+  if (options.validate && !a_rings.empty())
+    for (std::size_t k = 0; k < produced; ++k) produced_boxes.push_back(bg::return_envelope<Box>(result.polygons[k].geometry));
+  TypedMultiPolygon neighbours;
+  auto copy = [&](const TypedPolygon& polygon, const Box& box) {
+    result.polygons.push_back(polygon);
+    if (meets_any(box, produced_boxes, nullptr)) neighbours.push_back(polygon);
+  };
   for (std::size_t j = 0; j < b.size(); ++j)
-    if (!b_involved[j]) result.polygons.push_back(b[j]);
+    if (!b_involved[j]) copy(b[j], b_boxes[j]);
   for (std::size_t i = 0; i < a.size(); ++i)
     if (!a_involved[i]) {
-      result.polygons.push_back(a[i]);
+      copy(a[i], a_boxes[i]);
       ++result.unchanged_tail;
     }
+  if (!neighbours.empty()) {
+    for (std::size_t k = 0; k < produced; ++k) neighbours.push_back(result.polygons[k]);
+    std::string why;
+    if (!is_clearly_valid(neighbours) && !bg::is_valid(geometry_of(neighbours), why))
+      return failed("union: the result with the polygons it left alone is invalid: " + why);
+  }
   return result;
 }
 
