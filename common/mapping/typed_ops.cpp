@@ -397,6 +397,7 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
   const std::vector<EdgeType> box_types(4, EdgeType::kBorder);
   const RingRef box_rings[1] = {{&box_ring, &box_types}};
   std::vector<RingRef> polygon_rings;
+  bool clipped = false;
   const Box inner(Point(box.min_corner().x() + margin, box.min_corner().y() + margin),
                   Point(box.max_corner().x() - margin, box.max_corner().y() - margin));
   for (const auto& polygon : polygons) {
@@ -431,7 +432,15 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
     result.reassign.edges += piece.reassign.edges;
     result.reassign.candidates += piece.reassign.candidates;
     for (auto& p : piece.polygons) result.polygons.push_back(std::move(p));
+    clipped = true;
   }
+  // Each piece was checked alone; pieces of polygons that touch at a point
+  // can overlap once the overlay's snapping tilted an edge (as in
+  // typed_union above): with validate on, the whole result is checked.
+  std::string why;
+  if (options.validate && clipped && result.polygons.size() > 1 && !is_clearly_valid(result.polygons) &&
+      !bg::is_valid(geometry_of(result.polygons), why))
+    return failed("clip: the pieces together are invalid: " + why);
   return result;
 }
 
