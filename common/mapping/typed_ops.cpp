@@ -321,7 +321,7 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   // PolygonMap checks each tile at the end of an insert instead (validate off).
   const std::size_t produced = result.polygons.size();
   std::vector<Box> produced_boxes;
-  if (options.validate && !a_rings.empty())
+  if (options.validate && options.validate_copies && !a_rings.empty())
     for (std::size_t k = 0; k < produced; ++k) produced_boxes.push_back(bg::return_envelope<Box>(result.polygons[k].geometry));
   TypedMultiPolygon neighbours;
   auto copy = [&](const TypedPolygon& polygon, const Box& box) {

@@ -30,7 +30,9 @@ mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle
 
 mapping::TypedMultiPolygon with_live_view(const mapping::TypedMultiPolygon& map, const mapping::TypedMultiPolygon& live) {
   if (live.empty()) return map;
-  const auto united = mapping::typed_union(map, live);
+  mapping::TypedOpOptions options;
+  options.validate_copies = false;  // planning only: see TypedOpOptions::validate_copies
+  const auto united = mapping::typed_union(map, live, options);
   return united.ok ? united.polygons : map;
 }
 
