@@ -76,7 +76,7 @@ inline bool ray_crosses(const Point& p, const Point& a, const Point& b) {
 // shared vertex (no crossing, no touching, no spike), every hole lies inside
 // its own outer ring and outside its siblings, and no polygon lies inside
 // another except inside one of its holes. The clearance is 4e-8 of the
-// larger side of the box of all the rings, at least 1e-9 m. Such a
+// larger side of the box of all the rings, at least 1e-7 m. Such a
 // multi-polygon is valid by OGC's rules; bg::is_valid, which merges features
 // below about 1e-7 of that side, may still call a feature between the two a
 // spike (typed_polygon.cpp). false means "not shown": the caller asks bg::is_valid, which
