@@ -8,20 +8,6 @@
 
 namespace pex::mapping {
 
-namespace {
-
-// The cheap sufficient test first; Boost decides what it cannot show (rings
-// touching at points, near-degenerate geometry) and says why when invalid.
-bool valid_layer(std::span<const TypedPolygon> layer, std::string& why) {
-  if (is_clearly_valid(layer)) return true;
-  MultiPolygon geometry;
-  geometry.reserve(layer.size());
-  for (const auto& p : layer) geometry.push_back(p.geometry);
-  return bg::is_valid(geometry, why);
-}
-
-}  // namespace
-
 bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double epsilon_m, std::string& why) {
   // The kept polygons that can meet the changed ones go right after them:
   // boxes overlap (RDP keeps a subset of the vertices, so a simplified
@@ -47,11 +33,11 @@ bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double ep
     for (const bool check_each_polygon : {false, true}) {
       TypedMultiPolygon simplified = simplify_typed(original, epsilon_m, check_each_polygon);
       std::move(simplified.begin(), simplified.end(), layer.begin());  // one polygon for each
-      if (valid_layer(checked, why)) return true;
+      if (is_valid_cheap_first(checked, why)) return true;
     }
     std::move(original.begin(), original.end(), layer.begin());
   }
-  return valid_layer(checked, why);
+  return is_valid_cheap_first(checked, why);
 }
 
 Tile::Tile(Box box_in, TypedMultiPolygon free_in, TypedMultiPolygon obstacles_in,

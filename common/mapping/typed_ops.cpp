@@ -112,7 +112,7 @@ void edge_overlay(std::span<const RingRef> a, std::span<const RingRef> b, Overla
       r.error = std::move(*bad_area);
     }
   }
-  if (r.ok && options.validate && !is_clearly_valid(r.polygons) && !bg::is_valid(geometry_of(r.polygons), why)) {
+  if (r.ok && options.validate && !is_valid_cheap_first(r.polygons, why)) {
     r.ok = false;
     r.error = "invalid result: " + why;
   }
@@ -338,7 +338,7 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   if (!neighbours.empty()) {
     for (std::size_t k = 0; k < produced; ++k) neighbours.push_back(result.polygons[k]);
     std::string why;
-    if (!is_clearly_valid(neighbours) && !bg::is_valid(geometry_of(neighbours), why))
+    if (!is_valid_cheap_first(neighbours, why))
       return failed("union: the result with the polygons it left alone is invalid: " + why);
   }
   return result;
@@ -438,8 +438,7 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
   // can overlap once the overlay's snapping tilted an edge (as in
   // typed_union above): with validate on, the whole result is checked.
   std::string why;
-  if (options.validate && clipped && result.polygons.size() > 1 && !is_clearly_valid(result.polygons) &&
-      !bg::is_valid(geometry_of(result.polygons), why))
+  if (options.validate && clipped && result.polygons.size() > 1 && !is_valid_cheap_first(result.polygons, why))
     return failed("clip: the pieces together are invalid: " + why);
   return result;
 }

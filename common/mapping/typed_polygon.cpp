@@ -220,6 +220,14 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
   return true;
 }
 
+bool is_valid_cheap_first(std::span<const TypedPolygon> polygons, std::string& why) {
+  if (is_clearly_valid(polygons)) return true;
+  MultiPolygon geometry;
+  geometry.reserve(polygons.size());
+  for (const auto& p : polygons) geometry.push_back(p.geometry);
+  return bg::is_valid(geometry, why);
+}
+
 std::size_t vertex_count(const Polygon& polygon) {
   auto ring_count = [](const Ring& r) { return r.empty() ? 0 : r.size() - 1; };
   std::size_t n = ring_count(polygon.outer());

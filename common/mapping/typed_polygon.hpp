@@ -83,6 +83,10 @@ inline bool ray_crosses(const Point& p, const Point& a, const Point& b) {
 // also accepts rings touching at points. Used where validity is checked on
 // every insert (PolygonMap); tests keep bg::is_valid (is_valid above).
 bool is_clearly_valid(std::span<const TypedPolygon> polygons);
+// is_clearly_valid first; what it cannot show (rings touching at points,
+// features near Boost's tolerance) bg::is_valid decides, saying why in `why`
+// when invalid. Edge types are not looked at.
+bool is_valid_cheap_first(std::span<const TypedPolygon> polygons, std::string& why);
 
 // Number of distinct vertices (a closed ring of n + 1 points counts n).
 std::size_t vertex_count(const Polygon& polygon);
