@@ -421,7 +421,8 @@ TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsil
       out.push_back(polygon);
       continue;
     }
-    if (!check_each_polygon || bg::is_valid(simplified.geometry)) {
+    std::string why;
+    if (!check_each_polygon || is_valid_cheap_first({&simplified, 1}, why)) {
       out.push_back(std::move(simplified));
     } else {
       out.push_back(polygon);

@@ -92,38 +92,45 @@ mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double
   // of the extra vertices again.
   constexpr double kMaxArcErrorM = 1e-3;
   const double delta = distance_m * kClipperUnitsPerM;
-  ClipperLib::ClipperOffset offset;
-  offset.ArcTolerance =
+  const double arc_tolerance =
       std::min(distance_m * (1.0 - std::cos(std::numbers::pi / points_per_circle)), kMaxArcErrorM) * kClipperUnitsPerM;
-  ClipperLib::PolyTree tree;
-  try {
-    for (const auto& polygon : free_space) {
-      offset.AddPath(to_clipper(polygon.geometry.outer()), ClipperLib::jtRound, ClipperLib::etClosedPolygon);
-      for (const auto& hole : polygon.geometry.inners())
-        offset.AddPath(to_clipper(hole), ClipperLib::jtRound, ClipperLib::etClosedPolygon);
-    }
-    offset.Execute(tree, -delta);
-  } catch (const std::exception& e) {
-    result.error = std::string("offset failed: ") + e.what();
-    return result;
-  }
-  // The tree nests outer rings and holes: each outer node with its hole
-  // children is a polygon; an outer node inside a hole is a polygon of its own.
+  // Polygon by polygon: the polygons of a map are interior-disjoint, and a
+  // point of one is nearer its own boundary than any other polygon's (a
+  // segment to another polygon's edge leaves its own first), so its C-space
+  // depends on its own rings only. Clipper's sweep costs about its scanbeams
+  // times the edges across each, so several small sweeps cost less than one
+  // across the whole map.
   mapping::MultiPolygon geometry;
-  std::vector<const ClipperLib::PolyNode*> outers;
-  for (const ClipperLib::PolyNode* node : tree.Childs) outers.push_back(node);
-  for (std::size_t k = 0; k < outers.size(); ++k) {
-    const ClipperLib::PolyNode* outer = outers[k];
-    mapping::Polygon polygon;
-    polygon.outer() = from_clipper(outer->Contour);
-    for (const ClipperLib::PolyNode* hole : outer->Childs) {
-      polygon.inners().push_back(from_clipper(hole->Contour));
-      for (const ClipperLib::PolyNode* inner : hole->Childs) outers.push_back(inner);
+  for (const auto& input : free_space) {
+    ClipperLib::ClipperOffset offset;
+    offset.ArcTolerance = arc_tolerance;
+    ClipperLib::PolyTree tree;
+    try {
+      offset.AddPath(to_clipper(input.geometry.outer()), ClipperLib::jtRound, ClipperLib::etClosedPolygon);
+      for (const auto& hole : input.geometry.inners())
+        offset.AddPath(to_clipper(hole), ClipperLib::jtRound, ClipperLib::etClosedPolygon);
+      offset.Execute(tree, -delta);
+    } catch (const std::exception& e) {
+      result.error = std::string("offset failed: ") + e.what();
+      return result;
     }
-    // Clipper's orientation (positive area for outer rings) is ours in a
-    // y-up frame; correct() only closes and orders what needs it.
-    bg::correct(polygon);
-    geometry.push_back(std::move(polygon));
+    // The tree nests outer rings and holes: each outer node with its hole
+    // children is a polygon; an outer node inside a hole is a polygon of its own.
+    std::vector<const ClipperLib::PolyNode*> outers;
+    for (const ClipperLib::PolyNode* node : tree.Childs) outers.push_back(node);
+    for (std::size_t k = 0; k < outers.size(); ++k) {
+      const ClipperLib::PolyNode* outer = outers[k];
+      mapping::Polygon polygon;
+      polygon.outer() = from_clipper(outer->Contour);
+      for (const ClipperLib::PolyNode* hole : outer->Childs) {
+        polygon.inners().push_back(from_clipper(hole->Contour));
+        for (const ClipperLib::PolyNode* inner : hole->Childs) outers.push_back(inner);
+      }
+      // Clipper's orientation (positive area for outer rings) is ours in a
+      // y-up frame; correct() only closes and orders what needs it.
+      bg::correct(polygon);
+      geometry.push_back(std::move(polygon));
+    }
   }
   if (!type_edges) {
     result.polygons = mapping::with_uniform_type(geometry, EdgeType::kObstacle);
@@ -304,6 +311,23 @@ double ConfigurationSpace::distance_to_boundary(const Point& p) const {
 
 bool ConfigurationSpace::boundary_within(const Point& p, double radius_m) const {
   if (!tree_ || tree_->empty()) return false;
+  // A small window (the nodes' and candidates' millimetre tests) looks at the
+  // grid's few cells under it: an edge within radius_m of p has a point in
+  // the window, and the grid lists it in the cell of that point. The rtree's
+  // window query cost several times that.
+  const int cx0 = cell_x(p.x() - radius_m), cx1 = cell_x(p.x() + radius_m);
+  const int cy0 = cell_y(p.y() - radius_m), cy1 = cell_y(p.y() + radius_m);
+  if (grid_nx_ > 0 && (cx1 - cx0 + 1) * (cy1 - cy0 + 1) <= 4) {
+    for (int cy = cy0; cy <= cy1; ++cy)
+      for (int cx = cx0; cx <= cx1; ++cx) {
+        const std::size_t c = static_cast<std::size_t>(cy) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(cx);
+        for (std::uint32_t k = grid_start_[c]; k < grid_start_[c + 1]; ++k) {
+          const Edge& e = edges_[grid_edges_[k]];
+          if (segment_distance(p, e.a, e.b) < radius_m) return true;
+        }
+      }
+    return false;
+  }
   // Every edge nearer than radius_m has its box in this window.
   const mapping::Box window(Point(p.x() - radius_m, p.y() - radius_m), Point(p.x() + radius_m, p.y() + radius_m));
   for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) {
@@ -405,6 +429,7 @@ std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t ed
   const double delta = options_.interior_offset_m;
   Point direction;
   double step = delta;
+  bool spike = false;
   if (at_vertex_b) {
     const Edge& in = edges_[edge];
     const Edge& out = edges_[in.next];
@@ -413,6 +438,7 @@ std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t ed
     const double len = std::hypot(sum.x(), sum.y());
     if (len < 1e-9) {
       direction = n1;  // a spike: the edges run back on themselves
+      spike = true;
     } else {
       direction = Point(sum.x() / len, sum.y() / len);
       // len / 2 is the sine of half the interior angle: at a sharp corner the
@@ -423,8 +449,31 @@ std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t ed
     direction = left_normal(edges_[edge].a, edges_[edge].b);
   }
   const Point candidate(q.x() + step * direction.x(), q.y() + step * direction.y());
-  if (boundary_within(candidate, 0.5 * delta) || !covers(candidate)) return std::nullopt;
+  if (boundary_within(candidate, 0.5 * delta)) return std::nullopt;
+  // The step leaves q into the interior side of the edges q lies on (left
+  // of both at a vertex, as the bisector of their left normals is, unless
+  // they run back on themselves): with no other edge met on the way, the
+  // point is inside. That is a look at the grid cells along a few
+  // millimetres, where covers() counts crossings along a ray across the
+  // whole map, for every reflex vertex. Anything else on the way (another
+  // ring touching q, a spike) goes to covers().
+  const std::uint32_t skip_a = edge, skip_b = at_vertex_b ? edges_[edge].next : edge;
+  if (!spike && step_meets_no_other_edge(q, candidate, skip_a, skip_b)) return candidate;
+  if (!covers(candidate)) return std::nullopt;
   return candidate;
+}
+
+bool ConfigurationSpace::step_meets_no_other_edge(const Point& q, const Point& p, std::uint32_t skip_a,
+                                                 std::uint32_t skip_b) const {
+  if (grid_nx_ == 0) return false;
+  return for_cells_along(q, p, [&](std::size_t c) {
+    for (std::uint32_t k = grid_start_[c]; k < grid_start_[c + 1]; ++k) {
+      const std::uint32_t i = grid_edges_[k];
+      if (i == skip_a || i == skip_b) continue;
+      if (segments_intersect(q, p, edges_[i].a, edges_[i].b)) return false;
+    }
+    return true;
+  });
 }
 
 std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, double max_distance_m) const {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <numbers>
 #include <random>
 
 #include "mapping/polygon_map.hpp"
@@ -152,12 +154,16 @@ std::vector<TypedMultiPolygon> oracle_maps() {
   std::mt19937_64 rng(17);
   for (int k = 0; k < 3; ++k) maps.push_back(scanned_map(mapping::testing::random_room(14, 10, 8, rng), 14, 10, 40, 100 + k));
   maps.push_back(scanned_map(mapping::testing::rock_field(12, 12, 2.0, rng), 12, 12, 40, 7));
+  // Several polygons (the C-space is offset polygon by polygon): two rooms
+  // touching at a corner, one with a pillar, and a third room apart.
+  maps.push_back({typed_polygon(rectangle(0, 0, 5, 4)), typed_polygon(rectangle(5, 4, 9, 8), {rectangle_hole(6, 5, 7, 6)}),
+                  typed_polygon(rectangle(10, 0, 14, 3))});
   // Hand-drawn: two halls joined by a 0.8 m wide, 3 m long passage; a pillar.
   maps.push_back({typed_polygon(
       RingSpec{{Point(0, 0), Point(12, 0), Point(12, 3), Point(7.4, 3), Point(7.4, 6), Point(12, 6), Point(12, 9),
                 Point(0, 9), Point(0, 6), Point(6.6, 6), Point(6.6, 3), Point(0, 3)}, {}},
       {rectangle_hole(3, 1.3, 3.4, 1.7)})});
-  return maps;
+  return maps;  // the hand-drawn halls last (ClipperOffsetKeepsAPassageTheRobotFitsThroughOpen)
 }
 
 double min_distance_to_edges(const Point& p, const TypedMultiPolygon& map) {
@@ -370,6 +376,66 @@ TEST(ConfigurationSpace, SegmentFreeAgreesWithEveryEdge) {
   }
   EXPECT_GT(free, 2000);
   EXPECT_GT(blocked, 2000);
+}
+
+// The reflex nodes against the definition: every reflex vertex (a right turn)
+// moved interior_offset_m along the bisector of its edges' left normals (the
+// step longer at sharp corners, capped), kept when that point is inside
+// (bg::covered_by) and at least half the offset from the boundary. The
+// builder decides "inside" from the few millimetres the step crosses, not
+// from the whole map: this checks it decides the same.
+TEST(ConfigurationSpace, ReflexNodesAreTheVerticesMovedInsideAlongTheirBisectors) {
+  CSpaceOptions options;
+  options.robot_radius_m = 0.27;
+  const double delta = options.interior_offset_m;
+  // And a drawn map where the step from a corner lands in something else:
+  // a pillar, and a diamond 0.2 mm beyond its corner (6, 6) across the
+  // bisector, taken as it is (no offset, no simplification).
+  const double k = std::numbers::sqrt2 / 2.0;
+  auto beyond = [&](double t, double s) { return Point(6.0 + t * k - s * k, 6.0 + t * k + s * k); };
+  const TypedMultiPolygon touching{typed_polygon(
+      rectangle(0, 0, 10, 10),
+      {rectangle_hole(4, 4, 6, 6), RingSpec{{beyond(2e-4, 0.5), beyond(1.0002, 0.5), beyond(1.0002, -0.5), beyond(2e-4, -0.5)}, {}}})};
+  CSpaceOptions as_drawn = options;
+  as_drawn.robot_radius_m = as_drawn.clearance_margin_m = as_drawn.simplify_epsilon_m = 0.0;
+  std::vector<std::pair<TypedMultiPolygon, CSpaceOptions>> cases;
+  for (const auto& map : oracle_maps()) cases.emplace_back(map, options);
+  cases.emplace_back(touching, as_drawn);
+  int checked = 0, refused = 0;
+  for (const auto& [map, map_options] : cases) {
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, map_options).ok);
+    std::map<std::uint32_t, Point> nodes;
+    for (std::size_t k = 0; k < cs.reflex_nodes().size(); ++k) nodes.emplace(cs.reflex_edges()[k], cs.reflex_nodes()[k]);
+    for (std::uint32_t i = 0; i < cs.edges().size(); ++i) {
+      const auto& in = cs.edges()[i];
+      const auto& out = cs.edges()[in.next];
+      const double ux = in.b.x() - in.a.x(), uy = in.b.y() - in.a.y(), vx = out.b.x() - out.a.x(),
+                   vy = out.b.y() - out.a.y();
+      const double lu = std::hypot(ux, uy), lv = std::hypot(vx, vy);
+      if (!((ux * vy - uy * vx) / (lu * lv) < -1e-9)) {
+        EXPECT_EQ(nodes.count(i), 0u) << "a node at a vertex that is not reflex";
+        continue;
+      }
+      const double sx = -uy / lu - vy / lv, sy = ux / lu + vx / lv, len = std::hypot(sx, sy);
+      if (len < 1e-9) continue;  // a spike: the edges run back on themselves
+      const double step = delta / std::max(len / 2.0, 0.1);
+      const Point expected(in.b.x() + step * sx / len, in.b.y() + step * sy / len);
+      bool inside = false;
+      for (const auto& polygon : cs.polygons()) inside = inside || boost::geometry::covered_by(expected, polygon.geometry);
+      const bool kept = inside && cs.distance_to_boundary(expected) >= 0.5 * delta;
+      ASSERT_EQ(nodes.count(i), kept ? 1u : 0u) << expected.x() << "," << expected.y();
+      refused += inside ? 0 : 1;
+      if (kept) {
+        EXPECT_DOUBLE_EQ(nodes[i].x(), expected.x());
+        EXPECT_DOUBLE_EQ(nodes[i].y(), expected.y());
+        EXPECT_EQ(cs.piece_of(nodes[i]), static_cast<int>(in.polygon));
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 200);
+  EXPECT_GE(refused, 1);  // the pillar's corner at least
 }
 
 }  // namespace

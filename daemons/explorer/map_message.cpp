@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <map>
+#include <string>
 #include <vector>
 
 #include <pex/polygon_ring_t.hpp>
@@ -137,7 +138,10 @@ DecodedMap decode_map(const pex::polygon_map_t& msg, const MapDecodeOptions& opt
       polygon.geometry.inners().push_back(closed(h));
       polygon.edge_types.push_back(h.types);
     }
-    if (!mapping::is_valid(polygon)) {
+    // The cheap sufficient test first: Boost's is_valid over every polygon
+    // of every MAP is costly on big maps.
+    std::string why;
+    if (!mapping::types_match_rings(polygon) || !mapping::is_valid_cheap_first({&polygon, 1}, why)) {
       ++out.polygons_dropped;
       continue;
     }

@@ -13,6 +13,7 @@
 // CPU time per plan (p50 / p99 / max) and the slowest maps' utimes: the plan-time
 // benchmark on a real mission's maps (docs/exploration.md, "Planning time").
 #include <algorithm>
+#include <cstring>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -64,6 +65,15 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   std::vector<Timed> timed;
   std::size_t bad_maps = 0, failed = 0;  // failed: no plan at all (Plan::error), not merely no goal
   std::optional<pex::planning::GoalFocus> focus;
+  // FNV-1a over every plan's candidates (positions, reachability, costs and
+  // paths, bit for bit) and best: a change of the planner that only makes it
+  // faster must leave it as it was.
+  std::uint64_t digest = 14695981039346656037ull;
+  auto mix = [&](double v) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    for (int k = 0; k < 8; ++k) digest = (digest ^ ((bits >> (8 * k)) & 0xffu)) * 1099511628211ull;
+  };
   bool logged_goals = false;  // EXPLORE_STATE seen: its goal is the focus
   for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
     if (e->channel == pex::runtime::channels::kLidarScan) {
@@ -104,6 +114,17 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
       const auto result = pex::planning::compute_plan(request);
       const double cpu_ms = pex::explorer::thread_cpu_ms() - started;
       if (!result.plan.ok) ++failed;
+      for (const auto& c : result.plan.candidates) {
+        mix(c.position.x());
+        mix(c.position.y());
+        mix(c.reachable ? 1.0 : 0.0);
+        mix(c.cost);
+        for (const auto& q : c.path) {
+          mix(q.x());
+          mix(q.y());
+        }
+      }
+      mix(static_cast<double>(result.plan.best));
       timed.push_back({cpu_ms, m.utime, pex::mapping::vertex_count(decoded.polygons)});
       if (logged_goals) continue;
       const auto& candidates = result.plan.candidates;
@@ -129,6 +150,8 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   auto quantile = [&](double q) { return ms[static_cast<std::size_t>(q * static_cast<double>(ms.size() - 1))]; };
   std::printf("strategy %s: %zu plans (%zu failed), %zu MAP messages refused; maps up to %zu vertices\n",
               pex::planning::to_string(planner.strategy), timed.size(), failed, bad_maps, most_vertices);
+  std::printf("plans digest %016llx (the same log and planner give the same)\n",
+              static_cast<unsigned long long>(digest));
   std::printf("plan CPU ms: p50 %.2f  p90 %.2f  p99 %.2f  max %.2f\n", quantile(0.5), quantile(0.9), quantile(0.99),
               ms.back());
   std::sort(timed.begin(), timed.end(), [](const Timed& a, const Timed& b) { return a.cpu_ms > b.cpu_ms; });
