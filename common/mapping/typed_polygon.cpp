@@ -121,6 +121,13 @@ bool clearly_apart(const SweepEdge& e, const SweepEdge& f, double clearance) {
   if (((c1 > 0 && c2 < 0) || (c1 < 0 && c2 > 0)) && ((c3 > 0 && c4 < 0) || (c3 < 0 && c4 > 0)))
     return false;  // proper crossing
   const double d2 = clearance * clearance;
+  // Most pairs the sweep brings are far apart: each end farther than the
+  // clearance from the other's line (c = length x distance) is farther from
+  // the segment too, and without a crossing the segments' distance is that of
+  // an end. No division for them.
+  const double ex = e.b.x() - e.a.x(), ey = e.b.y() - e.a.y(), fx = f.b.x() - f.a.x(), fy = f.b.y() - f.a.y();
+  const double e_len2 = ex * ex + ey * ey, f_len2 = fx * fx + fy * fy;
+  if (c1 * c1 > d2 * e_len2 && c2 * c2 > d2 * e_len2 && c3 * c3 > d2 * f_len2 && c4 * c4 > d2 * f_len2) return true;
   return segment_distance_sq(f.a, e.a, e.b) > d2 && segment_distance_sq(f.b, e.a, e.b) > d2 &&
          segment_distance_sq(e.a, f.a, f.b) > d2 && segment_distance_sq(e.b, f.a, f.b) > d2;
 }
