@@ -50,9 +50,11 @@ struct CSpaceOptions {
   bool boost_offset = false;
 };
 
-// The free space shrunk by distance_m (> 0): Minkowski offset with round
-// joins of at least `points_per_circle` vertices per full circle and chords
-// within 1 mm of the arc (a chord cuts into the clearance), computed by Clipper
+// The free space (interior-disjoint polygons: each is offset on its own, as
+// its C-space depends on its own rings only) shrunk by distance_m (> 0):
+// Minkowski offset with round joins of at least `points_per_circle` vertices
+// per full circle and chords within 1 mm of the arc (a chord cuts into the
+// clearance), computed by Clipper
 // (ClipperLib::ClipperOffset, on a 10 um integer grid), each output edge
 // typed as the map edge it was offset from (mapping::assign_types), or, with
 // type_edges false, typed kObstacle. The same set as
