@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <map>
-#include <string>
 #include <vector>
 
 #include <pex/polygon_ring_t.hpp>
@@ -138,10 +137,7 @@ DecodedMap decode_map(const pex::polygon_map_t& msg, const MapDecodeOptions& opt
       polygon.geometry.inners().push_back(closed(h));
       polygon.edge_types.push_back(h.types);
     }
-    // The cheap sufficient test first: Boost's is_valid over every polygon
-    // of every MAP is costly on big maps.
-    std::string why;
-    if (!mapping::types_match_rings(polygon) || !mapping::is_valid_cheap_first({&polygon, 1}, why)) {
+    if (!mapping::is_valid(polygon)) {
       ++out.polygons_dropped;
       continue;
     }
