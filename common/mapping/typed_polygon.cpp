@@ -89,14 +89,16 @@ struct SweepEdge {
 // 1.74: a notch of 1.9e-7 m in a 2 m box, of 1.7e-5 m in a 200 m box, is a
 // spike or a self-intersection to it, wherever the box lies), so a feature of
 // 2e-9 m that this test passed was a spike to Boost (the typed_ops fuzz
-// finding). The clearance is 4e-8 of the box's side: at 1e-7 and more, the
-// float rounding of scan end points (about 1e-6 m at 10 m) sends most tiles
-// to bg::is_valid (+68 % instructions per insert, which it then accepts), at
-// 4e-8 +0.6 %. Between the two, this test and Boost can still disagree: the
-// exact (snap-rounded) overlay of issue 16 is what closes it. And at least
-// 1e-7 m whatever the box: Boost's side test has an absolute floor too (a
-// triangle of 3e-9 m with a 25 degree corner was a spike to it, the fuzzer's
-// next finding); it costs nothing measurable on real inserts.
+// finding). The clearance is 4e-8 of the box's side, not 1e-7: the float
+// rounding of scan end points (about 1e-6 m at 10 m) puts many tiles'
+// features near it, and what this test cannot show goes to bg::is_valid,
+// which accepts them at a price. Even at 4e-8 that price is large on some
+// maps: the rock-field insert benchmark is about 45 % slower than with
+// 1e-9 m (docs/mapping.md, "A regression found"). Between 4e-8 and 1e-7,
+// this test and Boost can still disagree: the exact (snap-rounded) overlay
+// of issue 16 is what closes both. And at least 1e-7 m whatever the box:
+// Boost's side test has an absolute floor too (a triangle of 3e-9 m with a
+// 25 degree corner was a spike to it, the fuzzer's next finding).
 constexpr double kMinClearance = 1e-7;       // m
 constexpr double kRelativeClearance = 4e-8;  // of the larger side of the box of what is checked
 
