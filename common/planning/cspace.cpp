@@ -412,14 +412,20 @@ int ConfigurationSpace::cell_y(double y) const {
 
 bool ConfigurationSpace::segment_free(const Point& a, const Point& b) const {
   ++segment_tests_;
+  return meets_no_edge_but(a, b, kNoEdge, kNoEdge);
+}
+
+bool ConfigurationSpace::meets_no_edge_but(const Point& a, const Point& b, std::uint32_t skip_a,
+                                           std::uint32_t skip_b) const {
   if (grid_nx_ == 0) return true;
   // Only the edges listed in the cells along the segment (some twice; the
   // answer is the same): the rtree's segment query was most of the path
   // matrix's time.
   return for_cells_along(a, b, [&](std::size_t c) {
     for (std::uint32_t k = grid_start_[c]; k < grid_start_[c + 1]; ++k) {
-      const Edge& e = edges_[grid_edges_[k]];
-      if (segments_intersect(a, b, e.a, e.b)) return false;
+      const std::uint32_t i = grid_edges_[k];
+      if (i == skip_a || i == skip_b) continue;
+      if (segments_intersect(a, b, edges_[i].a, edges_[i].b)) return false;
     }
     return true;
   });
@@ -458,22 +464,9 @@ std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t ed
   // whole map, for every reflex vertex. Anything else on the way (another
   // ring touching q, a spike) goes to covers().
   const std::uint32_t skip_a = edge, skip_b = at_vertex_b ? edges_[edge].next : edge;
-  if (!spike && step_meets_no_other_edge(q, candidate, skip_a, skip_b)) return candidate;
+  if (!spike && meets_no_edge_but(q, candidate, skip_a, skip_b)) return candidate;
   if (!covers(candidate)) return std::nullopt;
   return candidate;
-}
-
-bool ConfigurationSpace::step_meets_no_other_edge(const Point& q, const Point& p, std::uint32_t skip_a,
-                                                 std::uint32_t skip_b) const {
-  if (grid_nx_ == 0) return false;
-  return for_cells_along(q, p, [&](std::size_t c) {
-    for (std::uint32_t k = grid_start_[c]; k < grid_start_[c + 1]; ++k) {
-      const std::uint32_t i = grid_edges_[k];
-      if (i == skip_a || i == skip_b) continue;
-      if (segments_intersect(q, p, edges_[i].a, edges_[i].b)) return false;
-    }
-    return true;
-  });
 }
 
 std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, double max_distance_m) const {

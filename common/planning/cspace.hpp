@@ -130,8 +130,10 @@ class ConfigurationSpace {
   using Tree = boost::geometry::index::rtree<Value, boost::geometry::index::rstar<16>>;
 
   std::optional<Point> inward(const Point& q, std::uint32_t edge, bool at_vertex_b) const;
-  // True if the segment q-p meets no boundary edge but skip_a and skip_b.
-  bool step_meets_no_other_edge(const Point& q, const Point& p, std::uint32_t skip_a, std::uint32_t skip_b) const;
+  // True if the segment a-b meets no boundary edge but skip_a and skip_b
+  // (kNoEdge: none skipped), looking at the grid cells along it.
+  static constexpr std::uint32_t kNoEdge = 0xffffffffu;
+  bool meets_no_edge_but(const Point& a, const Point& b, std::uint32_t skip_a, std::uint32_t skip_b) const;
   void build_grid();
   template <class Fn>
   bool for_cells_along(const Point& a, const Point& b, Fn&& fn) const;
