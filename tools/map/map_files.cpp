@@ -169,9 +169,9 @@ pex::polygon_map_t from_geojson(std::string_view text) {
         ring.y.push_back(y);
         const std::string type = types[i].is_string() ? types[i].get<std::string>() : "";
         if (type == "obstacle")
-          ring.edge_type.push_back(pex::polygon_ring_t::EDGE_OBSTACLE);
+          ring.edge_type.push_back(std::int8_t{pex::polygon_ring_t::EDGE_OBSTACLE});
         else if (type == "frontier")
-          ring.edge_type.push_back(pex::polygon_ring_t::EDGE_FRONTIER);
+          ring.edge_type.push_back(std::int8_t{pex::polygon_ring_t::EDGE_FRONTIER});
         else
           fail(ring_where, "edge " + std::to_string(i) + ": type is not \"obstacle\" or \"frontier\"");
       }
