@@ -304,11 +304,116 @@ std::size_t memory_bytes(const TypedMultiPolygon& polygons) {
 
 namespace {
 
+// Edges shorter than this share of the RDP tolerance are merged into a
+// neighbour before RDP, which keeps every vertex where the type changes: an
+// overlay of nearly collinear edges (a wall seen again) leaves pieces of
+// 1e-9 to 1e-6 m between crossings that change the type, and such a piece
+// is below the clearance `is_clearly_valid` can vouch for, so each tile with
+// one went to bg::is_valid (docs/mapping.md, "Short edges"). Merging moves
+// the boundary by less than the piece's length, well within RDP's epsilon.
+constexpr double kShortEdgeShareOfEpsilon = 1e-3;
+
+// The ring's n distinct vertices (ring[0..n-1]) and their n edge types,
+// without the edges shorter than min_edge_m where that is possible without
+// moving a vertex of a border edge (tile borders must stay where they are,
+// shared with the neighbour tile): a short edge's start is dropped, so the
+// edge before it reaches its end with its own type; else its end is dropped
+// and the edge after it starts at the short edge's start with its own type.
+// The short edge's type is lost, which at well below epsilon is nothing.
+// A short edge between two border edges that meet at a corner of the box
+// (a scan edge passing within nanometres of a tile corner cuts it off) is
+// replaced by the corner: the two border edges are extended to it. The
+// corner's coordinates are those of the border edges' lines, exact.
+template <class ShortEdge>
+void cut_off_corners(std::vector<Point>& points, std::vector<EdgeType>& types, ShortEdge&& short_edge) {
+  const std::size_t m = points.size();
+  if (m < 5) return;
+  constexpr EdgeType kB = EdgeType::kBorder;
+  std::size_t at = m;  // at most one per pass: rare, and indices stay simple
+  Point corner;
+  for (std::size_t i = 0; i < m && at == m; ++i) {
+    const std::size_t h = (i + m - 1) % m, j = (i + 1) % m, k = (j + 1) % m;
+    if (types[h] != kB || types[i] == kB || types[j] != kB || !short_edge(points[i], points[j])) continue;
+    const Point &a = points[h], &p = points[i], &q = points[j], &r = points[k];
+    if (a.y() == p.y() && q.x() == r.x()) {
+      corner = Point(q.x(), p.y());
+    } else if (a.x() == p.x() && q.y() == r.y()) {
+      corner = Point(p.x(), q.y());
+    } else {
+      continue;
+    }
+    at = i;
+  }
+  if (at == m) return;
+  const std::size_t j = (at + 1) % m;
+  points[at] = corner;
+  types[at] = kB;
+  points.erase(points.begin() + static_cast<std::ptrdiff_t>(j));
+  types.erase(types.begin() + static_cast<std::ptrdiff_t>(j));
+}
+
+void drop_short_edges(const Ring& ring, const std::vector<EdgeType>& types, double min_edge_m,
+                      std::vector<Point>& points, std::vector<EdgeType>& point_types) {
+  const std::size_t n = ring.size() - 1;
+  const double min2 = min_edge_m * min_edge_m;
+  auto short_edge = [&](const Point& a, const Point& b) {
+    const double dx = b.x() - a.x(), dy = b.y() - a.y();
+    return dx * dx + dy * dy < min2;
+  };
+  points.clear();
+  point_types.clear();
+  // Start at a vertex whose two edges are long: it stays first and is never
+  // dropped, so the pass below needs no wrap-around.
+  std::size_t anchor = n;
+  for (std::size_t i = 0; i < n && anchor == n; ++i)
+    if (!short_edge(ring[(i + n - 1) % n], ring[i]) && !short_edge(ring[i], ring[i + 1])) anchor = i;
+  if (anchor == n) {  // every vertex has a short edge: nothing to anchor on, kept as it is
+    points.assign(ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(n));
+    point_types.assign(types.begin(), types.begin() + static_cast<std::ptrdiff_t>(n));
+    return;
+  }
+  auto try_drop = [&](bool closing) {
+    // The edge points[m-2] -> points[m-1] (or, closing, points[m-1] -> points[0]).
+    const std::size_t m = points.size();
+    const std::size_t from = closing ? m - 1 : m - 2;
+    const Point& to = closing ? points[0] : points[m - 1];
+    if (!short_edge(points[from], to)) return false;
+    const EdgeType before = point_types[from - 1], edge = point_types[from];
+    if (before != EdgeType::kBorder && edge != EdgeType::kBorder && (!closing || m > 3)) {
+      points.erase(points.begin() + static_cast<std::ptrdiff_t>(from));
+      point_types.erase(point_types.begin() + static_cast<std::ptrdiff_t>(from));
+      return true;
+    }
+    if (closing) return false;  // its end is the anchor, which stays
+    if (edge != EdgeType::kBorder && point_types[m - 1] != EdgeType::kBorder) {
+      point_types[m - 2] = point_types[m - 1];
+      points.pop_back();
+      point_types.pop_back();
+      return true;
+    }
+    return false;
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = (anchor + k) % n;
+    points.push_back(ring[i]);
+    point_types.push_back(types[i]);
+    while (points.size() >= 3 && try_drop(false)) {
+    }
+  }
+  while (points.size() > 3 && try_drop(true)) {
+  }
+  cut_off_corners(points, point_types, short_edge);
+}
+
 // Simplifies one closed ring given as n distinct vertices with n edge types.
 // Returns false if the ring would collapse below 3 vertices.
-bool simplify_ring(const Ring& ring, const std::vector<EdgeType>& types, double epsilon_m,
+bool simplify_ring(const Ring& input_ring, const std::vector<EdgeType>& input_types, double epsilon_m,
                    Ring& out_ring, std::vector<EdgeType>& out_types) {
-  const std::size_t n = ring.size() - 1;
+  if (input_ring.size() < 5) return false;
+  thread_local std::vector<Point> kept_points;
+  thread_local std::vector<EdgeType> types;
+  drop_short_edges(input_ring, input_types, kShortEdgeShareOfEpsilon * epsilon_m, kept_points, types);
+  const std::size_t n = kept_points.size();
   if (n < 4) return false;
   // Work on an unrolled copy starting at a type change (or at 0 for a uniform
   // ring), so every run is a contiguous range.
@@ -328,7 +433,7 @@ bool simplify_ring(const Ring& ring, const std::vector<EdgeType>& types, double 
   points.resize(n + 1);
   t.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    points[i] = ring[(start + i) % n];
+    points[i] = kept_points[(start + i) % n];
     t[i] = types[(start + i) % n];
   }
   points[n] = points[0];

@@ -72,6 +72,51 @@ TEST(TypedPolygon, SimplifyKeepsTheInputWhenTheResultWouldBeInvalid) {
   EXPECT_GT(area(s), 0.0);
 }
 
+// Pieces far below epsilon where the type changes (an overlay of nearly
+// collinear edges leaves them) are merged into a neighbour, never moving a
+// vertex of a border edge; a piece cutting off a corner between two border
+// edges is replaced by the corner.
+TEST(TypedPolygon, SimplifyMergesPiecesFarBelowEpsilonAtTypeChanges) {
+  // Bottom side: obstacle, a 2e-8 m frontier piece, obstacle; right side
+  // frontier, top obstacle, left border.
+  const auto p = make({{0, 0}, {2, 0}, {2 + 2e-8, 1e-9}, {4, 0}, {4, 4}, {0, 4}},
+                      {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kBorder});
+  const auto s = simplify_typed({p}, 0.01);
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_TRUE(is_clearly_valid(s));  // before: the piece was below its clearance
+  EXPECT_EQ(vertex_count(s), 4u);
+  EXPECT_NEAR(edge_length(s, E::kObstacle), 8.0, 1e-6);
+  EXPECT_NEAR(edge_length(s, E::kFrontier), 4.0, 1e-6);
+  EXPECT_DOUBLE_EQ(edge_length(s, E::kBorder), 4.0);  // the border vertices did not move
+  // Without the merge RDP would keep both ends of the piece (a type change).
+  const auto unmerged = simplify_typed({p}, 1e-12);
+  EXPECT_EQ(vertex_count(unmerged), 6u);
+}
+
+TEST(TypedPolygon, SimplifyKeepsBorderVerticesAndRestoresACutOffCorner) {
+  // A tile [0, 4]^2 whose free polygon misses a 1e-8 m triangle at (0, 0):
+  // border, border, a frontier piece across the corner, border.
+  const auto cut = make({{1e-8, 0}, {4, 0}, {4, 4}, {0, 4}, {0, 1e-8}},
+                        {E::kBorder, E::kBorder, E::kBorder, E::kBorder, E::kFrontier});
+  const auto s = simplify_typed({cut}, 0.01);
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_TRUE(is_clearly_valid(s));
+  EXPECT_EQ(vertex_count(s), 4u);
+  EXPECT_DOUBLE_EQ(edge_length(s, E::kBorder), 16.0);
+  EXPECT_DOUBLE_EQ(bg::area(s[0].geometry), 16.0);  // the corner is exactly (0, 0)
+  // A short piece between a border edge and another type: the border
+  // vertex stays where it is, the piece's other end goes.
+  const auto side = make({{0, 0}, {4, 0}, {4, 4}, {2e-8, 4}, {0, 4 - 1e-8}},
+                         {E::kObstacle, E::kBorder, E::kBorder, E::kFrontier, E::kObstacle});
+  const auto t = simplify_typed({side}, 0.01);
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_TRUE(is_valid(t));
+  bool border_corner_kept = false;
+  for (const auto& v : t[0].geometry.outer()) border_corner_kept |= v.x() == 2e-8 && v.y() == 4.0;
+  EXPECT_TRUE(border_corner_kept);
+  EXPECT_EQ(vertex_count(t), 4u);
+}
+
 TEST(TypedPolygon, UniformTypeCoversHoles) {
   Polygon g;
   bg::read_wkt("POLYGON((0 0,10 0,10 10,0 10,0 0),(2 2,2 4,4 4,4 2,2 2))", g);
