@@ -517,6 +517,13 @@ TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsil
     bool ok = simplify_ring(polygon.geometry.outer(), polygon.edge_types[0], epsilon_m,
                             simplified.geometry.outer(), simplified.edge_types[0]);
     for (std::size_t k = 0; ok && k < polygon.geometry.inners().size(); ++k) {
+      // A hole smaller than the shortest edge kept (a speck an overlay cut
+      // between crossings) goes: it is no obstacle, and only Boost could
+      // check it (docs/mapping.md, "Short edges").
+      const Box hole_box = bg::return_envelope<Box>(polygon.geometry.inners()[k]);
+      if (std::max(hole_box.max_corner().x() - hole_box.min_corner().x(),
+                   hole_box.max_corner().y() - hole_box.min_corner().y()) < kShortEdgeShareOfEpsilon * epsilon_m)
+        continue;
       Ring inner;
       std::vector<EdgeType> inner_types;
       if (simplify_ring(polygon.geometry.inners()[k], polygon.edge_types[1 + k], epsilon_m,
@@ -530,6 +537,7 @@ TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsil
         simplified.edge_types[simplified.geometry.inners().size()] = polygon.edge_types[1 + k];
       }
     }
+    simplified.edge_types.resize(1 + simplified.geometry.inners().size());  // less the holes dropped
     if (!ok) {
       // A small outer ring (< 4 vertices or collapsing) is kept as it was.
       out.push_back(polygon);

@@ -117,6 +117,23 @@ TEST(TypedPolygon, SimplifyKeepsBorderVerticesAndRestoresACutOffCorner) {
   EXPECT_EQ(vertex_count(t), 4u);
 }
 
+TEST(TypedPolygon, SimplifyDropsAHoleSmallerThanTheShortestEdgeKept) {
+  // A room with a 1.3 um speck of a hole (types kept from the overlay that
+  // cut it) and a 1 m pillar.
+  auto room = make({{0, 0}, {10, 0}, {10, 10}, {0, 10}}, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle});
+  room.geometry.inners().push_back(Ring{{5, 5}, {5 + 1e-6, 5 + 1.3e-6}, {5 + 1e-6, 5}, {5, 5}});
+  room.edge_types.push_back({E::kObstacle, E::kFrontier, E::kFrontier});
+  room.geometry.inners().push_back(Ring{{2, 2}, {2, 3}, {3, 3}, {3, 2}, {2, 2}});
+  room.edge_types.push_back({E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
+  ASSERT_TRUE(is_valid(TypedMultiPolygon{room}));
+  const auto s = simplify_typed({room}, 0.01);
+  ASSERT_EQ(s.size(), 1u);
+  ASSERT_EQ(s[0].geometry.inners().size(), 1u);
+  EXPECT_EQ(s[0].edge_types.size(), 2u);
+  EXPECT_DOUBLE_EQ(bg::area(s[0].geometry), 99.0);
+  EXPECT_TRUE(is_clearly_valid(s));
+}
+
 TEST(TypedPolygon, UniformTypeCoversHoles) {
   Polygon g;
   bg::read_wkt("POLYGON((0 0,10 0,10 10,0 10,0 0),(2 2,2 4,4 4,4 2,2 2))", g);
