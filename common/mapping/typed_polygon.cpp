@@ -313,13 +313,6 @@ namespace {
 // the boundary by less than the piece's length, well within RDP's epsilon.
 constexpr double kShortEdgeShareOfEpsilon = 1e-3;
 
-// The ring's n distinct vertices (ring[0..n-1]) and their n edge types,
-// without the edges shorter than min_edge_m where that is possible without
-// moving a vertex of a border edge (tile borders must stay where they are,
-// shared with the neighbour tile): a short edge's start is dropped, so the
-// edge before it reaches its end with its own type; else its end is dropped
-// and the edge after it starts at the short edge's start with its own type.
-// The short edge's type is lost, which at well below epsilon is nothing.
 // A short edge between two border edges that meet at a corner of the box
 // (a scan edge passing within nanometres of a tile corner cuts it off) is
 // replaced by the corner: the two border edges are extended to it. The
@@ -352,6 +345,14 @@ void cut_off_corners(std::vector<Point>& points, std::vector<EdgeType>& types, S
   types.erase(types.begin() + static_cast<std::ptrdiff_t>(j));
 }
 
+// The ring's n distinct vertices (ring[0..n-1]) and their n edge types,
+// without the edges shorter than min_edge_m where that is possible without
+// moving a vertex of a border edge (tile borders must stay where they are,
+// shared with the neighbour tile): a short edge's start is dropped, so the
+// edge before it reaches its end with its own type; else its end is dropped
+// and the edge after it starts at the short edge's start with its own type.
+// The short edge's type is lost, which at well below epsilon is nothing.
+// Then cut_off_corners.
 void drop_short_edges(const Ring& ring, const std::vector<EdgeType>& types, double min_edge_m,
                       std::vector<Point>& points, std::vector<EdgeType>& point_types) {
   const std::size_t n = ring.size() - 1;

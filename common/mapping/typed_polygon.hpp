@@ -122,6 +122,11 @@ void for_each_edge(const TypedMultiPolygon& polygons, Fn&& fn) {
 // Ramer-Douglas-Peucker on every ring, never across a change of edge type: a
 // ring is cut into runs of equal type and each run is simplified with its
 // end points fixed, so an obstacle edge is never merged with a frontier edge.
+// Before that, edges shorter than 1e-3 epsilon_m are merged into a neighbour
+// (their type is lost; a vertex of a border edge never moves, except that a
+// short edge cutting off a corner between two border edges becomes that
+// corner), and holes whose box is smaller than that are dropped. The
+// boundary moves by at most epsilon_m.
 // A simplification that would make a polygon invalid is not applied to that
 // polygon (it is kept as it was). epsilon_m <= 0 returns the input unchanged.
 // check_each_polygon = false skips that per-polygon check, for callers that
