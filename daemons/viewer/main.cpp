@@ -70,10 +70,13 @@ int main(int argc, char** argv) {
 
         // The page's buttons: MISSION_CMD, as pex-mission sends it.
         node.watch_fd(web->command_fd(), [&node, web] {
+          // Copies (std::int8_t{...}): the pair constructor takes references,
+          // and the generated constants have no definition to refer to.
+          using C = pex::mission_cmd_t;
           static const std::map<std::string, std::int8_t> kCodes = {
-              {"start", pex::mission_cmd_t::CMD_START}, {"pause", pex::mission_cmd_t::CMD_PAUSE},
-              {"resume", pex::mission_cmd_t::CMD_RESUME}, {"home", pex::mission_cmd_t::CMD_HOME},
-              {"stop", pex::mission_cmd_t::CMD_STOP}};
+              {"start", std::int8_t{C::CMD_START}}, {"pause", std::int8_t{C::CMD_PAUSE}},
+              {"resume", std::int8_t{C::CMD_RESUME}}, {"home", std::int8_t{C::CMD_HOME}},
+              {"stop", std::int8_t{C::CMD_STOP}}};
           for (const auto& name : web->take_commands()) {
             pex::mission_cmd_t cmd{};
             cmd.utime = node.now_utime();

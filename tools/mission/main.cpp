@@ -38,10 +38,15 @@ bool applied(pex::planning::MissionCommand command, Phase phase) {
   return false;
 }
 
+// Subscribed through a plain function (subscribeFunction), not a member
+// function pointer: GCC's UBSan misreads LCM 1.3's member-pointer dispatch
+// (lcm-cpp-impl.hpp) as a member access at address 0x1, which fails the
+// sanitizer build (scripts/test.sh --sanitize).
 struct StateListener {
-  void on_state(const lcm::ReceiveBuffer*, const std::string&, const pex::explore_state_t* s) {
-    state = *s;
-    heard = true;
+  static void on_state(const lcm::ReceiveBuffer*, const std::string&, const pex::explore_state_t* s,
+                       StateListener* self) {
+    self->state = *s;
+    self->heard = true;
   }
   pex::explore_state_t state{};
   bool heard = false;
@@ -75,7 +80,7 @@ int main(int argc, char** argv) {
     return EX_UNAVAILABLE;
   }
   StateListener listener;
-  lcm.subscribe(std::string(pex::runtime::channels::kExploreState), &StateListener::on_state, &listener);
+  lcm.subscribeFunction(std::string(pex::runtime::channels::kExploreState), &StateListener::on_state, &listener);
   const pex::explore_state_t& state = listener.state;
   const bool& heard = listener.heard;
 
