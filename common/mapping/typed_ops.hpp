@@ -25,12 +25,13 @@ struct TypedOpOptions {
   // turns it off for intermediate results and checks each tile once at the
   // end of an insert instead (validity checks cost as much as the overlay).
   bool validate = true;
-  // With validate: typed_union also checks its output together with the
-  // operands' polygons it copied unchanged that come near it (a copy touching
-  // an edge the overlay moved by its 1e-9 m snapping can overlap it). false:
-  // the copies are not looked at (the explorer's live view, a planning-only
-  // overlay whose rings Clipper's offset unions anyway: the check was a
-  // quarter of a campus plan's time).
+  // With validate: typed_union checks its whole result again (the
+  // overlay's output with every polygon it copied unchanged and every hole
+  // it put back), since the overlay's 1e-9 m snapping can tilt an edge onto
+  // a copy and Boost's verdict depends on the box it checks. false: copies
+  // are not looked at (the explorer's live view, a planning-only overlay
+  // whose rings Clipper's offset unions anyway: the check was a quarter of a
+  // campus plan's time).
   bool validate_copies = true;
   // true: typed_union, typed_clip and typed_difference use Boost.Geometry's
   // overlay and the reassignment pass instead of the edge overlay (the
