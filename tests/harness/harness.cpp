@@ -77,7 +77,8 @@ Process::Process(std::vector<std::string> argv, std::string log_path)
   if (pid_ == 0) {
     // The daemon dies with the test: a test that aborts (a failed sanitizer
     // check, a crash) runs no destructor, and its daemons went on for ever
-    // (117 of them once, filling the machine's memory).
+    // (117 of them once, filling the machine's memory). The signal follows
+    // the forking *thread*: start daemons from the test's own thread.
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (::getppid() != parent) ::_exit(127);  // the test died before prctl
     ::dup2(log_fd, 1);
