@@ -233,7 +233,15 @@ void Cia402Master::handle(const Frame& frame, std::int64_t now_us) {
         // Configured from the start even when already Operational (a restarted
         // master finds its drives running): the watchdog is ours to set.
         set_phase(*node, Phase::kConfiguring, now_us);
-        if (*state == NmtState::kBootUp) node->statusword_seen = false;
+        if (*state == NmtState::kBootUp) {
+          // A restarted drive's encoder counts from zero again: the position
+          // from before is not a reading of the new counter. Until its first
+          // new TPDO the odometry has no position of it (a stale one became
+          // the new baseline and the robot jumped back 5 cm: the sanitizer
+          // run's Hardware.DriverStopsOnBusErrors..., 1 run in 3).
+          node->statusword_seen = false;
+          node->position_seen = false;
+        }
       } else if (node->phase == Phase::kStarting && operational) {
         set_phase(*node, Phase::kEnabling, now_us);
       } else if ((node->phase == Phase::kEnabling || node->phase == Phase::kReady) && !operational) {

@@ -169,6 +169,10 @@ TEST(Cia402, PowerCycledNodeIsReconfigured) {
   bus.run(1, {100, 100});
   EXPECT_EQ(bus.master_.nodes()[0].restarts, 1u);
   EXPECT_FALSE(bus.master_.all_ready());
+  // Its position from before the restart is no reading of the new counter:
+  // none until the drive sends one again (the odometry re-baselines on it).
+  EXPECT_FALSE(bus.master_.nodes()[0].position_seen);
+  EXPECT_TRUE(bus.master_.nodes()[1].position_seen);
   bus.run(40, {100, 100});
   EXPECT_TRUE(bus.master_.all_ready());
   EXPECT_EQ(bus.nodes_[0].mode(), kModeProfileVelocity);
