@@ -55,10 +55,6 @@ function(pex_add_gtest name)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
-  if(NOT ARG_LABELS)
-    # Unlabeled = a unit test: what scripts/test.sh --sanitize builds and runs.
-    set_property(GLOBAL APPEND PROPERTY PEX_UNIT_TESTS ${name})
-  endif()
   set(props TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
   if(ARG_NETNS)
     # Tests that run daemons in real time get the machine to themselves under

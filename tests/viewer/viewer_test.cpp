@@ -10,12 +10,10 @@
 //     pages beyond max_clients refused.
 // Every wait ends on a state (the page's DOM, the bus); the budgets are
 // simulated seconds. PEX_VIEWER_SCREENSHOT=FILE.png saves the page mid-mission.
-#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <limits>
 #include <set>
 #include <thread>
 
