@@ -8,6 +8,21 @@
 
 namespace pex::mapping {
 
+namespace {
+
+// How many times a changed polygon the cheap check cannot clear is
+// simplified again, each time with a quarter of the tolerance before, the
+// last time not at all. RDP can fold a small ring (a rock's hole whose
+// short edge changes type turns into a bow-tie once its neighbours go) or
+// bring it within the clearance of another; a finer tolerance keeps the
+// vertices that held it apart. Without this, such a layer went to
+// bg::is_valid, and a polygon refused there was stored unsimplified, its
+// short pieces sending every later check of the tile to Boost again
+// (docs/mapping.md, "Finer RDP where the check fails").
+constexpr int kFinerSimplifications = 3;
+
+}  // namespace
+
 bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double epsilon_m, std::string& why) {
   // The kept polygons that can meet the changed ones go right after them:
   // boxes overlap (RDP keeps a subset of the vertices, so a simplified
@@ -28,15 +43,34 @@ bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double ep
                std::any_of(boxes.begin(), boxes.end(), [&](const Box& b) { return !bg::disjoint(b, box); });
       });
   const std::span<const TypedPolygon> checked(layer.data(), static_cast<std::size_t>(last_neighbour - layer.begin()));
-  if (epsilon_m > 0.0 && changed > 0) {
-    const TypedMultiPolygon original(layer.begin(), first_kept);
-    for (const bool check_each_polygon : {false, true}) {
-      TypedMultiPolygon simplified = simplify_typed(original, epsilon_m, check_each_polygon);
-      std::move(simplified.begin(), simplified.end(), layer.begin());  // one polygon for each
-      if (is_valid_cheap_first(checked, why)) return true;
+  if (epsilon_m <= 0.0 || changed == 0) return is_valid_cheap_first(checked, why);
+  // Swapped: the layer gets the simplified polygons (one for each), and
+  // `original` what came, without a copy.
+  TypedMultiPolygon original = simplify_typed(std::span(layer.data(), changed), epsilon_m, false);
+  std::swap_ranges(original.begin(), original.end(), layer.begin());
+  std::vector<int> finer(changed, 0);  // how often each changed polygon was simplified again
+  for (;;) {
+    UnclearPolygons unclear;
+    if (is_clearly_valid(checked, &unclear)) return true;
+    const std::size_t named[2] = {unclear.first, unclear.second};
+    bool again = false;
+    for (std::size_t i = 0; i < (named[0] == named[1] ? 1u : 2u); ++i) {
+      const std::size_t k = named[i];
+      if (k >= changed || finer[k] == kFinerSimplifications) continue;  // a kept one is not ours to change
+      const double epsilon = ++finer[k] < kFinerSimplifications ? epsilon_m / (1 << (2 * finer[k])) : 0.0;
+      layer[k] = epsilon > 0.0 ? std::move(simplify_typed(std::span(&original[k], 1), epsilon, false).front())
+                               : original[k];
+      again = true;
     }
-    std::move(original.begin(), original.end(), layer.begin());
+    if (!again) break;
   }
+  // What the cheap check cannot clear (rings touching at a point, features
+  // near Boost's tolerance, a kept neighbour's own) bg::is_valid decides.
+  if (is_valid_cheap_first(checked, why)) return true;
+  TypedMultiPolygon simplified = simplify_typed(original, epsilon_m, true);  // each polygon kept valid
+  std::move(simplified.begin(), simplified.end(), layer.begin());
+  if (is_valid_cheap_first(checked, why)) return true;
+  std::move(original.begin(), original.end(), layer.begin());
   return is_valid_cheap_first(checked, why);
 }
 

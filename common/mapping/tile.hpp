@@ -16,11 +16,14 @@ namespace pex::mapping {
 // equal type, then one validity check of them together with the other
 // polygons (kept: unchanged, valid, interior-disjoint from the changed ones
 // before RDP) whose boxes meet theirs: RDP moves a boundary by up to
-// epsilon_m, so a simplified polygon can cross a kept neighbour. If the
-// simplified polygons are not valid so, RDP polygon by polygon (each keeping
-// its own validity), then no RDP. False, with the reason in `why`, if none
-// of them is valid (the changed polygons are then as they came). The kept
-// polygons are reordered (those near the changed ones first) but not changed.
+// epsilon_m, so a simplified polygon can cross a kept neighbour. A changed
+// polygon is_clearly_valid cannot clear is simplified again with a finer
+// tolerance (epsilon_m / 4, / 16, then not at all) until it can; what it
+// still cannot clear bg::is_valid decides. If that is not valid, RDP polygon
+// by polygon (each keeping its own validity), then no RDP. False, with the
+// reason in `why`, if none of them is valid (the changed polygons are then as
+// they came). The kept polygons are reordered (those near the changed ones
+// first) but not changed.
 bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double epsilon_m, std::string& why);
 
 // One square of the map. An insert writes free and obstacles; the planning

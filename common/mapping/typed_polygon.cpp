@@ -136,31 +136,39 @@ bool clearly_apart(const SweepEdge& e, const SweepEdge& f, double clearance) {
 
 }  // namespace
 
-bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
+bool is_clearly_valid(std::span<const TypedPolygon> polygons, UnclearPolygons* unclear) {
   // Scratch kept per thread: this runs on every insert and merge.
   thread_local std::vector<const Ring*> rings;
+  thread_local std::vector<std::size_t> ring_polygon;  // the polygon of each ring
   thread_local std::vector<SweepEdge> edges;
   rings.clear();
+  ring_polygon.clear();
   edges.clear();
-  for (const auto& polygon : polygons) {
+  auto fail = [&](std::size_t first, std::size_t second) {
+    if (unclear) *unclear = {first, second};
+    return false;
+  };
+  for (std::size_t k = 0; k < polygons.size(); ++k) {
+    const auto& polygon = polygons[k];
     const std::size_t first_ring = rings.size();
     rings.push_back(&polygon.geometry.outer());
     for (const auto& inner : polygon.geometry.inners()) rings.push_back(&inner);
+    ring_polygon.resize(rings.size(), k);
     for (std::size_t r = first_ring; r < rings.size(); ++r) {
       const Ring& ring = *rings[r];
-      if (ring.size() < 4 || !bg::equals(ring.front(), ring.back())) return false;
+      if (ring.size() < 4 || !bg::equals(ring.front(), ring.back())) return fail(k, k);
       // Orientation: outer counter-clockwise (positive), holes clockwise.
       double twice_area = 0.0;
       for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
         const Point &a = ring[i], &b = ring[i + 1];
-        if (!std::isfinite(a.x()) || !std::isfinite(a.y())) return false;
-        if (a.x() == b.x() && a.y() == b.y()) return false;
+        if (!std::isfinite(a.x()) || !std::isfinite(a.y())) return fail(k, k);
+        if (a.x() == b.x() && a.y() == b.y()) return fail(k, k);
         twice_area += a.x() * b.y() - b.x() * a.y();
         edges.push_back({a, b, std::min(a.x(), b.x()), std::max(a.x(), b.x()), std::min(a.y(), b.y()),
                          std::max(a.y(), b.y()), static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(i),
                          static_cast<std::uint32_t>(ring.size() - 1)});
       }
-      if ((r == first_ring) != (twice_area > 0.0)) return false;
+      if ((r == first_ring) != (twice_area > 0.0)) return fail(k, k);
     }
   }
   double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x, min_y = min_x, max_y = -min_x;
@@ -188,11 +196,11 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
           const double d2 = clearance * clearance;
           if (segment_distance_sq(second.b, first.a, first.b) <= d2 ||
               segment_distance_sq(first.a, second.a, second.b) <= d2)
-            return false;
+            return fail(ring_polygon[e.ring], ring_polygon[e.ring]);
           continue;
         }
       }
-      if (!clearly_apart(e, f, clearance)) return false;
+      if (!clearly_apart(e, f, clearance)) return fail(ring_polygon[e.ring], ring_polygon[f.ring]);
     }
   }
   // No ring meets another, so rings are nested or apart; one vertex decides.
@@ -212,9 +220,9 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
   for (std::size_t k = 0; k < polygon_rings.size(); ++k) {
     const auto [first, last] = polygon_rings[k];
     for (std::size_t h = first + 1; h < last; ++h) {
-      if (!inside(first, rings[h]->front())) return false;  // hole outside its outer ring
+      if (!inside(first, rings[h]->front())) return fail(k, k);  // hole outside its outer ring
       for (std::size_t g = first + 1; g < last; ++g)
-        if (g != h && inside(g, rings[h]->front())) return false;  // hole in a hole
+        if (g != h && inside(g, rings[h]->front())) return fail(k, k);  // hole in a hole
     }
     // Another polygon inside this one must sit in one of its holes.
     for (std::size_t m = 0; m < polygon_rings.size(); ++m) {
@@ -223,7 +231,7 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons) {
       if (!inside(first, p)) continue;
       bool in_hole = false;
       for (std::size_t h = first + 1; h < last && !in_hole; ++h) in_hole = inside(h, p);
-      if (!in_hole) return false;
+      if (!in_hole) return fail(k, m);
     }
   }
   return true;
@@ -507,9 +515,9 @@ void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t l
   }
 }
 
-TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsilon_m,
+TypedMultiPolygon simplify_typed(std::span<const TypedPolygon> polygons, double epsilon_m,
                                  bool check_each_polygon) {
-  if (epsilon_m <= 0.0) return polygons;
+  if (epsilon_m <= 0.0) return TypedMultiPolygon(polygons.begin(), polygons.end());
   TypedMultiPolygon out;
   out.reserve(polygons.size());
   for (const auto& polygon : polygons) {

@@ -82,7 +82,14 @@ inline bool ray_crosses(const Point& p, const Point& a, const Point& b) {
 // spike (typed_polygon.cpp). false means "not shown": the caller asks bg::is_valid, which
 // also accepts rings touching at points. Used where validity is checked on
 // every insert (PolygonMap); tests keep bg::is_valid (is_valid above).
-bool is_clearly_valid(std::span<const TypedPolygon> polygons);
+// When it returns false and `unclear` is given, *unclear names the polygons
+// (indices into `polygons`) of the first feature it could not clear: the
+// same index twice for one polygon alone (a short edge, a crossing of its
+// own rings), two for a pair too close to each other.
+struct UnclearPolygons {
+  std::size_t first = 0, second = 0;
+};
+bool is_clearly_valid(std::span<const TypedPolygon> polygons, UnclearPolygons* unclear = nullptr);
 // is_clearly_valid first; what it cannot show (rings touching at points,
 // features near Boost's tolerance) bg::is_valid decides, saying why in `why`
 // when invalid. Edge types are not looked at.
@@ -131,7 +138,7 @@ void for_each_edge(const TypedMultiPolygon& polygons, Fn&& fn) {
 // polygon (it is kept as it was). epsilon_m <= 0 returns the input unchanged.
 // check_each_polygon = false skips that per-polygon check, for callers that
 // check the whole result anyway (PolygonMap: is_valid is the costliest step).
-TypedMultiPolygon simplify_typed(const TypedMultiPolygon& polygons, double epsilon_m,
+TypedMultiPolygon simplify_typed(std::span<const TypedPolygon> polygons, double epsilon_m,
                                  bool check_each_polygon = true);
 
 // Indices of the points RDP keeps from points[first..last] (both kept).

@@ -46,7 +46,7 @@ TEST(TypedPolygon, SimplifyRemovesCollinearVerticesWithinOneType) {
   const auto p = make({{0, 0}, {1, 0.001}, {2, 0}, {3, -0.001}, {4, 0}, {4, 4}, {0, 4}},
                       {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier,
                        E::kObstacle, E::kObstacle});
-  const auto s = simplify_typed({p}, 0.01);
+  const auto s = simplify_typed(TypedMultiPolygon{p}, 0.01);
   ASSERT_EQ(s.size(), 1u);
   EXPECT_EQ(vertex_count(s), 4u);
   EXPECT_TRUE(is_valid(s));
@@ -57,7 +57,7 @@ TEST(TypedPolygon, SimplifyNeverMergesAcrossATypeChange) {
   // Collinear bottom side whose middle vertex separates obstacle from frontier.
   const auto p = make({{0, 0}, {2, 0}, {4, 0}, {4, 4}, {0, 4}},
                       {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle});
-  const auto s = simplify_typed({p}, 0.5);
+  const auto s = simplify_typed(TypedMultiPolygon{p}, 0.5);
   EXPECT_EQ(vertex_count(s), 5u);
   EXPECT_NEAR(edge_length(s, E::kFrontier), 2.0, 1e-12);
   EXPECT_NEAR(edge_length(s, E::kObstacle), 14.0, 1e-12);
@@ -67,7 +67,7 @@ TEST(TypedPolygon, SimplifyKeepsTheInputWhenTheResultWouldBeInvalid) {
   // A thin spike: RDP with a large tolerance would collapse the ring.
   const auto p = make({{0, 0}, {10, 0}, {10, 0.01}, {0, 0.02}},
                       {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
-  const auto s = simplify_typed({p}, 1.0);
+  const auto s = simplify_typed(TypedMultiPolygon{p}, 1.0);
   EXPECT_TRUE(is_valid(s));
   EXPECT_GT(area(s), 0.0);
 }
@@ -81,7 +81,7 @@ TEST(TypedPolygon, SimplifyMergesPiecesFarBelowEpsilonAtTypeChanges) {
   // frontier, top obstacle, left border.
   const auto p = make({{0, 0}, {2, 0}, {2 + 2e-8, 1e-9}, {4, 0}, {4, 4}, {0, 4}},
                       {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kBorder});
-  const auto s = simplify_typed({p}, 0.01);
+  const auto s = simplify_typed(TypedMultiPolygon{p}, 0.01);
   ASSERT_EQ(s.size(), 1u);
   EXPECT_TRUE(is_clearly_valid(s));  // before: the piece was below its clearance
   EXPECT_EQ(vertex_count(s), 4u);
@@ -89,7 +89,7 @@ TEST(TypedPolygon, SimplifyMergesPiecesFarBelowEpsilonAtTypeChanges) {
   EXPECT_NEAR(edge_length(s, E::kFrontier), 4.0, 1e-6);
   EXPECT_DOUBLE_EQ(edge_length(s, E::kBorder), 4.0);  // the border vertices did not move
   // Without the merge RDP would keep both ends of the piece (a type change).
-  const auto unmerged = simplify_typed({p}, 1e-12);
+  const auto unmerged = simplify_typed(TypedMultiPolygon{p}, 1e-12);
   EXPECT_EQ(vertex_count(unmerged), 6u);
 }
 
@@ -98,7 +98,7 @@ TEST(TypedPolygon, SimplifyKeepsBorderVerticesAndRestoresACutOffCorner) {
   // border, border, a frontier piece across the corner, border.
   const auto cut = make({{1e-8, 0}, {4, 0}, {4, 4}, {0, 4}, {0, 1e-8}},
                         {E::kBorder, E::kBorder, E::kBorder, E::kBorder, E::kFrontier});
-  const auto s = simplify_typed({cut}, 0.01);
+  const auto s = simplify_typed(TypedMultiPolygon{cut}, 0.01);
   ASSERT_EQ(s.size(), 1u);
   EXPECT_TRUE(is_clearly_valid(s));
   EXPECT_EQ(vertex_count(s), 4u);
@@ -108,7 +108,7 @@ TEST(TypedPolygon, SimplifyKeepsBorderVerticesAndRestoresACutOffCorner) {
   // vertex stays where it is, the piece's other end goes.
   const auto side = make({{0, 0}, {4, 0}, {4, 4}, {2e-8, 4}, {0, 4 - 1e-8}},
                          {E::kObstacle, E::kBorder, E::kBorder, E::kFrontier, E::kObstacle});
-  const auto t = simplify_typed({side}, 0.01);
+  const auto t = simplify_typed(TypedMultiPolygon{side}, 0.01);
   ASSERT_EQ(t.size(), 1u);
   EXPECT_TRUE(is_valid(t));
   bool border_corner_kept = false;
@@ -126,7 +126,7 @@ TEST(TypedPolygon, SimplifyDropsAHoleSmallerThanTheShortestEdgeKept) {
   room.geometry.inners().push_back(Ring{{2, 2}, {2, 3}, {3, 3}, {3, 2}, {2, 2}});
   room.edge_types.push_back({E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
   ASSERT_TRUE(is_valid(TypedMultiPolygon{room}));
-  const auto s = simplify_typed({room}, 0.01);
+  const auto s = simplify_typed(TypedMultiPolygon{room}, 0.01);
   ASSERT_EQ(s.size(), 1u);
   ASSERT_EQ(s[0].geometry.inners().size(), 1u);
   EXPECT_EQ(s[0].edge_types.size(), 2u);
