@@ -1,13 +1,16 @@
-// The shipped worlds/intel.wkt (made by scripts/make-intel-world.sh), read by
-// the simulator's own loader: it parses, its START is clear, and a robot disk
-// (radius 0.25 m, config/sim.toml) cannot leave it.
+// The shipped worlds made from real logs (worlds/intel.wkt, worlds/fr079.wkt,
+// made by scripts/make-log-world.sh), read by the simulator's own loader: each
+// parses, has its building's size, its START is clear, and a robot disk
+// (radius 0.25 m, config/sim.toml) cannot leave it and reaches its rooms.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
+#include <ostream>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "sim/sim.hpp"
@@ -16,13 +19,26 @@ namespace {
 
 using pex::sim::World;
 
-World load_intel() {
-  const std::string path = std::string(PEX_SOURCE_DIR) + "/worlds/intel.wkt";
+// What each building is, from its log: the size of its walls' box and the
+// floor a 0.25 m disk reaches from START (each file's header gives the figure).
+struct LogWorld {
+  const char* name;
+  double min_width_m, max_width_m, min_height_m, max_height_m;
+  double min_reached_m2, max_reached_m2;
+};
+
+std::ostream& operator<<(std::ostream& out, const LogWorld& w) { return out << w.name; }
+
+class LogWorldTest : public ::testing::TestWithParam<LogWorld> {};
+
+World load(const char* name) {
+  const std::string file = std::string(name) + ".wkt";
+  const std::string path = std::string(PEX_SOURCE_DIR) + "/worlds/" + file;
   std::ifstream in(path);
   EXPECT_TRUE(in) << path;
   std::stringstream text;
   text << in.rdbuf();
-  auto result = pex::sim::parse_world(text.str(), "intel.wkt");
+  auto result = pex::sim::parse_world(text.str(), file);
   if (auto* e = std::get_if<pex::sim::WorldError>(&result)) {
     ADD_FAILURE() << e->message;
     return {};
@@ -30,14 +46,14 @@ World load_intel() {
   return std::get<World>(std::move(result));
 }
 
-TEST(IntelWorld, LoadsWithItsSizeAndAClearStart) {
-  const World w = load_intel();
+TEST_P(LogWorldTest, LoadsWithItsSizeAndAClearStart) {
+  const LogWorld& expected = GetParam();
+  const World w = load(expected.name);
   ASSERT_FALSE(w.walls.empty());
-  // The Intel lab is about 30 × 30 m.
-  EXPECT_GT(w.max_x - w.min_x, 25.0);
-  EXPECT_LT(w.max_x - w.min_x, 35.0);
-  EXPECT_GT(w.max_y - w.min_y, 25.0);
-  EXPECT_LT(w.max_y - w.min_y, 35.0);
+  EXPECT_GT(w.max_x - w.min_x, expected.min_width_m);
+  EXPECT_LT(w.max_x - w.min_x, expected.max_width_m);
+  EXPECT_GT(w.max_y - w.min_y, expected.min_height_m);
+  EXPECT_LT(w.max_y - w.min_y, expected.max_height_m);
   EXPECT_GT(w.walls.size(), 1000u);  // ragged, not four straight walls
   pex::sim::RayCaster caster(w);
   for (int k = 0; k < 72; ++k) {
@@ -51,9 +67,10 @@ TEST(IntelWorld, LoadsWithItsSizeAndAClearStart) {
 // The walls rasterised into 5 cm cells, each cell within the robot radius of a
 // wall blocked, then a flood fill from START: the robot's centre never gets to
 // the edge of the world's bounding box (plus a margin), so it cannot leave;
-// and it reaches a few hundred square metres of corridors and rooms.
-TEST(IntelWorld, ARobotDiskCannotLeaveAndReachesTheLab) {
-  const World w = load_intel();
+// and it reaches the building's corridors and rooms.
+TEST_P(LogWorldTest, ARobotDiskCannotLeaveAndReachesTheBuilding) {
+  const LogWorld& expected = GetParam();
+  const World w = load(expected.name);
   ASSERT_FALSE(w.walls.empty());
   constexpr double kCell = 0.05, kRadius = 0.25, kMargin = 1.0;
   const double ox = w.min_x - kMargin, oy = w.min_y - kMargin;
@@ -101,8 +118,19 @@ TEST(IntelWorld, ARobotDiskCannotLeaveAndReachesTheLab) {
   }
   EXPECT_FALSE(escaped);
   const double area = static_cast<double>(cells) * kCell * kCell;
-  EXPECT_GT(area, 250.0);  // the loop corridor and most rooms (the header says about 340 m²)
-  EXPECT_LT(area, 600.0);
+  EXPECT_GT(area, expected.min_reached_m2);
+  EXPECT_LT(area, expected.max_reached_m2);
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    Shipped, LogWorldTest,
+    ::testing::Values(
+        // The Intel lab: about 29 × 29 m; the loop corridor and most rooms
+        // (its header: a disk's centre reaches about 343 m²).
+        LogWorld{"intel", 25.0, 35.0, 25.0, 35.0, 250.0, 600.0},
+        // FR079: a 40 m corridor with offices on both sides, 16 m deep (its
+        // header: about 234 m²).
+        LogWorld{"fr079", 35.0, 45.0, 12.0, 20.0, 180.0, 400.0}),
+    [](const ::testing::TestParamInfo<LogWorld>& info) { return std::string(info.param.name); });
 
 }  // namespace
