@@ -145,7 +145,7 @@ class Overlay {
                     const std::optional<Box>& border_box, const std::optional<EdgeType> (&side_types)[2]) {
     clear();
     add_side(a, 0, side_types[0]);
-    sort_a_points();
+    sort_a_points(b);
     add_side(b, 1, side_types[1]);
     set_meet_box();
     find_splits();
@@ -162,6 +162,7 @@ class Overlay {
   std::vector<Point> a_points_;  // a's vertices by x, for snapping b's
   std::vector<Split> splits_;
   std::vector<std::uint32_t> cell_start_, cell_edges_;  // b's edges by grid cell
+  std::vector<std::uint32_t> tested_by_;                // by edge of b: the edge of a that last met it
   std::vector<Point> vertices_;
   std::vector<std::uint8_t> vertex_sides_;  // bit s: a piece of side s starts or ends here
   // Open-addressing table of vertex ids by exact coordinates (a hash map
@@ -242,8 +243,17 @@ class Overlay {
     }
   }
 
-  void sort_a_points() {
-    for (const auto& e : edges_) a_points_.push_back(e.p);
+  // Only a's vertices within kEps of b's box can take a vertex of b.
+  void sort_a_points(std::span<const RingRef> b) {
+    double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x, min_y = min_x, max_y = -min_x;
+    for (const RingRef& ref : b)
+      for (const Point& p : *ref.ring) {
+        min_x = std::min(min_x, p.x()), max_x = std::max(max_x, p.x());
+        min_y = std::min(min_y, p.y()), max_y = std::max(max_y, p.y());
+      }
+    for (const auto& e : edges_)
+      if (e.p.x() >= min_x - kEps && e.p.x() <= max_x + kEps && e.p.y() >= min_y - kEps && e.p.y() <= max_y + kEps)
+        a_points_.push_back(e.p);
     std::sort(a_points_.begin(), a_points_.end(), [](const Point& l, const Point& r) { return l.x() < r.x(); });
   }
 
@@ -258,10 +268,12 @@ class Overlay {
     return p;
   }
 
-  // Each edge of a meets the edges of b whose boxes overlap its own (within
-  // kEps), found through a uniform grid over both: b's edges are listed in
-  // the cells their boxes cover, and a pair is tested only in the cell that
-  // holds the lower-left corner of the two boxes' overlap, so once.
+  // Each edge of a meets the edges of b that come within kEps of it, found
+  // through a uniform grid over the region where the sides can meet: b's
+  // edges are listed in the cells their kEps-wide band crosses (not every
+  // cell of their box: a long diagonal frontier edge of a scan covers many
+  // more cells than it crosses), each edge of a visits the cells its band
+  // crosses, and a pair met in several cells is tested once (tested_by_).
   void find_splits() {
     if (meet_max_x_ < meet_min_x_ || meet_max_y_ < meet_min_y_) return;
     const double min_x = meet_min_x_, max_x = meet_max_x_, min_y = meet_min_y_, max_y = meet_max_y_;
@@ -271,30 +283,45 @@ class Overlay {
     const double last = n - 1;
     auto col = [&](double x) { return static_cast<int>(std::clamp((x - min_x) / cell_x, 0.0, last)); };
     auto row = [&](double y) { return static_cast<int>(std::clamp((y - min_y) / cell_y, 0.0, last)); };
-    // fn(cell, row, column) for every cell the edge's box (widened by kEps) covers.
+    // fn(cell) for every cell the edge's band (the points within kEps of it)
+    // can reach: row by row, the columns of the part of the edge inside the
+    // row's slab widened by kEps, widened by kEps. The outer rows and
+    // columns reach to infinity (col and row clamp).
     auto for_each_cell = [&](const InputEdge& e, auto&& fn) {
-      for (int r = row(e.min_y - kEps); r <= row(e.max_y + kEps); ++r)
-        for (int c = col(e.min_x - kEps); c <= col(e.max_x + kEps); ++c) fn(static_cast<std::size_t>(r * n + c), r, c);
+      const int first_row = row(e.min_y - kEps), last_row = row(e.max_y + kEps);
+      const double dx = e.q.x() - e.p.x(), dy = e.q.y() - e.p.y();
+      for (int r = first_row; r <= last_row; ++r) {
+        int c0 = col(e.min_x - kEps), c1 = col(e.max_x + kEps);
+        if (first_row != last_row && dy != 0.0) {
+          const double slab_lo = r == 0 ? e.min_y : std::max(e.min_y, min_y + r * cell_y - kEps);
+          const double slab_hi = r == n - 1 ? e.max_y : std::min(e.max_y, min_y + (r + 1) * cell_y + kEps);
+          const double xa = e.p.x() + (slab_lo - e.p.y()) * dx / dy, xb = e.p.x() + (slab_hi - e.p.y()) * dx / dy;
+          c0 = std::max(c0, col(std::min(xa, xb) - kEps));
+          c1 = std::min(c1, col(std::max(xa, xb) + kEps));
+        }
+        for (int c = c0; c <= c1; ++c) fn(static_cast<std::size_t>(r * n + c));
+      }
     };
     build_lists(static_cast<std::size_t>(n * n), cell_start_, cell_edges_, fill_, [&](auto&& emit) {
       for (std::uint32_t k = 0; k < edges_.size(); ++k) {
         const InputEdge& e = edges_[k];
-        if (e.side == 1 && near_meet_box(e)) for_each_cell(e, [&](std::size_t cell, int, int) { emit(cell, k); });
+        if (e.side == 1 && near_meet_box(e)) for_each_cell(e, [&](std::size_t cell) { emit(cell, k); });
       }
     });
+    tested_by_.assign(edges_.size(), kNone);
     for (std::uint32_t k = 0; k < edges_.size(); ++k) {
       const InputEdge& e = edges_[k];
       if (e.side != 0 || !near_meet_box(e)) continue;
-      for_each_cell(e, [&](std::size_t cell, int r, int c) {
+      for_each_cell(e, [&](std::size_t cell) {
         for (std::uint32_t m = cell_start_[cell]; m < cell_start_[cell + 1]; ++m) {
-          const InputEdge& f = edges_[cell_edges_[m]];
+          const std::uint32_t j = cell_edges_[m];
+          if (tested_by_[j] == k) continue;  // met in an earlier cell
+          tested_by_[j] = k;
+          const InputEdge& f = edges_[j];
           if (f.max_x < e.min_x - kEps || f.min_x > e.max_x + kEps || f.max_y < e.min_y - kEps ||
               f.min_y > e.max_y + kEps)
             continue;
-          if (c != std::max(col(e.min_x - kEps), col(f.min_x - kEps)) ||
-              r != std::max(row(e.min_y - kEps), row(f.min_y - kEps)))
-            continue;  // tested in another cell
-          meet(edges_, k, cell_edges_[m], splits_);
+          meet(edges_, k, j, splits_);
         }
       });
     }
