@@ -295,7 +295,11 @@ class Overlay {
         if (first_row != last_row && dy != 0.0) {
           const double slab_lo = r == 0 ? e.min_y : std::max(e.min_y, min_y + r * cell_y - kEps);
           const double slab_hi = r == n - 1 ? e.max_y : std::min(e.max_y, min_y + (r + 1) * cell_y + kEps);
-          const double xa = e.p.x() + (slab_lo - e.p.y()) * dx / dy, xb = e.p.x() + (slab_hi - e.p.y()) * dx / dy;
+          // Parameters clamped to the edge: finite even when dy is so small
+          // that a slope would overflow.
+          const double ta = std::clamp((slab_lo - e.p.y()) / dy, 0.0, 1.0);
+          const double tb = std::clamp((slab_hi - e.p.y()) / dy, 0.0, 1.0);
+          const double xa = e.p.x() + ta * dx, xb = e.p.x() + tb * dx;
           c0 = std::max(c0, col(std::min(xa, xb) - kEps));
           c1 = std::min(c1, col(std::max(xa, xb) + kEps));
         }
