@@ -15,7 +15,13 @@ namespace pex::planning {
 namespace bg = boost::geometry;
 namespace bgi = boost::geometry::index;
 
-double distance(const Point& a, const Point& b) { return std::hypot(a.x() - b.x(), a.y() - b.y()); }
+// Not std::hypot: it guards against overflow that map coordinates (checked
+// finite, far below 1e150) cannot reach, and it was 8 % of a plan's CPU time
+// (perf over `pex-plan --every-map` on a campus mission log).
+double distance(const Point& a, const Point& b) {
+  const double dx = a.x() - b.x(), dy = a.y() - b.y();
+  return std::sqrt(dx * dx + dy * dy);
+}
 
 Point closest_point_on_segment(const Point& p, const Point& a, const Point& b) {
   const double dx = b.x() - a.x(), dy = b.y() - a.y();

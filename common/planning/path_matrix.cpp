@@ -10,12 +10,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// std::hypot is several times slower and needs no guard here (map coordinates).
-double length(const Point& a, const Point& b) {
-  const double dx = b.x() - a.x(), dy = b.y() - a.y();
-  return std::sqrt(dx * dx + dy * dy);
-}
-
 // How far ConfigurationSpace moves a node off the vertex at which `edge`
 // ends (the miter of the two edges' parallels at interior_offset_m, capped as
 // inward() caps it at sharp corners), whether that vertex is reflex or not.
@@ -299,7 +293,7 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
       for (std::uint32_t t = 0; t < count; ++t) {
         const std::uint32_t j = first + t;
         if ((prune && score[t] < 0.0) || !cspace.segment_free(nodes[i], nodes[j])) continue;
-        edges.add(i, j, length(nodes[i], nodes[j]));
+        edges.add(i, j, distance(nodes[i], nodes[j]));
       }
     }
   }
@@ -307,7 +301,7 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
     for (std::uint32_t p = first_point; p < total; ++p) {
       if (prune && corners.drops(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y())) continue;
       if (!cspace.segment_free(nodes[i], nodes[p])) continue;
-      edges.add(i, p, length(nodes[i], nodes[p]));
+      edges.add(i, p, distance(nodes[i], nodes[p]));
     }
   }
   const Graph graph = compress(edges, total);
@@ -337,7 +331,7 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
     }
     if (wanted_count > 0) dijkstra(graph, p, first_point, wanted, wanted_count, dist, parent, settled, touched, heap);
     for (std::uint32_t q = p + 1; q < total; ++q) {
-      const double d = straight[q] ? length(nodes[p], nodes[q]) : dist[q];
+      const double d = straight[q] ? distance(nodes[p], nodes[q]) : dist[q];
       const std::size_t tq = q - first_point - 1;
       if (p == first_point) {
         out.from_start_m[tq] = d;
@@ -404,7 +398,7 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   auto lower_bound_left = [&](std::uint32_t v) {
     if (aim_distance[v] < 0.0) {
       double least = aims.empty() ? 0.0 : kInf;
-      for (const Point& a : aims) least = std::min(least, length(nodes[v], a));
+      for (const Point& a : aims) least = std::min(least, distance(nodes[v], a));
       aim_distance[v] = least;
     }
     return aim_distance[v];
