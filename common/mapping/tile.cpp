@@ -20,6 +20,11 @@ namespace {
 // short pieces sending every later check of the tile to Boost again
 // (docs/mapping.md, "Finer RDP where the check fails").
 constexpr int kFinerSimplifications = 3;
+// At most this many rounds of that per layer, whatever the number of changed
+// polygons: a merge's layer of hundreds of polygons that touch at points
+// (valid, but not clearly so) must not cost a check of the whole layer per
+// polygon before bg::is_valid decides. One or two rounds clear a fold.
+constexpr int kMaxFinerRounds = 6;
 
 }  // namespace
 
@@ -49,9 +54,10 @@ bool simplify_and_check(TypedMultiPolygon& layer, std::size_t changed, double ep
   TypedMultiPolygon original = simplify_typed(std::span(layer.data(), changed), epsilon_m, false);
   std::swap_ranges(original.begin(), original.end(), layer.begin());
   std::vector<int> finer(changed, 0);  // how often each changed polygon was simplified again
-  for (;;) {
+  for (int round = 0;; ++round) {
     UnclearPolygons unclear;
     if (is_clearly_valid(checked, &unclear)) return true;
+    if (round == kMaxFinerRounds) break;
     const std::size_t named[2] = {unclear.first, unclear.second};
     bool again = false;
     for (std::size_t i = 0; i < (named[0] == named[1] ? 1u : 2u); ++i) {

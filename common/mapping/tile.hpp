@@ -18,8 +18,8 @@ namespace pex::mapping {
 // before RDP) whose boxes meet theirs: RDP moves a boundary by up to
 // epsilon_m, so a simplified polygon can cross a kept neighbour. A changed
 // polygon is_clearly_valid cannot clear is simplified again with a finer
-// tolerance (epsilon_m / 4, / 16, then not at all) until it can; what it
-// still cannot clear bg::is_valid decides. If that is not valid, RDP polygon
+// tolerance (epsilon_m / 4, / 16, then not at all) until it can, in at
+// most six rounds; what it still cannot clear bg::is_valid decides. If that is not valid, RDP polygon
 // by polygon (each keeping its own validity), then no RDP. False, with the
 // reason in `why`, if none of them is valid (the changed polygons are then as
 // they came). The kept polygons are reordered (those near the changed ones
