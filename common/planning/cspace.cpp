@@ -3,11 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 
-#include <polyclipping/clipper.hpp>
-
-#include "mapping/edge_reassignment.hpp"
 #include "mapping/typed_ops.hpp"
 
 namespace pex::planning {
@@ -59,99 +55,7 @@ mapping::Box box_of(const Point& a, const Point& b) {
                       Point(std::max(a.x(), b.x()), std::max(a.y(), b.y())));
 }
 
-// Clipper works on integers: 10 um units keep map coordinates up to 10 km in
-// its fast 64-bit range (|c| < 2^30) and round far below interior_offset_m.
-constexpr double kClipperUnitsPerM = 1e5;
-
-ClipperLib::Path to_clipper(const mapping::Ring& ring) {
-  ClipperLib::Path path;
-  path.reserve(ring.size());
-  for (std::size_t i = 0; i + 1 < ring.size(); ++i)  // closed ring: the last point repeats the first
-    path.emplace_back(static_cast<ClipperLib::cInt>(std::llround(ring[i].x() * kClipperUnitsPerM)),
-                      static_cast<ClipperLib::cInt>(std::llround(ring[i].y() * kClipperUnitsPerM)));
-  return path;
-}
-
-mapping::Ring from_clipper(const ClipperLib::Path& path) {
-  mapping::Ring ring;
-  ring.reserve(path.size() + 1);
-  for (const auto& q : path)
-    ring.emplace_back(static_cast<double>(q.X) / kClipperUnitsPerM, static_cast<double>(q.Y) / kClipperUnitsPerM);
-  if (!ring.empty()) ring.push_back(ring.front());
-  return ring;
-}
-
 }  // namespace
-
-mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double distance_m, int points_per_circle,
-                                     bool type_edges) {
-  mapping::TypedOpResult result;
-  if (!(distance_m > 0.0) || points_per_circle < 4) {
-    result.error = "bad offset (distance must be > 0, points_per_circle >= 4)";
-    return result;
-  }
-  // Round joins: Clipper puts their vertices on the arc and takes as many as
-  // keep the chords within ArcTolerance of it. A chord cuts into the
-  // clearance by that much (6 mm with 16 vertices per circle at 0.32 m, where
-  // Boost's joins lost 1-2 mm on the maps of the tests), so the tolerance is
-  // also at most kMaxArcErrorM; the C-space's simplification removes most
-  // of the extra vertices again.
-  constexpr double kMaxArcErrorM = 1e-3;
-  const double delta = distance_m * kClipperUnitsPerM;
-  const double arc_tolerance =
-      std::min(distance_m * (1.0 - std::cos(std::numbers::pi / points_per_circle)), kMaxArcErrorM) * kClipperUnitsPerM;
-  // Polygon by polygon: the polygons of a map are interior-disjoint, and a
-  // point of one is nearer its own boundary than any other polygon's (a
-  // segment to another polygon's edge leaves its own first), so its C-space
-  // depends on its own rings only. Clipper's sweep costs about its scanbeams
-  // times the edges across each, so several small sweeps cost less than one
-  // across the whole map.
-  mapping::MultiPolygon geometry;
-  for (const auto& input : free_space) {
-    ClipperLib::ClipperOffset offset;
-    offset.ArcTolerance = arc_tolerance;
-    ClipperLib::PolyTree tree;
-    try {
-      offset.AddPath(to_clipper(input.geometry.outer()), ClipperLib::jtRound, ClipperLib::etClosedPolygon);
-      for (const auto& hole : input.geometry.inners())
-        offset.AddPath(to_clipper(hole), ClipperLib::jtRound, ClipperLib::etClosedPolygon);
-      offset.Execute(tree, -delta);
-    } catch (const std::exception& e) {
-      result.error = std::string("offset failed: ") + e.what();
-      return result;
-    }
-    // The tree nests outer rings and holes: each outer node with its hole
-    // children is a polygon; an outer node inside a hole is a polygon of its own.
-    std::vector<const ClipperLib::PolyNode*> outers;
-    for (const ClipperLib::PolyNode* node : tree.Childs) outers.push_back(node);
-    for (std::size_t k = 0; k < outers.size(); ++k) {
-      const ClipperLib::PolyNode* outer = outers[k];
-      mapping::Polygon polygon;
-      polygon.outer() = from_clipper(outer->Contour);
-      for (const ClipperLib::PolyNode* hole : outer->Childs) {
-        polygon.inners().push_back(from_clipper(hole->Contour));
-        for (const ClipperLib::PolyNode* inner : hole->Childs) outers.push_back(inner);
-      }
-      // Clipper's orientation (positive area for outer rings) is ours in a
-      // y-up frame; correct() only closes and orders what needs it.
-      bg::correct(polygon);
-      geometry.push_back(std::move(polygon));
-    }
-  }
-  if (!type_edges) {
-    result.polygons = mapping::with_uniform_type(geometry, EdgeType::kObstacle);
-    result.ok = true;
-    return result;
-  }
-  // Each output edge takes the type of the map edge it was offset from.
-  mapping::EdgeTypeIndex index;
-  index.add(free_space);
-  index.build();
-  // The search reaches past distance_m by more than the grid's rounding.
-  result.polygons = mapping::assign_types(geometry, index, distance_m + 1e-3, mapping::TypedOpOptions{}, &result.reassign);
-  result.ok = true;
-  return result;
-}
 
 bool segments_intersect(const Point& p1, const Point& p2, const Point& q1, const Point& q2) {
   const double d1 = orient(q1, q2, p1), d2 = orient(q1, q2, p2);
@@ -172,7 +76,7 @@ double polyline_length(const std::vector<Point>& points) {
 }
 
 ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygon& free_space,
-                                                          const CSpaceOptions& options) {
+                                                          const CSpaceOptions& options, OffsetTileCache* cache) {
   options_ = options;
   polygons_.clear();
   edges_.clear();
@@ -197,9 +101,14 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
 
   const double shrink_m = options.robot_radius_m + options.clearance_margin_m;
   if (shrink_m > 0.0) {
+    InwardOffset how;
+    how.distance_m = shrink_m;
+    how.points_per_circle = options.points_per_circle;
+    how.type_edges = options.edge_types;
+    how.tile_m = options.offset_tile_m;
+    how.tile_min_vertices = options.offset_tile_min_vertices;
     auto offset = options.boost_offset ? mapping::typed_offset(free_space, -shrink_m, options.points_per_circle)
-                                       : offset_inward(free_space, shrink_m, options.points_per_circle,
-                                                       options.edge_types);
+                                       : offset_inward(free_space, how, cache);
     if (!offset.ok) {
       result.error = "offset by the robot radius failed: " + offset.error;
       return result;

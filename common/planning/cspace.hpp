@@ -17,6 +17,7 @@
 
 #include "mapping/typed_ops.hpp"
 #include "mapping/typed_polygon.hpp"
+#include "planning/inward_offset.hpp"
 
 namespace pex::planning {
 
@@ -48,20 +49,12 @@ struct CSpaceOptions {
   // reference the tests compare offset_inward() with; several times slower
   // on ragged real maps.
   bool boost_offset = false;
+  // The offset of a polygon of at least offset_tile_min_vertices is computed
+  // in square tiles of offset_tile_m (0: every polygon whole), which a cache
+  // passed to build() keeps between plans (inward_offset.hpp).
+  double offset_tile_m = 8.0;
+  int offset_tile_min_vertices = 400;
 };
-
-// The free space (interior-disjoint polygons: each is offset on its own, as
-// its C-space depends on its own rings only) shrunk by distance_m (> 0):
-// Minkowski offset with round joins of at least `points_per_circle` vertices
-// per full circle and chords within 1 mm of the arc (a chord cuts into the
-// clearance), computed by Clipper
-// (ClipperLib::ClipperOffset, on a 10 um integer grid), each output edge
-// typed as the map edge it was offset from (mapping::assign_types), or, with
-// type_edges false, typed kObstacle. The same set as
-// mapping::typed_offset(free_space, -distance_m, points_per_circle) up to the
-// placement of the round joins' vertices and the grid.
-mapping::TypedOpResult offset_inward(const TypedMultiPolygon& free_space, double distance_m, int points_per_circle,
-                                     bool type_edges = true);
 
 class ConfigurationSpace {
  public:
@@ -81,8 +74,10 @@ class ConfigurationSpace {
   // Offsets `free_space` (outer rings counter-clockwise, holes clockwise:
   // free space on the left of every edge) inward by the robot radius plus
   // margin. An empty result (the map is narrower than the robot) is ok: the
-  // C-space is simply empty.
-  BuildResult build(const TypedMultiPolygon& free_space, const CSpaceOptions& options);
+  // C-space is simply empty. `cache` (may be null) keeps offset tiles from
+  // one build to the next; the C-space does not depend on it.
+  BuildResult build(const TypedMultiPolygon& free_space, const CSpaceOptions& options,
+                    OffsetTileCache* cache = nullptr);
 
   const TypedMultiPolygon& polygons() const { return polygons_; }
   const std::vector<Edge>& edges() const { return edges_; }

@@ -177,11 +177,18 @@ double min_distance_to_edges(const Point& p, const TypedMultiPolygon& map) {
 // Our offset (Clipper) against the reference (Boost.Geometry's buffer, the
 // C-space before): the same set up to where the round joins put their
 // vertices, the same connected pieces, and every C-space vertex at least the
-// clearance the docs promise from every map edge and inside the map.
-TEST(ConfigurationSpace, ClipperOffsetAgreesWithBoostOnScannedAndDrawnMaps) {
+// clearance the docs promise from every map edge and inside the map. Also
+// with every polygon offset in 1.5 m tiles (a tile's side every few metres
+// of each map).
+class ClipperOffsetAgreesWithBoost : public ::testing::TestWithParam<double> {};
+INSTANTIATE_TEST_SUITE_P(Tiles, ClipperOffsetAgreesWithBoost, ::testing::Values(0.0, 1.5),
+                         [](const auto& info) { return info.param > 0.0 ? std::string("Tiled") : std::string("Whole"); });
+TEST_P(ClipperOffsetAgreesWithBoost, OnScannedAndDrawnMaps) {
   CSpaceOptions options;  // the explorer's
   options.robot_radius_m = 0.27;
   options.clearance_margin_m = 0.05;
+  options.offset_tile_m = GetParam();
+  options.offset_tile_min_vertices = 0;
   const double shrink = options.robot_radius_m + options.clearance_margin_m;
   auto reference_options = options;
   reference_options.boost_offset = true;
@@ -245,6 +252,115 @@ TEST(ConfigurationSpace, ClipperOffsetKeepsAPassageTheRobotFitsThroughOpen) {
   ASSERT_TRUE(cs.build(oracle_maps().back(), options).ok);
   EXPECT_EQ(cs.polygons().size(), 2u);
   EXPECT_NE(cs.piece_of(Point(1, 1.5)), cs.piece_of(Point(11, 7.5)));
+}
+
+mapping::MultiPolygon geometry_of(const mapping::TypedOpResult& offset) {
+  mapping::MultiPolygon g;
+  for (const auto& p : offset.polygons) g.push_back(p.geometry);
+  return g;
+}
+
+// Tiles change nothing but the rounding where their results meet: on every
+// oracle map, offset in 1.5 m tiles (every polygon tiled) and whole, the
+// same set within 10 um times the perimeter, in as many pieces.
+TEST(InwardOffset, TilesGiveTheWholePolygonsOffset) {
+  InwardOffset whole;
+  whole.distance_m = 0.32;
+  whole.type_edges = false;
+  whole.tile_m = 0.0;
+  InwardOffset tiled = whole;
+  tiled.tile_m = 1.5;
+  tiled.tile_min_vertices = 0;
+  int map_index = 0;
+  for (const auto& map : oracle_maps()) {
+    SCOPED_TRACE("map " + std::to_string(map_index++));
+    const auto a = offset_inward(map, whole);
+    const auto b = offset_inward(map, tiled);
+    ASSERT_TRUE(a.ok && b.ok) << a.error << b.error;
+    ASSERT_FALSE(a.polygons.empty());
+    mapping::MultiPolygon diff;
+    boost::geometry::sym_difference(geometry_of(a), geometry_of(b), diff);
+    EXPECT_LT(boost::geometry::area(diff), 1e-5 * boost::geometry::perimeter(geometry_of(a)));
+    EXPECT_EQ(a.polygons.size(), b.polygons.size());
+    EXPECT_TRUE(boost::geometry::is_valid(geometry_of(b)));
+  }
+}
+
+// Two halls joined by a corridor 0.7 m wide (open for 0.32 m: a strip 6 cm
+// wide): straight along the side of two 1 m tiles, or slanted across the
+// sides of many. One piece, tiled as whole; the halls' middles are tiles
+// whose input no wall reaches.
+TEST(InwardOffset, PiecesJoinAcrossTileSides) {
+  const std::vector<TypedMultiPolygon> maps{
+      {typed_polygon(RingSpec{{Point(0, 0), Point(20, 0), Point(20, 20), Point(5.35, 20), Point(5.35, 30),
+                               Point(20, 30), Point(20, 40), Point(0, 40), Point(0, 30), Point(4.65, 30),
+                               Point(4.65, 20), Point(0, 20)},
+                              {}})},
+      {typed_polygon(RingSpec{{Point(0, 0), Point(20, 0), Point(20, 20), Point(10.7826, 20), Point(15.7826, 30),
+                               Point(20, 30), Point(20, 40), Point(0, 40), Point(0, 30), Point(15, 30), Point(10, 20),
+                               Point(0, 20)},
+                              {}})}};
+  for (const auto& map : maps) {
+    InwardOffset how;
+    how.distance_m = 0.32;
+    how.type_edges = false;
+    how.tile_m = 1.0;
+    how.tile_min_vertices = 0;
+    const auto tiled = offset_inward(map, how);
+    ASSERT_TRUE(tiled.ok) << tiled.error;
+    how.tile_m = 0.0;
+    const auto whole = offset_inward(map, how);
+    ASSERT_TRUE(whole.ok) << whole.error;
+    ASSERT_EQ(whole.polygons.size(), 1u);
+    EXPECT_EQ(tiled.polygons.size(), 1u);
+    EXPECT_NEAR(mapping::area(tiled.polygons), mapping::area(whole.polygons), 1e-4);
+    EXPECT_TRUE(boost::geometry::is_valid(geometry_of(tiled)));
+  }
+}
+
+// Maps that grow scan by scan (a 40 m long building, a 10 m laser): with a
+// cache the offset is the one computed afresh, point for point, and most
+// tiles come from the cache, as the map changes only within the laser's
+// reach of the robot.
+TEST(InwardOffset, ACacheKeepsTilesAndChangesNothing) {
+  InwardOffset how;
+  how.distance_m = 0.32;
+  how.type_edges = false;
+  how.tile_m = 2.0;
+  how.tile_min_vertices = 0;
+  OffsetTileCache cache;
+  std::mt19937_64 rng(5);
+  const auto walls = mapping::testing::random_room(40, 10, 8, rng);
+  for (int scans = 20; scans <= 40; scans += 2) {
+    SCOPED_TRACE(std::to_string(scans) + " scans");
+    const auto map = scanned_map(walls, 40, 10, scans, 11);
+    const auto fresh = offset_inward(map, how);
+    const auto kept = offset_inward(map, how, &cache);
+    ASSERT_TRUE(fresh.ok && kept.ok);
+    ASSERT_EQ(fresh.polygons.size(), kept.polygons.size());
+    for (std::size_t i = 0; i < fresh.polygons.size(); ++i) {
+      const auto& f = fresh.polygons[i].geometry;
+      const auto& k = kept.polygons[i].geometry;
+      ASSERT_EQ(f.inners().size(), k.inners().size());
+      auto same = [](const mapping::Ring& x, const mapping::Ring& y) {
+        if (x.size() != y.size()) return false;
+        for (std::size_t j = 0; j < x.size(); ++j)
+          if (x[j].x() != y[j].x() || x[j].y() != y[j].y()) return false;
+        return true;
+      };
+      EXPECT_TRUE(same(f.outer(), k.outer()));
+      for (std::size_t h = 0; h < f.inners().size(); ++h) EXPECT_TRUE(same(f.inners()[h], k.inners()[h]));
+    }
+  }
+  EXPECT_GT(cache.counters().hits, cache.counters().misses);
+  // Entries not used by the last kKeptCalls calls are dropped: after that
+  // many calls on one map, only that map's tiles are kept.
+  const auto last = scanned_map(walls, 40, 10, 20, 11);
+  for (int k = 0; k < OffsetTileCache::kKeptCalls; ++k) ASSERT_TRUE(offset_inward(last, how, &cache).ok);
+  OffsetTileCache alone;
+  ASSERT_TRUE(offset_inward(last, how, &alone).ok);
+  EXPECT_EQ(cache.entries(), alone.entries());
+  EXPECT_GT(alone.entries(), 4u);
 }
 
 // Uniform random points over a map's box grown by 1 m.

@@ -132,15 +132,17 @@ struct GoalFocus {
 // (a live view covers frontiers it has not mapped yet, and its own edges are
 // no walls to see through). The greedy strategy searches paths only as far
 // as the cheapest candidate and those `focus` matches (shortest_paths_to_cheapest);
-// the tour needs them all. Pure and deterministic.
+// the tour needs them all. Deterministic: the plan is a function of the
+// arguments; `offsets` (may be null) keeps the C-space's offset tiles from
+// one plan to the next (inward_offset.hpp) and changes only the time taken.
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable = nullptr,
-                      const GoalFocus* focus = nullptr);
+                      const GoalFocus* focus = nullptr, OffsetTileCache* offsets = nullptr);
 
 // A path from `robot` to `target` (e.g. the mission's start pose) in the
 // C-space of `map`: the plan's one candidate is `target` moved into the
 // C-space (at most candidate_snap_distance_m), best when it is reachable.
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
-                  const PlannerOptions& options);
+                  const PlannerOptions& options, OffsetTileCache* offsets = nullptr);
 
 }  // namespace pex::planning

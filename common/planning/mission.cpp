@@ -53,7 +53,7 @@ const char* to_string(MissionCommand command) {
   return "?";
 }
 
-PlanResult compute_plan(const PlanRequest& request) {
+PlanResult compute_plan(const PlanRequest& request, OffsetTileCache* offsets) {
   PlanResult result;
   result.id = request.id;
   if (!request.map) {
@@ -63,9 +63,11 @@ PlanResult compute_plan(const PlanRequest& request) {
   // The newest scan opens where the robot may drive; the frontiers stay the map's.
   const bool live = request.live_view && !request.live_view->empty();
   const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
-  result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options)
+  result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options,
+                                            offsets)
                              : plan_exploration(*request.map, request.pose, request.blacklist, request.options,
-                                                live ? &opened : nullptr, request.focus ? &*request.focus : nullptr);
+                                                live ? &opened : nullptr, request.focus ? &*request.focus : nullptr,
+                                                offsets);
   return result;
 }
 

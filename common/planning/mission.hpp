@@ -164,8 +164,10 @@ struct PlanResult {
   Plan plan;
 };
 
-// Runs the request: plan_exploration(), or plan_path_to() for `home`. Pure.
-PlanResult compute_plan(const PlanRequest& request);
+// Runs the request: plan_exploration(), or plan_path_to() for `home`. The
+// result is a function of the request; `offsets` (may be null: one per
+// planning thread) keeps the C-space's offset tiles between requests.
+PlanResult compute_plan(const PlanRequest& request, OffsetTileCache* offsets = nullptr);
 
 struct MissionOutput {
   Phase phase = Phase::kIdle;
@@ -323,6 +325,6 @@ class Mission {
 // `plan` runs a request (default compute_plan; a caller may wrap it, e.g. to time it).
 MissionOutput step_with_inline_planning(
     Mission& mission, std::int64_t now_utime,
-    const std::function<PlanResult(const PlanRequest&)>& plan = compute_plan);
+    const std::function<PlanResult(const PlanRequest&)>& plan = [](const PlanRequest& r) { return compute_plan(r); });
 
 }  // namespace pex::planning

@@ -101,7 +101,7 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
       request.live_view = live_view_at(request.pose);
       const auto plan_started = std::chrono::steady_clock::now();
       const double cpu_started = thread_cpu_ms();
-      auto result = planning::compute_plan(request);
+      auto result = planning::compute_plan(request, &inline_offsets_);
       plan_ms_.add(ms_since(plan_started));
       plan_cpu_ms_.add(thread_cpu_ms() - cpu_started);
       return result;

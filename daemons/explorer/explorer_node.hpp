@@ -116,6 +116,7 @@ class ExplorerNode {
   ExplorerOptions options_;
   planning::Mission mission_;
   std::unique_ptr<PlanWorker> worker_;
+  planning::OffsetTileCache inline_offsets_;  // inline planning only: the worker has its own
   planning::MissionOutput last_;
   ExplorerCounters counters_;
   LatencyStats plan_ms_;

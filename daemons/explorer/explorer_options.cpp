@@ -39,6 +39,9 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   cspace.points_per_circle = config.get<int>("points_per_circle", cspace.points_per_circle, in_range(4, 360));
   cspace.simplify_epsilon_m =
       config.get<double>("cspace_simplify_epsilon_m", cspace.simplify_epsilon_m, in_range(0.0, 0.5));
+  cspace.offset_tile_m = config.get<double>("cspace_offset_tile_m", cspace.offset_tile_m, in_range(0.0, 1000.0));
+  cspace.offset_tile_min_vertices = config.get<int>("cspace_offset_tile_min_vertices",
+                                                    cspace.offset_tile_min_vertices, non_negative<int>());
 
   // Goal candidates.
   planner.frontier.sensor_range_m =

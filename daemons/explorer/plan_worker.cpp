@@ -63,7 +63,7 @@ void PlanWorker::run() {
     const double cpu_started = thread_cpu_ms();
     TimedPlanResult timed;
     try {
-      timed.result = planning::compute_plan(request);
+      timed.result = planning::compute_plan(request, &offsets_);
     } catch (const std::exception& e) {
       // The planner's geometry failing is a failed plan, not a dead daemon.
       timed.result = planning::PlanResult{request.id, planning::Plan{}};

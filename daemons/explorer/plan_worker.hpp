@@ -45,6 +45,7 @@ class PlanWorker {
   std::optional<TimedPlanResult> done_;
   bool stop_ = false;
   int event_fd_ = -1;
+  planning::OffsetTileCache offsets_;  // the worker thread's alone
   std::thread thread_;
 };
 
