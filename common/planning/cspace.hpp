@@ -52,7 +52,7 @@ struct CSpaceOptions {
   // The offset of a polygon of at least offset_tile_min_vertices is computed
   // in square tiles of offset_tile_m (0: every polygon whole), which a cache
   // passed to build() keeps between plans (inward_offset.hpp).
-  double offset_tile_m = 8.0;
+  double offset_tile_m = 12.0;
   int offset_tile_min_vertices = 400;
 };
 

@@ -25,13 +25,12 @@ namespace {
 // its fast 64-bit range (|c| < 2^30) and round far below the C-space's
 // interior_offset_m.
 constexpr double kUnitsPerM = 1e5;
-// A tile's result is clipped to the tile grown by this much, so the results
-// of neighbouring tiles overlap and their union joins them whatever the
-// rounding along the side they share.
-constexpr cInt kTileOverlap = 100;  // 1 mm
 // The input of a tile is the polygon clipped to the tile grown by the offset
-// distance, the overlap and this slack (more than the joins' chord error), so
-// nothing outside it reaches the result.
+// distance and this slack (more than the joins' chord error): the erosion of
+// that covers the erosion of the whole polygon within the tile and a little
+// beyond (so the results of neighbouring tiles overlap, and their union
+// joins them whatever the rounding), and nowhere more than it (an erosion
+// of less is less).
 constexpr cInt kInputSlack = 1000;  // 1 cm
 // At most this many tiles over one polygon's box; a larger box (coordinates
 // far beyond a building) is offset whole.
@@ -270,10 +269,10 @@ struct Eroder {
 
   // The polygon's erosion within each tile it reaches, united.
   void tiled(const Paths& rings, const IntBox& box, mapping::MultiPolygon& out) {
-    const cInt grow = delta + kTileOverlap + kInputSlack;  // a tile's input box beyond the tile
-    // Tiles whose result box (the tile grown by the overlap) meets the polygon's box.
-    const cInt i0 = floor_div(box.x0 - kTileOverlap, tile), i1 = floor_div(box.x1 + kTileOverlap, tile);
-    const cInt j0 = floor_div(box.y0 - kTileOverlap, tile), j1 = floor_div(box.y1 + kTileOverlap, tile);
+    const cInt grow = delta + kInputSlack;  // a tile's input box beyond the tile
+    // The tiles that meet the polygon's box.
+    const cInt i0 = floor_div(box.x0, tile), i1 = floor_div(box.x1, tile);
+    const cInt j0 = floor_div(box.y0, tile), j1 = floor_div(box.y1, tile);
     const auto nx = static_cast<std::size_t>(i1 - i0 + 1), ny = static_cast<std::size_t>(j1 - j0 + 1);
     auto tile_box = [&](std::size_t ix, std::size_t iy) {
       const cInt x = (i0 + static_cast<cInt>(ix)) * tile, y = (j0 + static_cast<cInt>(iy)) * tile;
@@ -329,9 +328,9 @@ struct Eroder {
     for (std::size_t iy = 0; iy < ny; ++iy)
       for (std::size_t ix = 0; ix < nx; ++ix) {
         const std::size_t t = iy * nx + ix;
-        const IntBox keep = tile_box(ix, iy).grown(kTileOverlap);
         if (edges[t].empty()) {
-          if (inside[t]) pieces.push_back(keep.ring());  // deep inside: the whole tile
+          // Deep inside: the whole tile, and as far beyond as a neighbour's result reaches.
+          if (inside[t]) pieces.push_back(tile_box(ix, iy).grown(kInputSlack).ring());
           continue;
         }
         std::vector<cInt> key = key_head(1, delta, arc_tolerance);
@@ -344,7 +343,7 @@ struct Eroder {
             pieces.insert(pieces.end(), e->tile.begin(), e->tile.end());
             continue;
           }
-        Paths result = tile_result(rings, tile_box(ix, iy).grown(grow), keep);
+        Paths result = tile_result(rings, tile_box(ix, iy).grown(grow));
         pieces.insert(pieces.end(), result.begin(), result.end());
         if (cache) {
           ++counters->misses;
@@ -359,8 +358,8 @@ struct Eroder {
     append_polygons(tree, out);
   }
 
-  // The erosion of the polygon clipped to `input`, clipped to `keep`.
-  Paths tile_result(const Paths& rings, const IntBox& input, const IntBox& keep) const {
+  // The erosion of the polygon clipped to `input`.
+  Paths tile_result(const Paths& rings, const IntBox& input) const {
     Paths clipped;
     for (const auto& r : rings) {  // the outer ring first, as erode() needs
       const IntBox b = box_of(r);
@@ -374,13 +373,7 @@ struct Eroder {
     if (clipped.empty()) return {};
     Paths eroded;
     erode(clipped, static_cast<double>(delta), arc_tolerance, eroded);
-    if (eroded.empty()) return {};
-    ClipperLib::Clipper clip;
-    clip.AddPaths(eroded, ClipperLib::ptSubject, true);
-    clip.AddPath(keep.ring(), ClipperLib::ptClip, true);
-    Paths result;
-    clip.Execute(ClipperLib::ctIntersection, result, ClipperLib::pftNonZero, ClipperLib::pftNonZero);
-    return result;
+    return eroded;
   }
 };
 

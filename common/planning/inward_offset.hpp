@@ -27,7 +27,7 @@ struct InwardOffset {
   bool type_edges = true;
   // Side of the square tiles (on a grid fixed in the map frame) a polygon of
   // at least tile_min_vertices is offset in; 0: every polygon whole.
-  double tile_m = 8.0;
+  double tile_m = 12.0;
   int tile_min_vertices = 400;
 };
 
@@ -68,9 +68,10 @@ class OffsetTileCache {
 // the Minkowski erosion by a disk, with round joins, computed by Clipper
 // (ClipperLib::ClipperOffset, 10 um grid). A polygon of at least
 // how.tile_min_vertices is cut into tiles of how.tile_m: each tile's result is
-// the erosion of the polygon clipped to the tile grown by more than the
-// distance, clipped to the tile grown by 1 mm, and the tiles' results are
-// united (so pieces join across tile sides). The same set as
+// the erosion of the polygon clipped to the tile grown by the distance and
+// 1 cm, which is the whole polygon's erosion within the tile and a subset of
+// it beyond (an erosion of less is less), and the tiles' results, which
+// overlap, are united (so pieces join across tile sides). The same set as
 // mapping::typed_offset(free_space, -distance_m, points_per_circle) up to the
 // placement of the round joins' vertices and the grid. `cache` (may be null)
 // keeps tile results between calls; the result does not depend on it.
