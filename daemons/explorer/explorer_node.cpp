@@ -83,6 +83,7 @@ void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
   if (auto timed = worker_->take_result()) {
     plan_ms_.add(timed->compute_ms);
     plan_cpu_ms_.add(timed->compute_cpu_ms);
+    offset_tiles_ = timed->offset_tiles;
     mission_.on_plan(timed->result, now_utime);
   }
 }
@@ -104,6 +105,7 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
       auto result = planning::compute_plan(request, &inline_offsets_);
       plan_ms_.add(ms_since(plan_started));
       plan_cpu_ms_.add(thread_cpu_ms() - cpu_started);
+      offset_tiles_ = inline_offsets_.counters();
       return result;
     });
   }

@@ -106,6 +106,10 @@ class ExplorerNode {
     v.total("plan_cpu_us_p99", us(plan_cpu_ms_.quantile(0.99)));
     v.total("control_us_p99", us(control_ms_.quantile(0.99)));
     v.total("control_us_max", us(control_ms_.quantile(1.0)));
+    // The C-space's offset tiles (planning/inward_offset.hpp): taken from the
+    // planning thread's cache, and computed.
+    v.total("offset_tiles_kept", offset_tiles_.hits);
+    v.total("offset_tiles_computed", offset_tiles_.misses);
   }
 
  private:
@@ -117,6 +121,7 @@ class ExplorerNode {
   planning::Mission mission_;
   std::unique_ptr<PlanWorker> worker_;
   planning::OffsetTileCache inline_offsets_;  // inline planning only: the worker has its own
+  planning::OffsetTileCache::Counters offset_tiles_;  // of the cache that ran the newest plan
   planning::MissionOutput last_;
   ExplorerCounters counters_;
   LatencyStats plan_ms_;

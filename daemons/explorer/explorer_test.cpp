@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <optional>
 
 #include "explorer_node.hpp"
@@ -184,6 +185,35 @@ TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {
   broken.rings[0].edge_type[0] = 9;
   EXPECT_THROW(node.on_map(broken, 2'100'000), std::invalid_argument);
   EXPECT_EQ(node.counters().maps_accepted, 1);
+}
+
+// DAEMON_STATUS says how the C-space's offset was had: a replan on the map
+// it planned on before takes its polygon from the planning thread's cache.
+TEST(ExplorerNode, CountsOffsetTilesKeptAndComputed) {
+  struct Totals {
+    std::map<std::string, std::int64_t> values;
+    void total(const std::string& name, std::int64_t value) { values[name] = value; }
+  };
+  ExplorerOptions options;
+  ExplorerNode node(options);
+  pex::pose_t pose{};
+  pose.x = 10;
+  pose.y = 1.5;
+  node.on_map(corridor(), 0);
+  node.on_pose(pose, 0);
+  node.step(0);
+  Totals first;
+  node.visit_counters(first);
+  EXPECT_EQ(first.values.at("offset_tiles_kept"), 0);
+  EXPECT_GE(first.values.at("offset_tiles_computed"), 1);
+  const std::int64_t replan_us = options.mission.replan_period_us + 100'000;
+  node.on_pose(pose, replan_us);
+  node.step(replan_us);
+  Totals second;
+  node.visit_counters(second);
+  ASSERT_GT(second.values.at("plans"), first.values.at("plans"));
+  EXPECT_GE(second.values.at("offset_tiles_kept"), 1);
+  EXPECT_EQ(second.values.at("offset_tiles_computed"), first.values.at("offset_tiles_computed"));
 }
 
 // The laser's scans keep the mission going; a scan without ranges is refused

@@ -71,6 +71,7 @@ void PlanWorker::run() {
     }
     timed.compute_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
     timed.compute_cpu_ms = thread_cpu_ms() - cpu_started;
+    timed.offset_tiles = offsets_.counters();
     {
       std::lock_guard lock(mutex_);
       done_ = std::move(timed);

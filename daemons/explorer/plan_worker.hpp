@@ -18,6 +18,7 @@ struct TimedPlanResult {
   double compute_ms = 0.0;      // wall time of compute_plan (steady clock): the plan's latency
   double compute_cpu_ms = 0.0;  // CPU time of the thread that ran it: the planner's own cost,
                                 // which a loaded machine does not inflate
+  planning::OffsetTileCache::Counters offset_tiles;  // the worker's cache so far, this plan included
 };
 
 // CPU time consumed by the calling thread so far, in ms.
