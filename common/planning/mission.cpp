@@ -529,16 +529,22 @@ void Mission::give_up_goal(const std::string& why) {
 void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   list_frontiers(plan);
   // The same match the planner searched paths for (PlanRequest::focus).
+  // The nearest reachable match: in clutter several candidates match one
+  // goal (its frontier seen past a chair leg, a sliver beside it), and an
+  // unreachable one nearer the goal does not block the goal while another
+  // with a path still sees its frontier. Unreachable only if all are.
   const GoalFocus focus{*goal_, goal_frontier_, options_.goal_match_radius_m};
   int match = -1;
   double match_distance = std::numeric_limits<double>::infinity();
+  bool match_reachable = false;
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
     if (!focus.matches(c)) continue;
     const double d = focus.distance_to(c);
-    if (d < match_distance) {
+    if ((c.reachable && !match_reachable) || (c.reachable == match_reachable && d < match_distance)) {
       match_distance = d;
       match = static_cast<int>(i);
+      match_reachable = c.reachable;
     }
   }
   if (match < 0) {

@@ -310,6 +310,53 @@ TEST(Mission, BlockedGoalIsBlacklisted) {
   EXPECT_LT(out.goal->x(), 1.0);
 }
 
+// In clutter several candidates match the goal being followed; one without
+// a path nearer the goal (a sliver past a chair leg) does not block it while
+// another that matches has a path.
+TEST(Mission, AnUnreachableMatchDoesNotBlockAGoalAReachableMatchStillHas) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  const Point goal = *out.goal;
+  m.on_map(corridor(false, true), kSecond);
+  m.on_pose(Pose2{10.5, 1.5, 0}, kSecond);
+  out = m.step(kSecond + 1);  // replan period reached
+  ASSERT_TRUE(out.plan_request.has_value());
+  PlanResult result = compute_plan(*out.plan_request);
+  int same = -1;
+  for (std::size_t i = 0; i < result.plan.candidates.size(); ++i)
+    if (result.plan.candidates[i].reachable && distance(result.plan.candidates[i].position, goal) < 0.5)
+      same = static_cast<int>(i);
+  ASSERT_GE(same, 0);
+  GoalCandidate sliver = result.plan.candidates[static_cast<std::size_t>(same)];
+  sliver.position = goal;  // nearer the goal than any other
+  sliver.reachable = false;
+  sliver.path.clear();
+  result.plan.candidates.insert(result.plan.candidates.begin(), sliver);
+  if (result.plan.best >= 0) ++result.plan.best;
+  m.on_plan(result, kSecond + 2);
+  out = m.step(kSecond + 3);
+  EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_EQ(m.goal_outcomes().blocked, 0);
+  EXPECT_TRUE(m.blacklist().empty());
+  // With no reachable match left the goal is blocked.
+  m.on_map(corridor(false, true), 2 * kSecond);
+  m.on_pose(Pose2{11, 1.5, 0}, 2 * kSecond);
+  out = m.step(2 * kSecond + 4);
+  ASSERT_TRUE(out.plan_request.has_value());
+  result = compute_plan(*out.plan_request);
+  for (auto& c : result.plan.candidates) {
+    c.reachable = false;
+    c.path.clear();
+  }
+  result.plan.best = -1;
+  m.on_plan(result, 2 * kSecond + 5);
+  m.step(2 * kSecond + 6);
+  EXPECT_EQ(m.goal_outcomes().blocked, 1);
+}
+
 TEST(Mission, FailsAfterRepeatedGoalsWithoutProgress) {
   MissionOptions o = test_options();
   o.max_consecutive_failures = 2;
