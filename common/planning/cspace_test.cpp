@@ -318,6 +318,32 @@ TEST(InwardOffset, PiecesJoinAcrossTileSides) {
   }
 }
 
+// Long edges across many tiles (a comb of 100 teeth 2 m wide and 1 km
+// long): every edge would be listed in some 80 tiles' keys, so the polygon
+// is offset whole (one computed result in the cache), not in 7,000 tiles.
+TEST(InwardOffset, APolygonOfLongEdgesAcrossManyTilesIsOffsetWhole) {
+  std::vector<Point> ring{Point(0, 0), Point(400, 0)};
+  for (int t = 99; t >= 0; --t) {
+    const double x = 4.0 * t;
+    ring.insert(ring.end(), {Point(x + 2, 10), Point(x + 2, 1000), Point(x, 1000), Point(x, 10)});
+  }
+  ring.pop_back();  // (0, 10) -> (0, 0) closes it
+  const TypedMultiPolygon map{typed_polygon(RingSpec{ring, {}})};
+  ASSERT_TRUE(boost::geometry::is_valid(map[0].geometry));
+  ASSERT_GE(mapping::vertex_count(map), 400u);
+  InwardOffset how;
+  how.distance_m = 0.32;
+  how.type_edges = false;
+  how.tile_m = 12.0;
+  how.tile_min_vertices = 0;
+  OffsetTileCache cache;
+  const auto offset = offset_inward(map, how, &cache);
+  ASSERT_TRUE(offset.ok) << offset.error;
+  EXPECT_EQ(cache.counters().misses, 1);
+  EXPECT_EQ(cache.entries(), 1u);
+  EXPECT_GT(mapping::area(offset.polygons), 100 * 1.36 * 990.0 * 0.99);
+}
+
 // Maps that grow scan by scan (a 40 m long building, a 10 m laser): with a
 // cache the offset is the one computed afresh, point for point, and most
 // tiles come from the cache, as the map changes only within the laser's

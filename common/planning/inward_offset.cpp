@@ -35,6 +35,11 @@ constexpr cInt kInputSlack = 1000;  // 1 cm
 // At most this many tiles over one polygon's box; a larger box (coordinates
 // far beyond a building) is offset whole.
 constexpr long long kMaxTiles = 1 << 16;
+// A map's edges are short beside a tile, so each is listed in a few tiles'
+// keys. A polygon whose edges would be listed more than this many times per
+// vertex on average (long edges across many tiles: a map nothing like a
+// building's, or hostile) is offset whole, so the keys' size stays bounded.
+constexpr long double kMaxTilesPerEdge = 32;
 
 Path to_clipper(const mapping::Ring& ring) {
   Path path;
@@ -226,10 +231,32 @@ struct Eroder {
     std::size_t vertices = 0;
     for (const auto& r : rings) vertices += r.size();
     const IntBox box = box_of(rings[0]);
-    if (tile > 0 && vertices >= static_cast<std::size_t>(tile_min_vertices) && tiles_over(box) <= kMaxTiles)
+    if (tile > 0 && vertices >= static_cast<std::size_t>(tile_min_vertices) && tiles_over(box) <= kMaxTiles &&
+        edge_listings(rings) <= kMaxTilesPerEdge * static_cast<long double>(vertices))
       tiled(rings, box, out);
     else
       whole(rings, out);
+  }
+
+  // The edge grown by the tile input's reach.
+  struct EdgeReach {
+    cInt x0, y0, x1, y1;
+  };
+  EdgeReach reach_of(const IntPoint& a, const IntPoint& b) const {
+    const cInt grow = delta + kInputSlack;
+    return {std::min(a.X, b.X) - grow, std::min(a.Y, b.Y) - grow, std::max(a.X, b.X) + grow,
+            std::max(a.Y, b.Y) + grow};
+  }
+  // How many tile keys would list the rings' edges.
+  long double edge_listings(const Paths& rings) const {
+    long double n = 0;
+    for (const auto& r : rings)
+      for (std::size_t k = 0; k < r.size(); ++k) {
+        const EdgeReach e = reach_of(r[k], r[(k + 1) % r.size()]);
+        n += static_cast<long double>(floor_div(e.x1, tile) - floor_div(e.x0, tile) + 1) *
+             static_cast<long double>(floor_div(e.y1, tile) - floor_div(e.y0, tile) + 1);
+      }
+    return n;
   }
 
   long long tiles_over(const IntBox& b) const {
@@ -286,14 +313,13 @@ struct Eroder {
       for (std::size_t k = 0; k < r.size(); ++k) {
         const IntPoint& a = r[k];
         const IntPoint& b = r[(k + 1) % r.size()];
-        const cInt ex0 = std::min(a.X, b.X) - grow, ex1 = std::max(a.X, b.X) + grow;
-        const cInt ey0 = std::min(a.Y, b.Y) - grow, ey1 = std::max(a.Y, b.Y) + grow;
-        const cInt tx0 = std::max(i0, floor_div(ex0, tile)), tx1 = std::min(i1, floor_div(ex1, tile));
-        const cInt ty0 = std::max(j0, floor_div(ey0, tile)), ty1 = std::min(j1, floor_div(ey1, tile));
+        const EdgeReach e = reach_of(a, b);
+        const cInt tx0 = std::max(i0, floor_div(e.x0, tile)), tx1 = std::min(i1, floor_div(e.x1, tile));
+        const cInt ty0 = std::max(j0, floor_div(e.y0, tile)), ty1 = std::min(j1, floor_div(e.y1, tile));
         for (cInt ty = ty0; ty <= ty1; ++ty)
           for (cInt tx = tx0; tx <= tx1; ++tx) {
-            auto& e = edges[static_cast<std::size_t>(ty - j0) * nx + static_cast<std::size_t>(tx - i0)];
-            e.insert(e.end(), {a.X, a.Y, b.X, b.Y});
+            auto& listed = edges[static_cast<std::size_t>(ty - j0) * nx + static_cast<std::size_t>(tx - i0)];
+            listed.insert(listed.end(), {a.X, a.Y, b.X, b.Y});
           }
       }
     // Whether each tile's centre is inside the polygon (non-zero winding):

@@ -67,7 +67,8 @@ class OffsetTileCache {
 // its C-space depends on its own rings only) shrunk by how.distance_m:
 // the Minkowski erosion by a disk, with round joins, computed by Clipper
 // (ClipperLib::ClipperOffset, 10 um grid). A polygon of at least
-// how.tile_min_vertices is cut into tiles of how.tile_m: each tile's result is
+// how.tile_min_vertices (and edges short beside a tile: listed in at most 32
+// tiles per vertex on average) is cut into tiles of how.tile_m: each tile's result is
 // the erosion of the polygon clipped to the tile grown by the distance and
 // 1 cm, which is the whole polygon's erosion within the tile and a subset of
 // it beyond (an erosion of less is less), and the tiles' results, which
