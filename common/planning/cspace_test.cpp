@@ -318,6 +318,19 @@ TEST(InwardOffset, PiecesJoinAcrossTileSides) {
   }
 }
 
+// Coordinates the integer grid cannot hold are refused, not wrapped.
+TEST(InwardOffset, RefusesCoordinatesBeyondItsGrid) {
+  InwardOffset how;
+  how.distance_m = 0.32;
+  EXPECT_TRUE(offset_inward({typed_polygon(rectangle(1e8, 0, 1e8 + 10, 10))}, how).ok);
+  const auto far = offset_inward({typed_polygon(rectangle(1e12, 0, 1e12 + 10, 10))}, how);
+  EXPECT_FALSE(far.ok);
+  EXPECT_NE(far.error.find("beyond"), std::string::npos);
+  auto nan = typed_polygon(rectangle(0, 0, 10, 10));
+  nan.geometry.outer()[1].x(std::nan(""));
+  EXPECT_FALSE(offset_inward({nan}, how).ok);
+}
+
 // Long edges across many tiles (a comb of 100 teeth 2 m wide and 1 km
 // long): every edge would be listed in some 80 tiles' keys, so the polygon
 // is offset whole (one computed result in the cache), not in 7,000 tiles.

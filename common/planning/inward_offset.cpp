@@ -25,6 +25,10 @@ namespace {
 // its fast 64-bit range (|c| < 2^30) and round far below the C-space's
 // interior_offset_m.
 constexpr double kUnitsPerM = 1e5;
+// Coordinates beyond this are refused: in grid units, with a tile's growth
+// and the products of the clipping, they stay far inside 64 bits and
+// Clipper's range (4.6e18).
+constexpr double kMaxAbsCoordinateM = 1e9;
 // The input of a tile is the polygon clipped to the tile grown by the offset
 // distance and this slack (more than the joins' chord error): the erosion of
 // that covers the erosion of the whole polygon within the tile and a little
@@ -439,6 +443,19 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
   // depends on its own rings only. Clipper's sweep costs about its scanbeams
   // times the edges across each, so several small sweeps cost less than one
   // across the whole map.
+  for (const auto& input : free_space) {
+    bool far = false;
+    auto check = [&](const mapping::Ring& ring) {
+      for (const auto& p : ring)
+        far = far || !(std::abs(p.x()) <= kMaxAbsCoordinateM && std::abs(p.y()) <= kMaxAbsCoordinateM);
+    };
+    check(input.geometry.outer());
+    for (const auto& hole : input.geometry.inners()) check(hole);
+    if (far) {
+      result.error = "a coordinate is not finite or beyond 1e9 m";
+      return result;
+    }
+  }
   mapping::MultiPolygon geometry;
   try {
     for (const auto& input : free_space) {

@@ -76,6 +76,7 @@ class OffsetTileCache {
 // mapping::typed_offset(free_space, -distance_m, points_per_circle) up to the
 // placement of the round joins' vertices and the grid. `cache` (may be null)
 // keeps tile results between calls; the result does not depend on it.
+// Refused (ok false, error set): a coordinate not finite or beyond 1e9 m.
 mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_space, const InwardOffset& how,
                                      OffsetTileCache* cache = nullptr);
 
