@@ -437,12 +437,6 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
     ++eroder.cache->call;
   }
 
-  // Polygon by polygon: the polygons of a map are interior-disjoint, and a
-  // point of one is nearer its own boundary than any other polygon's (a
-  // segment to another polygon's edge leaves its own first), so its C-space
-  // depends on its own rings only. Clipper's sweep costs about its scanbeams
-  // times the edges across each, so several small sweeps cost less than one
-  // across the whole map.
   for (const auto& input : free_space) {
     bool far = false;
     auto check = [&](const mapping::Ring& ring) {
@@ -456,6 +450,12 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
       return result;
     }
   }
+  // Polygon by polygon: the polygons of a map are interior-disjoint, and a
+  // point of one is nearer its own boundary than any other polygon's (a
+  // segment to another polygon's edge leaves its own first), so its C-space
+  // depends on its own rings only. Clipper's sweep costs about its scanbeams
+  // times the edges across each, so several small sweeps cost less than one
+  // across the whole map.
   mapping::MultiPolygon geometry;
   try {
     for (const auto& input : free_space) {
