@@ -260,17 +260,23 @@ mapping::MultiPolygon geometry_of(const mapping::TypedOpResult& offset) {
   return g;
 }
 
+// The explorer's offset (0.27 m radius, 0.05 m margin), untyped, in tiles of
+// tile_m (0: whole) for every polygon however few its vertices.
+InwardOffset untyped_offset(double tile_m) {
+  InwardOffset how;
+  how.distance_m = 0.32;
+  how.type_edges = false;
+  how.tile_m = tile_m;
+  how.tile_min_vertices = 0;
+  return how;
+}
+
 // Tiles change nothing but the rounding where their results meet: on every
 // oracle map, offset in 1.5 m tiles (every polygon tiled) and whole, the
 // same set within 10 um times the perimeter, in as many pieces.
 TEST(InwardOffset, TilesGiveTheWholePolygonsOffset) {
-  InwardOffset whole;
-  whole.distance_m = 0.32;
-  whole.type_edges = false;
-  whole.tile_m = 0.0;
-  InwardOffset tiled = whole;
-  tiled.tile_m = 1.5;
-  tiled.tile_min_vertices = 0;
+  const InwardOffset whole = untyped_offset(0.0);
+  const InwardOffset tiled = untyped_offset(1.5);
   int map_index = 0;
   for (const auto& map : oracle_maps()) {
     SCOPED_TRACE("map " + std::to_string(map_index++));
@@ -301,15 +307,9 @@ TEST(InwardOffset, PiecesJoinAcrossTileSides) {
                                Point(0, 20)},
                               {}})}};
   for (const auto& map : maps) {
-    InwardOffset how;
-    how.distance_m = 0.32;
-    how.type_edges = false;
-    how.tile_m = 1.0;
-    how.tile_min_vertices = 0;
-    const auto tiled = offset_inward(map, how);
+    const auto tiled = offset_inward(map, untyped_offset(1.0));
     ASSERT_TRUE(tiled.ok) << tiled.error;
-    how.tile_m = 0.0;
-    const auto whole = offset_inward(map, how);
+    const auto whole = offset_inward(map, untyped_offset(0.0));
     ASSERT_TRUE(whole.ok) << whole.error;
     ASSERT_EQ(whole.polygons.size(), 1u);
     EXPECT_EQ(tiled.polygons.size(), 1u);
@@ -344,11 +344,7 @@ TEST(InwardOffset, APolygonOfLongEdgesAcrossManyTilesIsOffsetWhole) {
   const TypedMultiPolygon map{typed_polygon(RingSpec{ring, {}})};
   ASSERT_TRUE(boost::geometry::is_valid(map[0].geometry));
   ASSERT_GE(mapping::vertex_count(map), 400u);
-  InwardOffset how;
-  how.distance_m = 0.32;
-  how.type_edges = false;
-  how.tile_m = 12.0;
-  how.tile_min_vertices = 0;
+  const InwardOffset how = untyped_offset(12.0);
   OffsetTileCache cache;
   const auto offset = offset_inward(map, how, &cache);
   ASSERT_TRUE(offset.ok) << offset.error;
@@ -362,11 +358,7 @@ TEST(InwardOffset, APolygonOfLongEdgesAcrossManyTilesIsOffsetWhole) {
 // tiles come from the cache, as the map changes only within the laser's
 // reach of the robot.
 TEST(InwardOffset, ACacheKeepsTilesAndChangesNothing) {
-  InwardOffset how;
-  how.distance_m = 0.32;
-  how.type_edges = false;
-  how.tile_m = 2.0;
-  how.tile_min_vertices = 0;
+  const InwardOffset how = untyped_offset(2.0);
   OffsetTileCache cache;
   std::mt19937_64 rng(5);
   const auto walls = mapping::testing::random_room(40, 10, 8, rng);

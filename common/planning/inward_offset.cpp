@@ -147,17 +147,20 @@ Path clip_to_box(const Path& ring, const IntBox& box) {
 
 // Paths (outer ring first: Clipper's offset takes the orientation of the
 // path with the lowest vertex as that of outer rings) shrunk by delta.
-void erode(const Paths& paths, double delta, double arc_tolerance, ClipperLib::PolyTree& tree) {
-  ClipperLib::ClipperOffset offset;
-  offset.ArcTolerance = arc_tolerance;
-  offset.AddPaths(paths, ClipperLib::jtRound, ClipperLib::etClosedPolygon);
-  offset.Execute(tree, -delta);
-}
-void erode(const Paths& paths, double delta, double arc_tolerance, Paths& out) {
+// Out: Paths, or a PolyTree (the rings nested as polygons).
+template <class Out>
+void erode(const Paths& paths, double delta, double arc_tolerance, Out& out) {
   ClipperLib::ClipperOffset offset;
   offset.ArcTolerance = arc_tolerance;
   offset.AddPaths(paths, ClipperLib::jtRound, ClipperLib::etClosedPolygon);
   offset.Execute(out, -delta);
+}
+
+// fn(a, b) for every edge of the rings (closed: the last vertex to the first).
+template <class Fn>
+void for_each_edge(const Paths& rings, Fn&& fn) {
+  for (const auto& r : rings)
+    for (std::size_t k = 0; k < r.size(); ++k) fn(r[k], r[(k + 1) % r.size()]);
 }
 
 std::uint64_t hash_of(const std::vector<cInt>& key) {
@@ -242,24 +245,20 @@ struct Eroder {
       whole(rings, out);
   }
 
-  // The edge grown by the tile input's reach.
-  struct EdgeReach {
-    cInt x0, y0, x1, y1;
-  };
-  EdgeReach reach_of(const IntPoint& a, const IntPoint& b) const {
-    const cInt grow = delta + kInputSlack;
-    return {std::min(a.X, b.X) - grow, std::min(a.Y, b.Y) - grow, std::max(a.X, b.X) + grow,
-            std::max(a.Y, b.Y) + grow};
+  // How far a tile's input box reaches beyond the tile.
+  cInt input_reach() const { return delta + kInputSlack; }
+  // The edge's box grown by that reach: the tiles it meets list the edge.
+  IntBox reach_of(const IntPoint& a, const IntPoint& b) const {
+    return IntBox{std::min(a.X, b.X), std::min(a.Y, b.Y), std::max(a.X, b.X), std::max(a.Y, b.Y)}.grown(input_reach());
   }
   // How many tile keys would list the rings' edges.
   long double edge_listings(const Paths& rings) const {
     long double n = 0;
-    for (const auto& r : rings)
-      for (std::size_t k = 0; k < r.size(); ++k) {
-        const EdgeReach e = reach_of(r[k], r[(k + 1) % r.size()]);
-        n += static_cast<long double>(floor_div(e.x1, tile) - floor_div(e.x0, tile) + 1) *
-             static_cast<long double>(floor_div(e.y1, tile) - floor_div(e.y0, tile) + 1);
-      }
+    for_each_edge(rings, [&](const IntPoint& a, const IntPoint& b) {
+      const IntBox e = reach_of(a, b);
+      n += static_cast<long double>(floor_div(e.x1, tile) - floor_div(e.x0, tile) + 1) *
+           static_cast<long double>(floor_div(e.y1, tile) - floor_div(e.y0, tile) + 1);
+    });
     return n;
   }
 
@@ -300,7 +299,6 @@ struct Eroder {
 
   // The polygon's erosion within each tile it reaches, united.
   void tiled(const Paths& rings, const IntBox& box, mapping::MultiPolygon& out) {
-    const cInt grow = delta + kInputSlack;  // a tile's input box beyond the tile
     // The tiles that meet the polygon's box.
     const cInt i0 = floor_div(box.x0, tile), i1 = floor_div(box.x1, tile);
     const cInt j0 = floor_div(box.y0, tile), j1 = floor_div(box.y1, tile);
@@ -313,19 +311,16 @@ struct Eroder {
     // Each tile's key: every directed edge whose box meets the tile's input
     // box (a superset of those that cross it), in ring order.
     std::vector<std::vector<cInt>> edges(nx * ny);
-    for (const auto& r : rings)
-      for (std::size_t k = 0; k < r.size(); ++k) {
-        const IntPoint& a = r[k];
-        const IntPoint& b = r[(k + 1) % r.size()];
-        const EdgeReach e = reach_of(a, b);
-        const cInt tx0 = std::max(i0, floor_div(e.x0, tile)), tx1 = std::min(i1, floor_div(e.x1, tile));
-        const cInt ty0 = std::max(j0, floor_div(e.y0, tile)), ty1 = std::min(j1, floor_div(e.y1, tile));
-        for (cInt ty = ty0; ty <= ty1; ++ty)
-          for (cInt tx = tx0; tx <= tx1; ++tx) {
-            auto& listed = edges[static_cast<std::size_t>(ty - j0) * nx + static_cast<std::size_t>(tx - i0)];
-            listed.insert(listed.end(), {a.X, a.Y, b.X, b.Y});
-          }
-      }
+    for_each_edge(rings, [&](const IntPoint& a, const IntPoint& b) {
+      const IntBox e = reach_of(a, b);
+      const cInt tx0 = std::max(i0, floor_div(e.x0, tile)), tx1 = std::min(i1, floor_div(e.x1, tile));
+      const cInt ty0 = std::max(j0, floor_div(e.y0, tile)), ty1 = std::min(j1, floor_div(e.y1, tile));
+      for (cInt ty = ty0; ty <= ty1; ++ty)
+        for (cInt tx = tx0; tx <= tx1; ++tx) {
+          auto& listed = edges[static_cast<std::size_t>(ty - j0) * nx + static_cast<std::size_t>(tx - i0)];
+          listed.insert(listed.end(), {a.X, a.Y, b.X, b.Y});
+        }
+    });
     // Whether each tile's centre is inside the polygon (non-zero winding):
     // with the edges, this fixes the polygon within the tile's input box
     // (a box no edge meets is all inside or all outside).
@@ -334,16 +329,13 @@ struct Eroder {
     for (std::size_t iy = 0; iy < ny; ++iy) {
       const cInt cy = (j0 + static_cast<cInt>(iy)) * tile + tile / 2;
       crossings.clear();
-      for (const auto& r : rings)
-        for (std::size_t k = 0; k < r.size(); ++k) {
-          const IntPoint& a = r[k];
-          const IntPoint& b = r[(k + 1) % r.size()];
-          const bool up = a.Y <= cy && cy < b.Y, down = b.Y <= cy && cy < a.Y;
-          if (!up && !down) continue;
-          const long double t = static_cast<long double>(cy - a.Y) / static_cast<long double>(b.Y - a.Y);
-          const long double x = static_cast<long double>(a.X) + t * static_cast<long double>(b.X - a.X);
-          crossings.emplace_back(static_cast<cInt>(std::floor(x)), up ? 1 : -1);
-        }
+      for_each_edge(rings, [&](const IntPoint& a, const IntPoint& b) {
+        const bool up = a.Y <= cy && cy < b.Y, down = b.Y <= cy && cy < a.Y;
+        if (!up && !down) return;
+        const long double t = static_cast<long double>(cy - a.Y) / static_cast<long double>(b.Y - a.Y);
+        const long double x = static_cast<long double>(a.X) + t * static_cast<long double>(b.X - a.X);
+        crossings.emplace_back(static_cast<cInt>(std::floor(x)), up ? 1 : -1);
+      });
       std::sort(crossings.begin(), crossings.end());
       std::size_t next = 0;
       int winding = 0;
@@ -373,7 +365,7 @@ struct Eroder {
             pieces.insert(pieces.end(), e->tile.begin(), e->tile.end());
             continue;
           }
-        Paths result = tile_result(rings, tile_box(ix, iy).grown(grow));
+        Paths result = tile_result(rings, tile_box(ix, iy).grown(input_reach()));
         pieces.insert(pieces.end(), result.begin(), result.end());
         if (cache) {
           ++counters->misses;
