@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -62,6 +63,10 @@ int main(int argc, char** argv) {
                  "take SLAM_POSE for the pose audit from this log instead of the run's: the run's record replayed "
                  "through another SLAM configuration (pex-slam --log RUN.lcm --out THIS.lcm)");
   app.add_option("--json-out", json_out, "also write the JSON line to this file");
+  std::string pose_errors_out;
+  app.add_option("--pose-errors-out", pose_errors_out,
+                 "write the pose audit's pairs to this file, one line each: t_s slam_x slam_y slam_theta truth_x truth_y "
+                 "truth_theta error_m heading_error_deg (world frame; where SLAM went wrong, and when)");
   app.add_option("--svg", svg_out, "draw the world, the reachable space and the map (red: missed, violet: not reachable, gold: beyond the walls) to this SVG");
   if (const auto code = pex::cli::parse_command_line(app, "pex-explore-report", argc, argv)) return *code;
 
@@ -127,6 +132,18 @@ int main(int argc, char** argv) {
     std::ofstream out(json_out);
     out << line << '\n';
     if (!out) return fail(73, "cannot write " + json_out);
+  }
+  if (!pose_errors_out.empty()) {
+    std::ofstream out(pose_errors_out);
+    out << "# t_s slam_x_m slam_y_m slam_theta_rad truth_x_m truth_y_m truth_theta_rad error_m heading_error_deg\n";
+    char row[256];
+    for (const auto& pair : pex::explore_report::pose_errors(*log, options.map_in_world)) {
+      std::snprintf(row, sizeof row, "%.3f %.3f %.3f %.4f %.3f %.3f %.4f %.3f %.2f\n", static_cast<double>(pair.utime) * 1e-6,
+                    pair.slam_in_world.x_m, pair.slam_in_world.y_m, pair.slam_in_world.theta_rad, pair.truth.x_m,
+                    pair.truth.y_m, pair.truth.theta_rad, pair.error_m, pair.heading_error_rad * 180.0 / std::numbers::pi);
+      out << row;
+    }
+    if (!out) return fail(73, "cannot write " + pose_errors_out);
   }
   if (!svg_out.empty()) {
     std::ofstream out(svg_out);

@@ -44,34 +44,20 @@ std::optional<double> finite(double v) {
   return v;
 }
 
-// SLAM_POSE against the truth nearest in time (Report's slam_error_*).
+// Report's slam_error_*, from the pose pairs.
 void audit_poses(const LogContents& log, const geometry::Pose2& map_in_world, Report& r) {
-  if (log.slam_poses.empty() || log.truth.empty()) return;
-  std::vector<StampedPose> truth = log.truth;
-  std::stable_sort(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
-  const geometry::PoseTransform place(map_in_world);  // map frame -> world
+  const std::vector<PoseError> pairs = pose_errors(log, map_in_world);
+  if (pairs.empty()) return;
   double sum = 0.0, worst = 0.0, heading_sum = 0.0;
   std::vector<geometry::Point> placed, true_points;  // the pairs compared
-  for (const auto& slam : log.slam_poses) {
-    auto it = std::lower_bound(truth.begin(), truth.end(), slam.utime,
-                               [](const StampedPose& p, std::int64_t t) { return p.utime < t; });
-    const StampedPose* nearest = nullptr;
-    if (it != truth.end()) nearest = &*it;
-    if (it != truth.begin() && (!nearest || slam.utime - std::prev(it)->utime < nearest->utime - slam.utime))
-      nearest = &*std::prev(it);
-    if (!nearest || std::llabs(nearest->utime - slam.utime) > 20'000) continue;
-    const auto& p = slam.pose;
-    const geometry::Point w = place(geometry::Point(p.x_m, p.y_m));
-    const double e = std::hypot(w.x() - nearest->pose.x_m, w.y() - nearest->pose.y_m);
-    if (!std::isfinite(e)) continue;
-    sum += e;
-    worst = std::max(worst, e);
-    placed.push_back(w);
-    true_points.emplace_back(nearest->pose.x_m, nearest->pose.y_m);
-    heading_sum += std::abs(geometry::wrap_angle(map_in_world.theta_rad + p.theta_rad - nearest->pose.theta_rad));
+  for (const PoseError& pair : pairs) {
+    sum += pair.error_m;
+    worst = std::max(worst, pair.error_m);
+    heading_sum += std::abs(pair.heading_error_rad);
+    placed.emplace_back(pair.slam_in_world.x_m, pair.slam_in_world.y_m);
+    true_points.emplace_back(pair.truth.x_m, pair.truth.y_m);
   }
-  if (placed.empty()) return;
-  const auto n = static_cast<double>(placed.size());
+  const auto n = static_cast<double>(pairs.size());
   r.slam_error_mean_m = sum / n;
   r.slam_error_max_m = worst;
   r.slam_heading_error_mean_deg = heading_sum / n * 180.0 / std::numbers::pi;
@@ -90,6 +76,31 @@ void audit_poses(const LogContents& log, const geometry::Pose2& map_in_world, Re
 }
 
 }  // namespace
+
+std::vector<PoseError> pose_errors(const LogContents& log, const geometry::Pose2& map_in_world) {
+  std::vector<PoseError> out;
+  if (log.slam_poses.empty() || log.truth.empty()) return out;
+  std::vector<StampedPose> truth = log.truth;
+  std::stable_sort(truth.begin(), truth.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
+  for (const auto& slam : log.slam_poses) {
+    auto it = std::lower_bound(truth.begin(), truth.end(), slam.utime,
+                               [](const StampedPose& p, std::int64_t t) { return p.utime < t; });
+    const StampedPose* nearest = nullptr;
+    if (it != truth.end()) nearest = &*it;
+    if (it != truth.begin() && (!nearest || slam.utime - std::prev(it)->utime < nearest->utime - slam.utime))
+      nearest = &*std::prev(it);
+    if (!nearest || std::llabs(nearest->utime - slam.utime) > 20'000) continue;
+    PoseError pair;
+    pair.utime = slam.utime;
+    pair.slam_in_world = geometry::compose(map_in_world, slam.pose);
+    pair.truth = nearest->pose;
+    pair.error_m = std::hypot(pair.slam_in_world.x_m - pair.truth.x_m, pair.slam_in_world.y_m - pair.truth.y_m);
+    if (!std::isfinite(pair.error_m)) continue;
+    pair.heading_error_rad = geometry::wrap_angle(pair.slam_in_world.theta_rad - pair.truth.theta_rad);
+    out.push_back(pair);
+  }
+  return out;
+}
 
 std::optional<LogContents> read_log(const std::string& path, std::string* error) {
   lcm::LogFile log(path, "r");

@@ -39,6 +39,18 @@ struct LogContents {
 // opened or holds no LCM event at all.
 std::optional<LogContents> read_log(const std::string& path, std::string* error);
 
+// A SLAM_POSE and the simulator's truth nearest it in time (within 20 ms),
+// the MAP frame placed in the world by map_in_world: the pose audit's pairs
+// (Report's slam_error_*), in the log's order.
+struct PoseError {
+  std::int64_t utime = 0;         // the SLAM_POSE's stamp
+  geometry::Pose2 slam_in_world;  // the published pose, in the world frame
+  geometry::Pose2 truth;          // SIM_TRUTH
+  double error_m = 0.0;           // distance between the two
+  double heading_error_rad = 0.0;  // slam minus truth, wrapped
+};
+std::vector<PoseError> pose_errors(const LogContents& log, const geometry::Pose2& map_in_world);
+
 // The lower-case name of an explore_state_t phase ("done",
 // "done_with_unreachable", ...), "unknown_<n>" for others.
 std::string phase_name(std::int8_t phase);

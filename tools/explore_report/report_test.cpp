@@ -274,6 +274,15 @@ TEST(ExploreReport, PoseAuditComparesSlamPosesWithTheTruthAtTheSameTime) {
   EXPECT_NEAR(*r.slam_error_mean_m, 0.05, 1e-9);
   EXPECT_NEAR(*r.slam_error_max_m, 0.1, 1e-9);
   EXPECT_NEAR(*r.slam_heading_error_mean_deg, 0.05 * 180.0 / std::numbers::pi, 1e-9);
+  // The pairs behind the figures (--pose-errors-out), in the log's order.
+  const auto pairs = pose_errors(log, options.map_in_world);
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0].utime, 1'000'000);
+  EXPECT_NEAR(pairs[0].slam_in_world.x_m, 3.0, 1e-12);
+  EXPECT_NEAR(pairs[0].truth.y_m, 2.1, 1e-12);
+  EXPECT_NEAR(pairs[0].error_m, 0.1, 1e-9);
+  EXPECT_NEAR(pairs[1].error_m, 0.0, 1e-9);
+  EXPECT_NEAR(pairs[1].heading_error_rad, -0.1, 1e-12);  // SLAM's heading minus the truth's
   // The same poses with the map frame at the world's origin are 2-3 m off,
   // but a rigid motion of the trajectory as a whole brings them close again.
   options.map_in_world = {};
