@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "median_collector.hpp"
 #include "carmen_scans.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
@@ -179,32 +180,14 @@ BENCHMARK(BM_InsertIntel)->Arg(1000)->Arg(5000)->Unit(benchmark::kMillisecond)
     ->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_MergePlanningMap)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
-// Collects the medians for the JSON line while printing the usual table.
-class MedianCollector : public benchmark::ConsoleReporter {
- public:
-  std::map<std::string, double> median_ms;
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& run : runs) {
-      if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {
-        // CPU time, in the benchmark's unit (ms): on this shared 2-core machine
-        // wall time mostly measures the other processes.
-        median_ms[run.run_name.function_name + "/" + run.run_name.args] = run.GetAdjustedCPUTime();
-      }
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-};
 
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
-  MedianCollector reporter;
+  pex::bench::MedianCollector reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  auto get = [&](const std::string& name) {
-    const auto it = reporter.median_ms.find(name);
-    return it == reporter.median_ms.end() ? -1.0 : it->second;
-  };
+  auto get = [&](const std::string& name) { return reporter.median(name); };
   const double insert_1k = get("BM_InsertTyped/1000"), plain_1k = get("BM_InsertPlain/1000");
   // Memory: the 10k map's bytes over the vertices it stores (free, obstacle
   // and planning layers), and a 5 cm grid (1 byte a cell) over the explored

@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "median_collector.hpp"
 #include "evaluation/carmen_log.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
@@ -377,6 +378,17 @@ MissionScene& mission_scene(int which) {
   return *slot;
 }
 
+// The mission of the benchmark's first argument; nullptr (the benchmark
+// skipped, with the reason) when its maps did not load.
+MissionScene* mission_scene_or_skip(benchmark::State& state) {
+  MissionScene& s = mission_scene(static_cast<int>(state.range(0)));
+  if (s.maps.snapshots.empty()) {
+    state.SkipWithError((s.name + ": " + s.maps.error).c_str());
+    return nullptr;
+  }
+  return &s;
+}
+
 double thread_cpu_ms() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
@@ -392,11 +404,9 @@ double percentile(std::vector<double> v, double q) {
 // One whole plan_exploration call (what the explorer's worker runs every
 // replan period) on the largest map of the mission.
 void BM_Plan(benchmark::State& state) {
-  MissionScene& s = mission_scene(static_cast<int>(state.range(0)));
-  if (s.maps.snapshots.empty()) {
-    state.SkipWithError((s.name + ": " + s.maps.error).c_str());
-    return;
-  }
+  MissionScene* scene = mission_scene_or_skip(state);
+  if (!scene) return;
+  MissionScene& s = *scene;
   const auto options = planner_options(state.range(1) == 0 ? GoalStrategy::kGreedy : GoalStrategy::kTour);
   const auto& snap = s.maps.snapshots[s.largest];
   Plan plan;
@@ -415,11 +425,9 @@ void BM_Plan(benchmark::State& state) {
 // (range 1 = 0), then the robot's row of the path matrix over its candidates
 // (1): the rest of a plan is candidates and approach points.
 void BM_PlanStep(benchmark::State& state) {
-  MissionScene& s = mission_scene(static_cast<int>(state.range(0)));
-  if (s.maps.snapshots.empty()) {
-    state.SkipWithError((s.name + ": " + s.maps.error).c_str());
-    return;
-  }
+  MissionScene* scene = mission_scene_or_skip(state);
+  if (!scene) return;
+  MissionScene& s = *scene;
   const auto options = planner_options(GoalStrategy::kGreedy);
   const auto& snap = s.maps.snapshots[s.largest];
   ConfigurationSpace cs;
@@ -444,11 +452,9 @@ void BM_PlanStep(benchmark::State& state) {
 // kept from plan to plan as the explorer's worker keeps them: the per-plan
 // CPU time's p50, p99 and max over the mission (the target is the p99).
 void BM_PlanMission(benchmark::State& state) {
-  MissionScene& s = mission_scene(static_cast<int>(state.range(0)));
-  if (s.maps.snapshots.empty()) {
-    state.SkipWithError((s.name + ": " + s.maps.error).c_str());
-    return;
-  }
+  MissionScene* scene = mission_scene_or_skip(state);
+  if (!scene) return;
+  MissionScene& s = *scene;
   const auto options = planner_options(state.range(1) == 0 ? GoalStrategy::kGreedy : GoalStrategy::kTour);
   std::vector<double> ms;
   for (auto _ : state) {
@@ -500,32 +506,14 @@ BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Itera
 BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
     ->ReportAggregatesOnly(true);
 
-// Collects the medians for the JSON line while printing the usual table.
-class MedianCollector : public benchmark::ConsoleReporter {
- public:
-  std::map<std::string, double> median_ms;
-  std::map<std::string, double> median_counter;  // "name/args/counter"
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const auto& run : runs)
-      if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {
-        const std::string name = run.run_name.function_name + "/" + run.run_name.args;
-        median_ms[name] = run.GetAdjustedCPUTime();
-        for (const auto& [counter, value] : run.counters) median_counter[name + "/" + counter] = value.value;
-      }
-    ConsoleReporter::ReportRuns(runs);
-  }
-};
 
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
-  MedianCollector reporter;
+  pex::bench::MedianCollector reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  auto get = [&](const std::string& name) {
-    const auto it = reporter.median_ms.find(name);
-    return it == reporter.median_ms.end() ? -1.0 : it->second;
-  };
+  auto get = [&](const std::string& name) { return reporter.median(name); };
   std::printf("{");
   const char* sep = "";
   for (const int map : {0, 1}) {

@@ -1,7 +1,6 @@
 // pex-sim as the clock source: a Simulator on an in-process LCM (memq://),
 // with its sockets on loopback, run until it has published enough SIM_CLOCK
 // messages. Asserts the clock's contract, not how fast the host ran it.
-#include <sys/timerfd.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -11,6 +10,7 @@
 
 #include "runtime/channels.hpp"
 #include "runtime/node.hpp"
+#include "runtime/run_guarded.hpp"
 #include "simulator.hpp"
 
 namespace pex::simd {
@@ -39,14 +39,7 @@ TEST(SimClock, StepsInSimulatedTimeWithTruthOnTheSameTimeLineAndCountsContacts) 
   });
   node.subscribe<pex::pose_t>(ch::kSimTruth, [&](const pex::pose_t& p) { truths.push_back(p); });
   Simulator sim(node, o);
-  // Only a guard against hanging, not a time limit under test.
-  const int guard = timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC);
-  itimerspec in_60s{};
-  in_60s.it_value.tv_sec = 60;
-  timerfd_settime(guard, 0, &in_60s, nullptr);
-  node.watch_fd(guard, [&] { node.request_stop(); });
-  node.run();
-  close(guard);
+  pex::runtime::run_guarded(node);  // until the state above is reached
 
   ASSERT_GE(clocks.size(), 60u);
   const std::int64_t epoch = clocks[0].utime - clocks[0].sim_time_us;

@@ -1,4 +1,5 @@
 #include "runtime/node.hpp"
+#include "runtime/run_guarded.hpp"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +7,6 @@
 
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
-#include <sys/timerfd.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -430,14 +430,7 @@ TEST(NodeSimClock, HeartbeatIsPublishedWithoutTheClockAndReportsIt) {
     // Enough heartbeats have passed, however slow the machine, or the clock went silent.
     if (statuses.size() >= 1000 || s.state == daemon_status_t::STATE_ERROR) node.request_stop();
   });
-  // Only a guard against hanging if no heartbeat ever comes, not a time limit under test.
-  const int guard = timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC);
-  itimerspec in_60s{};
-  in_60s.it_value.tv_sec = 60;
-  timerfd_settime(guard, 0, &in_60s, nullptr);
-  node.watch_fd(guard, [&] { node.request_stop(); });
-  node.run();
-  close(guard);
+  pex::runtime::run_guarded(node);  // until the state above is reached
 
   ASSERT_GE(statuses.size(), 3u);
   for (size_t i = 0; i < 3; ++i) {

@@ -54,6 +54,29 @@ int label_components(int width, int height, bool eight, Member member, std::vect
   return count;
 }
 
+// The cells 4-connected to `seed` through cells where member(index) is true
+// (the seed is in, whatever member says of it): 1 in, 0 out.
+template <class Member>
+std::vector<std::uint8_t> flood_fill(int width, int height, std::size_t seed, Member member) {
+  std::vector<std::uint8_t> in(static_cast<std::size_t>(width) * height, 0);
+  std::vector<std::size_t> stack{seed};
+  in[seed] = 1;
+  while (!stack.empty()) {
+    const std::size_t c = stack.back();
+    stack.pop_back();
+    const int cx = static_cast<int>(c % width), cy = static_cast<int>(c / width);
+    for (int d = 0; d < 4; ++d) {
+      const int nx = cx + kDx[d], ny = cy + kDy[d];
+      if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+      const std::size_t ni = static_cast<std::size_t>(ny) * width + nx;
+      if (in[ni] || !member(ni)) continue;
+      in[ni] = 1;
+      stack.push_back(ni);
+    }
+  }
+  return in;
+}
+
 // 1D squared Euclidean distance transform (Felzenszwalb & Huttenlocher 2012).
 void edt_1d(const std::vector<double>& f, std::vector<double>& d, std::vector<int>& v, std::vector<double>& z) {
   const int n = static_cast<int>(f.size());
@@ -437,24 +460,7 @@ std::variant<World, std::string> extract_world(const OccupancyGrid& grid, const 
   }
   if (seed == n) return std::string("no trajectory pose stands in a free cell");
   auto& region = world.region;
-  region.assign(n, 0);
-  {
-    std::vector<std::size_t> stack{seed};
-    region[seed] = 1;
-    while (!stack.empty()) {
-      const std::size_t c = stack.back();
-      stack.pop_back();
-      const int cx = static_cast<int>(c % w), cy = static_cast<int>(c / w);
-      for (int d = 0; d < 4; ++d) {
-        const int nx = cx + kDx[d], ny = cy + kDy[d];
-        if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-        const std::size_t ni = idx(nx, ny);
-        if (region[ni] || cls[ni] != CellClass::kFree) continue;
-        region[ni] = 1;
-        stack.push_back(ni);
-      }
-    }
-  }
+  region = flood_fill(w, h, seed, [&](std::size_t i) { return cls[i] == CellClass::kFree; });
 
   // 5. Pockets: 8-connected components of the rest. The one touching the
   //    grid's border is outside; the others are holes in the region. Holes
@@ -534,24 +540,8 @@ std::variant<World, std::string> extract_world(const OccupancyGrid& grid, const 
 
   // 9. Where the disk's centre goes from START.
   auto& reach = world.reachable;
-  reach.assign(n, 0);
-  {
-    std::vector<std::size_t> stack{start_cell};
-    reach[start_cell] = 1;
-    while (!stack.empty()) {
-      const std::size_t c = stack.back();
-      stack.pop_back();
-      const int cx = static_cast<int>(c % w), cy = static_cast<int>(c / w);
-      for (int d = 0; d < 4; ++d) {
-        const int nx = cx + kDx[d], ny = cy + kDy[d];
-        if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-        const std::size_t ni = idx(nx, ny);
-        if (reach[ni] || !region[ni] || clearance[ni] <= options.robot_radius_m) continue;
-        reach[ni] = 1;
-        stack.push_back(ni);
-      }
-    }
-  }
+  reach = flood_fill(w, h, start_cell,
+                     [&](std::size_t i) { return region[i] && clearance[i] > options.robot_radius_m; });
 
   // 10. Figures.
   std::size_t region_cells = 0, reach_cells = 0;
