@@ -64,7 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     PEX_FUZZ_CHECK(std::abs(m.theta) <= std::numbers::pi + 1e-9, "theta " + std::to_string(m.theta));
     for (double c : m.covariance) PEX_FUZZ_CHECK(std::isfinite(c), "covariance not finite");
   };
-  out.report = [](const base_driver::DriverHealth&) {};
+  out.report = [](const pex::runtime::DaemonHealth&) {};
   out.error = [](std::string_view, const std::string&) {};
   out.reject = [](std::string_view, const std::string&) {};
   base_driver::DriverCore driver(options, out);

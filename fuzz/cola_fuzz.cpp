@@ -86,7 +86,7 @@ void read_stream(std::string_view stream, std::size_t chunk, bool configure_scan
     check_published(m);
     ++published;
   };
-  out.report = [](const lidar_reader::ReaderHealth&) {};
+  out.report = [](const pex::runtime::DaemonHealth&) {};
   out.note = [](const std::string&) {};
   out.error = [](std::string_view, const std::string&) {};
   out.reject = [](std::string_view, const std::string&) {};

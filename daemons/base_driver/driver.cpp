@@ -113,7 +113,7 @@ DriverOutputs Driver::outputs() {
   DriverOutputs out;
   out.send_frame = [this](const canopen::Frame& frame, std::string* error) { return can_->send(frame, error); };
   out.publish_odometry = [this](const pex::odometry_t& msg) { node_.publish(runtime::channels::kOdometry, msg); };
-  out.report = [this](const DriverHealth& health) {
+  out.report = [this](const runtime::DaemonHealth& health) {
     node_.set_state(health.state, health.reason);
   };
   out.error = [this](std::string_view key, const std::string& text) { node_.error(key, text); };

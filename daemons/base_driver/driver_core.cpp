@@ -165,7 +165,7 @@ void DriverCore::report(bool cmd_stale, bool error_recent) {
   counters_.sdo_aborts = static_cast<std::int64_t>(master_.counters().sdo_aborts);
   counters_.odometry_jumps = static_cast<std::int64_t>(odometry_.rejected_jumps());
   counters_.stopped = safe_stop_ ? 1 : 0;
-  DriverHealth health;
+  runtime::DaemonHealth health;
   if (error_recent) {
     health = {pex::daemon_status_t::STATE_ERROR, "CAN error frame: wheels stopped"};
   } else if (!problem.empty()) {

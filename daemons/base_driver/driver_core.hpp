@@ -16,6 +16,7 @@
 #include <pex/odometry_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
 
+#include "runtime/daemon_state.hpp"
 #include "canopen/canopen.hpp"
 #include "kinematics/kinematics.hpp"
 
@@ -86,18 +87,12 @@ struct DriverCounters {
   }
 };
 
-// The health after a control step.
-struct DriverHealth {
-  std::int8_t state = 0;  // daemon_status_t::STATE_*
-  std::string reason;
-};
-
 struct DriverOutputs {
   // Puts a frame on the bus; false, with the reason in *error, when it could not.
   std::function<bool(const canopen::Frame& frame, std::string* error)> send_frame;
   std::function<void(const pex::odometry_t& msg)> publish_odometry;
   // After every control step, with counters() current.
-  std::function<void(const DriverHealth& health)> report;
+  std::function<void(const runtime::DaemonHealth& health)> report;
   // An error of the bus or of ours, and input that was refused: `key` groups
   // them for rate-limited logging.
   std::function<void(std::string_view key, const std::string& text)> error;

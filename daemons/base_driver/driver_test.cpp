@@ -134,7 +134,7 @@ class Rig {
   std::vector<Frame> sent;       // every frame the core sent
   std::vector<Frame> step_sent;  // ... in the last control step
   std::vector<pex::odometry_t> odometry;
-  DriverHealth health;
+  runtime::DaemonHealth health;
   std::vector<std::pair<std::string, std::string>> errors, rejects;  // (key, text)
   DriverCore core;
   std::vector<DriveNode> drives;
@@ -154,7 +154,7 @@ class Rig {
       return true;
     };
     out.publish_odometry = [this](const pex::odometry_t& msg) { odometry.push_back(msg); };
-    out.report = [this](const DriverHealth& h) { health = h; };
+    out.report = [this](const runtime::DaemonHealth& h) { health = h; };
     out.error = [this](std::string_view key, const std::string& text) { errors.emplace_back(key, text); };
     out.reject = [this](std::string_view key, const std::string& text) { rejects.emplace_back(key, text); };
     return out;

@@ -80,7 +80,7 @@ ReaderOutputs Reader::outputs() {
     return hwio::write_all(fd_.get(), bytes, core_.options().reply_timeout_ms, error);
   };
   out.publish_scan = [this](const pex::laser_scan_t& msg) { node_.publish(runtime::channels::kLidarScan, msg); };
-  out.report = [this](const ReaderHealth& health) {
+  out.report = [this](const runtime::DaemonHealth& health) {
     node_.set_state(health.state, health.reason);
   };
   out.note = [](const std::string& text) { spdlog::info("{}", text); };

@@ -256,7 +256,7 @@ pex::laser_scan_t ReaderCore::laser_scan(const cola::ScanData& scan, const cola:
 }
 
 void ReaderCore::report(std::int8_t state, std::string reason) {
-  outputs_.report(ReaderHealth{state, std::move(reason)});
+  outputs_.report(runtime::DaemonHealth{state, std::move(reason)});
 }
 
 }  // namespace pex::lidar_reader

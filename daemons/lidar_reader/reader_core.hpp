@@ -17,6 +17,7 @@
 
 #include <pex/laser_scan_t.hpp>
 
+#include "runtime/daemon_state.hpp"
 #include "cola/cola.hpp"
 
 namespace pex::lidar_reader {
@@ -86,11 +87,6 @@ struct ReaderCounters {
   }
 };
 
-struct ReaderHealth {
-  std::int8_t state = 0;  // daemon_status_t::STATE_*
-  std::string reason;
-};
-
 struct ReaderOutputs {
   // Opens the connection to host:port within connect_timeout_ms; false, with
   // the reason in *error, when it could not.
@@ -101,7 +97,7 @@ struct ReaderOutputs {
   std::function<bool(std::string_view bytes, std::string* error)> send;
   std::function<void(const pex::laser_scan_t& msg)> publish_scan;
   // At every change of phase, and with every scan; counters() is current.
-  std::function<void(const ReaderHealth& health)> report;
+  std::function<void(const runtime::DaemonHealth& health)> report;
   // The connection's progress, for the log ("connected to ...", "streaming ...").
   std::function<void(const std::string& text)> note;
   // An error (the connection's), and input that was refused: `key` groups

@@ -142,7 +142,7 @@ class Rig {
   int closes = 0;
   std::string sent_bytes;
   std::vector<pex::laser_scan_t> scans;
-  ReaderHealth health;
+  runtime::DaemonHealth health;
   std::vector<std::string> notes;
   std::vector<std::pair<std::string, std::string>> errors, rejects;  // (key, text)
   Device device;
@@ -177,7 +177,7 @@ class Rig {
       return true;
     };
     out.publish_scan = [this](const pex::laser_scan_t& msg) { scans.push_back(msg); };
-    out.report = [this](const ReaderHealth& h) { health = h; };
+    out.report = [this](const runtime::DaemonHealth& h) { health = h; };
     out.note = [this](const std::string& text) { notes.push_back(text); };
     out.error = [this](std::string_view key, const std::string& text) { errors.emplace_back(key, text); };
     out.reject = [this](std::string_view key, const std::string& text) { rejects.emplace_back(key, text); };
