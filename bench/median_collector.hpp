@@ -17,6 +17,13 @@ class MedianCollector : public benchmark::ConsoleReporter {
   std::map<std::string, double> median_ms;
   std::map<std::string, double> median_counter;  // "function/args/counter"
 
+  // Google Benchmark's flags from the command line, then every benchmark
+  // selected, reported here.
+  void run(int* argc, char** argv) {
+    benchmark::Initialize(argc, argv);
+    benchmark::RunSpecifiedBenchmarks(this);
+  }
+
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const auto& run : runs)
       if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {

@@ -184,9 +184,8 @@ BENCHMARK(BM_MergePlanningMap)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisec
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
   pex::bench::MedianCollector reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
+  reporter.run(&argc, argv);
   auto get = [&](const std::string& name) { return reporter.median(name); };
   const double insert_1k = get("BM_InsertTyped/1000"), plain_1k = get("BM_InsertPlain/1000");
   // Memory: the 10k map's bytes over the vertices it stores (free, obstacle

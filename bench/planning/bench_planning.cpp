@@ -81,6 +81,17 @@ struct Scene {
   std::string error;
 };
 
+// The scene's map and its C-space; false (the reason in scene.error) when
+// the C-space does not build.
+bool set_map(Scene& scene, TypedMultiPolygon map) {
+  scene.map = std::move(map);
+  scene.map_vertices = pex::mapping::vertex_count(scene.map);
+  scene.cspace = std::make_unique<ConfigurationSpace>();
+  const auto built = scene.cspace->build(scene.map, cspace_options());
+  if (!built.ok) scene.error = built.error;
+  return built.ok;
+}
+
 // Candidates: those of `given` in the robot's piece of the C-space first
 // (in order), then random interior points of that piece until there are
 // kMaxCandidates: every candidate is reachable.
@@ -138,14 +149,7 @@ std::unique_ptr<Scene> build_campus() {
     holes.push_back(tree);
     ++trees;
   }
-  scene->map = {testing::typed_polygon(testing::rectangle(0, 0, 160, 160), holes)};
-  scene->map_vertices = pex::mapping::vertex_count(scene->map);
-  scene->cspace = std::make_unique<ConfigurationSpace>();
-  const auto built = scene->cspace->build(scene->map, cspace_options());
-  if (!built.ok) {
-    scene->error = built.error;
-    return scene;
-  }
+  if (!set_map(*scene, {testing::typed_polygon(testing::rectangle(0, 0, 160, 160), holes)})) return scene;
   scene->start = Point(8.0, 8.0);  // the campus world's START
   fill_candidates(*scene, {});
   return scene;
@@ -184,14 +188,7 @@ std::unique_ptr<Scene> build_intel(std::size_t target_vertices) {
     scene->error = "the Intel planning map failed: " + merged.error;
     return scene;
   }
-  scene->map = std::move(merged.polygons);
-  scene->map_vertices = pex::mapping::vertex_count(scene->map);
-  scene->cspace = std::make_unique<ConfigurationSpace>();
-  const auto built = scene->cspace->build(scene->map, cspace_options());
-  if (!built.ok) {
-    scene->error = built.error;
-    return scene;
-  }
+  if (!set_map(*scene, std::move(merged.polygons))) return scene;
   const auto start = scene->cspace->nearest_interior_point(Point(first->x_m, first->y_m), 0.5);
   if (!start) {
     scene->error = "the first Intel pose is not in the C-space";
@@ -510,9 +507,8 @@ BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->R
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
   pex::bench::MedianCollector reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
+  reporter.run(&argc, argv);
   auto get = [&](const std::string& name) { return reporter.median(name); };
   std::printf("{");
   const char* sep = "";
