@@ -184,6 +184,44 @@ double CowGridMap::log_likelihood(const Pose2& pose, const ScanPoints& scan) con
   return evaluate_terms<false>(pose, scan).log_likelihood;
 }
 
+namespace {
+// The sums over a scan's beams that both evaluations keep: each beam adds
+// its nearest hit's squared distance (or the penalty of no hit). Every
+// expression in a fixed order, so that both give the same doubles.
+template <bool kWithScore>
+struct BeamSums {
+  float inv_score_sigma;
+  double inv_likelihood_sigma;
+  double no_hit;
+  double score = 0.0;
+  double log_likelihood = 0.0;
+  std::size_t matched_beams = 0;
+
+  explicit BeamSums(const CowGridMapOptions& options)
+      : inv_score_sigma(static_cast<float>(1.0 / options.score_sigma_m2)),
+        inv_likelihood_sigma(1.0 / options.likelihood_sigma_m2),
+        no_hit(options.null_log_likelihood * inv_likelihood_sigma) {}
+  void miss() { log_likelihood += no_hit; }
+  // best_d2: float max when no hit was near.
+  void add(float best_d2) {
+    if (best_d2 < std::numeric_limits<float>::max()) {
+      if constexpr (kWithScore) score += std::exp(-best_d2 * inv_score_sigma);
+      log_likelihood += -static_cast<double>(best_d2) * inv_likelihood_sigma;
+      ++matched_beams;
+    } else {
+      miss();
+    }
+  }
+  PoseEvaluation result() const {
+    PoseEvaluation r;
+    r.score = score;
+    r.log_likelihood = log_likelihood;
+    r.matched_beams = matched_beams;
+    return r;
+  }
+};
+}  // namespace
+
 template <bool kWithScore>
 PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints& scan) const {
   // Every expression as in evaluate_terms, in the same order: the same floats.
@@ -192,17 +230,12 @@ PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints&
   const float px = static_cast<float>(pose.x_m);
   const float py = static_cast<float>(pose.y_m);
   const float inv_res = static_cast<float>(inverse_resolution_);
-  const float inv_score_sigma = static_cast<float>(1.0 / options_.score_sigma_m2);
-  const double inv_likelihood_sigma = 1.0 / options_.likelihood_sigma_m2;
-  const double no_hit = options_.null_log_likelihood * inv_likelihood_sigma;
   const float along_weight = static_cast<float>(options_.along_line_weight);
   const std::size_t step = static_cast<std::size_t>(std::max(1, options_.beam_step));
   constexpr int kMask = kTileSize - 1;
   // The 3x3 window's bits in a tile's mask, shifted down to its corner.
   constexpr std::uint64_t kWindow = 0x7 | (0x7 << kTileSize) | (0x7ULL << (2 * kTileSize));
-  PoseEvaluation result;
-  double score = 0.0;
-  double log_likelihood = 0.0;
+  BeamSums<kWithScore> sums(options_);
   // The end points and their cells are computed a chunk of beams at a time in
   // a loop the compiler vectorises (the same float operations per lane), then
   // the windows are read beam by beam.
@@ -233,7 +266,7 @@ PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints&
     }
   for (std::size_t k = 0; k < count; ++k) {
     if (!chunk_valid[k]) {
-      log_likelihood += no_hit;
+      sums.miss();
       continue;
     }
     const float hx = chunk_x[k];
@@ -258,7 +291,7 @@ PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints&
       // name the occupied cells in row-major order (as the loops visit them).
       const Tile* tile = tile_at(hix >> kTileBits, hiy >> kTileBits);
       if (!tile) {
-        log_likelihood += no_hit;
+        sums.miss();
         continue;
       }
       const int corner = ((ly - 1) << kTileBits) + (lx - 1);
@@ -287,18 +320,10 @@ PoseEvaluation CowGridMap::evaluate_window3(const Pose2& pose, const ScanPoints&
         }
       }
     }
-    if (best_d2 < std::numeric_limits<float>::max()) {
-      if constexpr (kWithScore) score += std::exp(-best_d2 * inv_score_sigma);
-      log_likelihood += -static_cast<double>(best_d2) * inv_likelihood_sigma;
-      ++result.matched_beams;
-    } else {
-      log_likelihood += no_hit;
-    }
+    sums.add(best_d2);
   }
   }
-  result.score = score;
-  result.log_likelihood = log_likelihood;
-  return result;
+  return sums.result();
 }
 
 template <bool kWithScore>
@@ -308,23 +333,18 @@ PoseEvaluation CowGridMap::evaluate_terms(const Pose2& pose, const ScanPoints& s
   const float px = static_cast<float>(pose.x_m);
   const float py = static_cast<float>(pose.y_m);
   const float inv_res = static_cast<float>(inverse_resolution_);
-  const float inv_score_sigma = static_cast<float>(1.0 / options_.score_sigma_m2);
-  const double inv_likelihood_sigma = 1.0 / options_.likelihood_sigma_m2;
-  const double no_hit = options_.null_log_likelihood * inv_likelihood_sigma;
   const int k = options_.kernel_radius_cells;
   const float along_weight = static_cast<float>(options_.along_line_weight);
   const bool check_free = options_.check_free_before_hit;
   const std::size_t step = static_cast<std::size_t>(std::max(1, options_.beam_step));
-  PoseEvaluation result;
-  double score = 0.0;
-  double log_likelihood = 0.0;
+  BeamSums<kWithScore> sums(options_);
   for (std::size_t i = 0; i < scan.beams.size(); i += step) {
     const BeamPoint& beam = scan.beams[i];
     const float hx = px + c * beam.hit_x_m - s * beam.hit_y_m;
     const float hy = py + s * beam.hit_x_m + c * beam.hit_y_m;
     // Guard the float -> int conversion against absurd poses.
     if (!(std::abs(hx * inv_res) < 1e8f && std::abs(hy * inv_res) < 1e8f)) {
-      log_likelihood += no_hit;
+      sums.miss();
       continue;
     }
     const int hix = floor_to_int(hx * inv_res);
@@ -334,7 +354,7 @@ PoseEvaluation CowGridMap::evaluate_terms(const Pose2& pose, const ScanPoints& s
       const float fx = px + c * beam.free_x_m - s * beam.free_y_m;
       const float fy = py + s * beam.free_x_m + c * beam.free_y_m;
       if (!(std::abs(fx * inv_res) < 1e8f && std::abs(fy * inv_res) < 1e8f)) {
-        log_likelihood += no_hit;
+        sums.miss();
         continue;
       }
       fix = floor_to_int(fx * inv_res);
@@ -350,12 +370,12 @@ PoseEvaluation CowGridMap::evaluate_terms(const Pose2& pose, const ScanPoints& s
       const int ty = (hiy >> kTileBits) - tile_y0_;
       if (static_cast<unsigned>(tx) >= static_cast<unsigned>(tiles_w_) ||
           static_cast<unsigned>(ty) >= static_cast<unsigned>(tiles_h_)) {
-        log_likelihood += no_hit;
+        sums.miss();
         continue;
       }
       hit_tile = tiles_[static_cast<std::size_t>(ty) * tiles_w_ + tx].get();
       if (!hit_tile) {
-        log_likelihood += no_hit;
+        sums.miss();
         continue;
       }
     }
@@ -381,17 +401,9 @@ PoseEvaluation CowGridMap::evaluate_terms(const Pose2& pose, const ScanPoints& s
         if (d2 < best_d2) best_d2 = d2;
       }
     }
-    if (best_d2 < std::numeric_limits<float>::max()) {
-      if constexpr (kWithScore) score += std::exp(-best_d2 * inv_score_sigma);
-      log_likelihood += -static_cast<double>(best_d2) * inv_likelihood_sigma;
-      ++result.matched_beams;
-    } else {
-      log_likelihood += no_hit;
-    }
+    sums.add(best_d2);
   }
-  result.score = score;
-  result.log_likelihood = log_likelihood;
-  return result;
+  return sums.result();
 }
 
 namespace {

@@ -35,7 +35,7 @@ TrajectoryNode::~TrajectoryNode() {
 }
 
 ParticleFilter::ParticleFilter(const ParticleFilterOptions& options, ParticleMapFactory map_factory)
-    : options_(options), map_factory_(std::move(map_factory)), rng_(options.seed) {
+    : options_(options), map_factory_(std::move(map_factory)), rng_(options.seed), drift_(options.odometry_drift) {
   options_.particle_count = std::max(1, options_.particle_count);
   grid_maps_ = !map_factory_;
   if (!map_factory_) {
@@ -125,19 +125,28 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   const ScanPoints match_points = matcher_beams(points, options_.matcher);
   const ScanPoints likelihood_points = proposal_beams(points, options_.proposal);
   Pose2 odometry_step = relative(odometry_at_update_, odometry);
-  std::optional<MatchResult> measured_match;
-  const std::size_t checked = best_index();
-  stats.odometry_scale = check_odometry_step(match_points, odometry_step, stats, measured_match);
-  if (stats.odometry_scale != 1.0) {
-    measured_match.reset();  // the particles move: every one is matched again
-    // Every particle keeps its own motion noise, moved onto the corrected step.
-    const Pose2 corrected{stats.odometry_scale * odometry_step.x_m, stats.odometry_scale * odometry_step.y_m,
-                          odometry_step.theta_rad};
+  // Every particle keeps its own motion noise, moved onto a corrected step.
+  auto move_onto = [&](const Pose2& corrected) {
     for (Particle& p : particles_) {
       const Pose2 noise = relative(compose(p.pose_at_update, odometry_step), p.pose);
       p.pose = compose(compose(p.pose_at_update, corrected), noise);
     }
     odometry_step = corrected;
+  };
+  // The step as the odometry measured it: the drift's evidence below.
+  const double odometry_turn = odometry_step.theta_rad;
+  const double odometry_travel = std::hypot(odometry_step.x_m, odometry_step.y_m);
+  if (options_.odometry_drift.correct) {
+    const Pose2 corrected = drift_.correct(odometry_step);
+    if (corrected.theta_rad != odometry_step.theta_rad) move_onto(corrected);
+  }
+  std::optional<MatchResult> measured_match;
+  const std::size_t checked = best_index();
+  stats.odometry_scale = check_odometry_step(match_points, odometry_step, stats, measured_match);
+  if (stats.odometry_scale != 1.0) {
+    measured_match.reset();  // the particles move: every one is matched again
+    move_onto({stats.odometry_scale * odometry_step.x_m, stats.odometry_scale * odometry_step.y_m,
+               odometry_step.theta_rad});
     ++corrected_odometry_steps_;
   }
   const Pose2 step_std = motion_noise_std(odometry_step, options_.motion);
@@ -203,6 +212,13 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   if (stats.effective_sample_size < options_.resample_threshold * static_cast<double>(particles_.size())) {
     resample(weights);
     stats.resampled = true;
+  }
+  // The best lineage's matched turn is evidence of the drift where the scan
+  // pinned the pose (no unconstrained direction, every match trusted) and
+  // the odometry step stood as measured.
+  if (stats.unconstrained_directions == 0 && stats.failed_matches == 0 && stats.odometry_scale == 1.0) {
+    const Particle& best = particles_[best_index()];
+    drift_.observe(odometry_travel, odometry_turn, geometry::wrap_angle(best.pose.theta_rad - best.pose_at_update.theta_rad));
   }
   for (Particle& p : particles_) {
     stats.points_beyond_map_extent += p.map->insert(p.pose, points);
@@ -307,7 +323,7 @@ std::vector<Pose2> ParticleFilter::best_trajectory() const {
 
 namespace {
 constexpr std::string_view kCheckpointMagic = "PEXSLAMF";
-constexpr std::uint32_t kCheckpointVersion = 2;  // 2: corrected odometry steps, check statistics
+constexpr std::uint32_t kCheckpointVersion = 3;  // 2: corrected odometry steps, check statistics; 3: odometry drift
 }  // namespace
 
 std::string ParticleFilter::checkpoint() const {
@@ -335,6 +351,7 @@ std::string ParticleFilter::checkpoint() const {
   out.put<double>(last_update_.odometry_scale);
   out.put<double>(last_update_.odometry_check_ratio);
   out.put<std::int64_t>(corrected_odometry_steps_);
+  drift_.write(out);
 
   // The trajectory tree: every node a particle reaches, once, parents before
   // their children (a particle's chain is walked up to the first node already
@@ -410,6 +427,7 @@ std::string ParticleFilter::restore(std::string_view checkpoint) {
     restored.last_update_.odometry_scale = in.get<double>();
     restored.last_update_.odometry_check_ratio = in.get<double>();
     restored.corrected_odometry_steps_ = in.get<std::int64_t>();
+    restored.drift_.read(in);
 
     constexpr std::size_t kNodeBytes = 3 * sizeof(double) + 2 * sizeof(std::int64_t);
     const std::uint64_t node_count = in.get_count(kNodeBytes);

@@ -20,6 +20,7 @@
 
 #include "slam/cow_grid_map.hpp"
 #include "slam/motion_model.hpp"
+#include "slam/odometry_drift.hpp"
 #include "slam/particle_map.hpp"
 #include "slam/scan.hpp"
 #include "slam/scan_constraint.hpp"
@@ -70,6 +71,10 @@ struct ParticleFilterOptions {
   // Where the scan does not constrain the position (a corridor's length), a
   // particle's match is replaced by its motion-model sample (scan_constraint.hpp).
   ScanConstraintOptions constraint;
+  // The odometry's systematic heading error, learnt from the matches and,
+  // with odometry_drift.correct, taken out of every update's step
+  // (odometry_drift.hpp).
+  OdometryDriftOptions odometry_drift;
 };
 
 // Low-variance (systematic) resampling: parent index of each of the
@@ -188,6 +193,7 @@ class ParticleFilter {
   double angular_since_update_rad_ = 0.0;
   UpdateStats last_update_;
   std::int64_t corrected_odometry_steps_ = 0;
+  OdometryDrift drift_;
   std::int64_t points_beyond_map_extent_ = 0;
   std::int64_t unconstrained_updates_ = 0;
 
@@ -201,6 +207,8 @@ class ParticleFilter {
   std::int64_t unconstrained_updates() const { return unconstrained_updates_; }
   // Updates whose odometry step the check replaced (OdometryCheckOptions).
   std::int64_t corrected_odometry_steps() const { return corrected_odometry_steps_; }
+  // The odometry's drift as learnt so far (checkpointed).
+  const OdometryDrift& odometry_drift() const { return drift_; }
 };
 
 }  // namespace pex::slam

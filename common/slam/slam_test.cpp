@@ -371,6 +371,51 @@ TEST(ParticleFilter, CorrectsOdometryDriftInASyntheticRoom) {
   EXPECT_LT(est_error, 0.1);
 }
 
+// Laps of a rectangle round the pillar: straight runs in steps of 0.1 m and
+// turns on the spot at the corners, with odometry whose heading bends by
+// `drift_rad_per_m` (wheels of different radii) plus noise.
+Drive rectangle_laps(std::uint64_t seed, int laps, double drift_rad_per_m) {
+  Drive d;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  Pose2 truth{-3.0, -2.5, 0.0};
+  Pose2 odom = truth;
+  auto step = [&](const Pose2& s) {
+    truth = compose(truth, s);
+    odom = compose(odom, {s.x_m * (1.0 + 0.02 * noise(rng)), 0.0,
+                          s.theta_rad * (1.0 + 0.01 * noise(rng)) + drift_rad_per_m * s.x_m + 0.002 * noise(rng)});
+    d.truth.push_back(truth);
+    d.odometry.push_back(odom);
+  };
+  for (int lap = 0; lap < laps; ++lap)
+    for (const int run : {65, 55, 65, 55}) {  // 6.5 m by 5.5 m
+      for (int i = 0; i < run; ++i) step({0.1, 0.0, 0.0});
+      for (int i = 0; i < 9; ++i) step({0.0, 0.0, std::numbers::pi / 18.0});
+    }
+  return d;
+}
+
+// The filter learns the odometry's drift from its own matches, whether it
+// takes it out of the steps or only shows it, and learns none from an
+// odometry without it.
+TEST(ParticleFilter, LearnsTheOdometrysHeadingDriftFromItsMatches) {
+  for (const auto& [drift, correct] : {std::pair{0.02, false}, std::pair{0.02, true}, std::pair{0.0, true}}) {
+    const Drive d = rectangle_laps(12, 4, drift);
+    ParticleFilterOptions options = small_filter(5);
+    // A lighter ridge than the shipped 5 m / 2 rad: four laps are 96 m.
+    options.odometry_drift.prior_travel_m = 1.0;
+    options.odometry_drift.prior_turn_rad = 0.5;
+    options.odometry_drift.correct = correct;
+    ParticleFilter filter(options);
+    for (std::size_t i = 0; i < d.truth.size(); ++i)
+      filter.process(scan_from(d.truth[i], static_cast<std::int64_t>(i)), d.odometry[i]);
+    const OdometryDrift& learnt = filter.odometry_drift();
+    EXPECT_GT(learnt.observations(), 100) << drift << correct;
+    EXPECT_NEAR(learnt.drift_rad_per_m(), -drift, 0.004) << drift << correct;
+    EXPECT_NEAR(learnt.turn_scale(), 0.0, 0.01) << drift << correct;
+  }
+}
+
 // Offline, the next update's correction is spread over the scans before it:
 // the update poses stay, and the motion between consecutive scans follows
 // the truth where the carried-forward odometry (5 % long, drifting) jumps at
@@ -772,9 +817,10 @@ TEST(FilterCheckpoint, BrokenInputIsRefusedWithAReasonAndChangesNothing) {
     flipped[at] = static_cast<char>(flipped[at] ^ 0x10);
     refused(flipped, at == 9 ? "version" : "checksum");
   }
-  const std::string payload = archive::unseal("PEXSLAMF", 2, good);
+  const std::string payload = archive::unseal("PEXSLAMF", 3, good);
   refused(archive::seal("PEXSLAMF", 1, payload), "format version 1");  // before the odometry check
-  refused(archive::seal("PEXSLAMF", 3, payload), "format version 3");
+  refused(archive::seal("PEXSLAMF", 2, payload), "format version 2");  // before the odometry drift
+  refused(archive::seal("PEXSLAMF", 4, payload), "format version 4");
   refused(OdometrySync().checkpoint(), "not a PEXSLAMF archive");
   // Well formed, but not this filter's: another particle count or cell size.
   ParticleFilterOptions more = small_filter(5);
@@ -803,11 +849,14 @@ TEST(FilterCheckpoint, BrokenInputIsRefusedWithAReasonAndChangesNothing) {
   lying.put<double>(1.0);        // the odometry check's scale and ratio, steps corrected
   lying.put<double>(0.0);
   lying.put<std::int64_t>(0);
+  for (int i = 0; i < 7; ++i) lying.put<double>(0.0);  // the odometry drift: its sums and estimate
+  lying.put<std::int64_t>(0);                          // ... steps observed and refused
+  lying.put<std::int64_t>(0);
   lying.put<std::uint64_t>(1);  // one trajectory node ...
   for (int i = 0; i < 3; ++i) lying.put<double>(0.0);
   lying.put<std::int64_t>(0);
   lying.put<std::int64_t>(3);  // ... whose parent is node 3
-  refused(archive::seal("PEXSLAMF", 2, lying.bytes()), "trajectory node 0 has parent 3");
+  refused(archive::seal("PEXSLAMF", 3, lying.bytes()), "trajectory node 0 has parent 3");
   // And the good one is taken up.
   EXPECT_EQ(filter.restore(good), "");
   EXPECT_TRUE(filter.checkpoint() == good);

@@ -76,9 +76,11 @@ int main(int argc, char** argv) {
     node.on_shutdown([slam, &poses_path, &checkpoint_out] {
       slam->flush();
       spdlog::info("{} filter updates, {} odometry steps replaced by the odometry check, {} along the odometry "
-                   "where the scan constrained no position",
+                   "where the scan constrained no position; odometry drift {:.5f} rad/m, turn scale {:+.4f} "
+                   "({} steps of evidence)",
                    slam->filter().generation() + 1, slam->filter().corrected_odometry_steps(),
-                   slam->filter().unconstrained_updates());
+                   slam->filter().unconstrained_updates(), slam->filter().odometry_drift().drift_rad_per_m(),
+                   slam->filter().odometry_drift().turn_scale(), slam->filter().odometry_drift().observations());
       if (!checkpoint_out.empty()) {
         const std::string bytes = slam->checkpoint();
         if (const auto why = pex::runtime::write_file_atomically(checkpoint_out, bytes); !why.empty())

@@ -3,6 +3,7 @@
 // LIDAR_SCAN and ODOMETRY in, SLAM_UPDATE and SLAM_POSE out (through `publish`
 // callbacks, so this class knows no transport), and the trajectory of every
 // scan for the offline pose file.
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -90,6 +91,11 @@ class SlamNode {
     v.total("updates_republished", republished_);
     v.total("corrected_odometry_steps", filter_.corrected_odometry_steps());
     v.total("unconstrained_updates", filter_.unconstrained_updates());
+    // The learnt drift in micro-units (counters are integers): urad per
+    // metre driven and ppm of every turn.
+    v.total("odometry_drift_urad_per_m", std::llround(filter_.odometry_drift().drift_rad_per_m() * 1e6));
+    v.total("odometry_turn_scale_ppm", std::llround(filter_.odometry_drift().turn_scale() * 1e6));
+    v.total("odometry_drift_steps", filter_.odometry_drift().observations());
     v.total("scans_without_odometry", static_cast<std::int64_t>(sync_.stale_pairings()));
     v.total("odometry_resets", static_cast<std::int64_t>(sync_.odometry_resets()));
     v.event("odometry_impossible_steps", static_cast<std::int64_t>(sync_.impossible_steps()));

@@ -91,6 +91,19 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   f.odometry_check.min_translation_m =
       check.get<double>("min_translation_m", f.odometry_check.min_translation_m, non_negative<double>());
   f.odometry_check.margin = check.get<double>("margin", f.odometry_check.margin, non_negative<double>());
+  auto drift = config.section("odometry_drift");
+  f.odometry_drift.correct = drift.get<bool>("correct", f.odometry_drift.correct);
+  f.odometry_drift.forgetting = drift.get<double>("forgetting", f.odometry_drift.forgetting, in_range(0.5, 1.0));
+  f.odometry_drift.prior_travel_m =
+      drift.get<double>("prior_travel_m", f.odometry_drift.prior_travel_m, in_range(0.001, 1e6));
+  f.odometry_drift.prior_turn_rad =
+      drift.get<double>("prior_turn_rad", f.odometry_drift.prior_turn_rad, in_range(0.001, 1e6));
+  f.odometry_drift.max_drift_rad_per_m =
+      drift.get<double>("max_drift_rad_per_m", f.odometry_drift.max_drift_rad_per_m, in_range(0.0, 1.0));
+  f.odometry_drift.max_turn_scale =
+      drift.get<double>("max_turn_scale", f.odometry_drift.max_turn_scale, in_range(0.0, 1.0));
+  f.odometry_drift.max_step_residual_rad =
+      drift.get<double>("max_step_residual_rad", f.odometry_drift.max_step_residual_rad, in_range(0.0, 1.0));
   auto constraint = config.section("constraint");
   f.constraint.enabled = constraint.get<bool>("enabled", f.constraint.enabled);
   f.constraint.neighbours = constraint.get<int>("neighbours", f.constraint.neighbours, in_range(1, 20));
