@@ -7,8 +7,8 @@ namespace pex::slam {
 
 OdometryDrift::OdometryDrift(const OdometryDriftOptions& options) : options_(options) {}
 
-bool OdometryDrift::observe(double odometry_translation_m, double odometry_turn_rad, double matched_turn_rad) {
-  const double d = std::abs(odometry_translation_m);
+bool OdometryDrift::observe(double odometry_forward_m, double odometry_turn_rad, double matched_turn_rad) {
+  const double d = odometry_forward_m;
   const double t = odometry_turn_rad;
   const double residual = geometry::wrap_angle(matched_turn_rad - odometry_turn_rad);
   if (!std::isfinite(d) || !std::isfinite(t) || !std::isfinite(residual) ||
@@ -47,7 +47,7 @@ void OdometryDrift::solve() {
 geometry::Pose2 OdometryDrift::correct(const geometry::Pose2& odometry_step) const {
   if (!options_.correct) return odometry_step;
   geometry::Pose2 out = odometry_step;
-  const double d = std::hypot(odometry_step.x_m, odometry_step.y_m);
+  const double d = odometry_step.x_m;
   out.theta_rad = geometry::wrap_angle(odometry_step.theta_rad + drift_rad_per_m_ * d +
                                        turn_scale_ * odometry_step.theta_rad);
   return out;

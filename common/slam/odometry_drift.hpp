@@ -9,8 +9,9 @@
 // motion prior pulls toward it), so part of the bias stays in every pose and
 // the map turns with it (docs/slam.md, "Odometry drift").
 //
-// Model: over a step of translation d and odometry turn dtheta, the true turn
-// is dtheta + drift_per_m * d + turn_scale * dtheta. The two are estimated by
+// Model: over a step of forward travel d (signed: backwards is negative, and
+// so is the drift it brings) and odometry turn dtheta, the true turn is
+// dtheta + drift_per_m * d + turn_scale * dtheta. The two are estimated by
 // least squares with exponential forgetting over the steps the scan
 // constrained (the best particle's matched turn against the odometry's), with
 // a ridge toward 0 so that a few steps move them little, and bounded.
@@ -24,9 +25,9 @@ namespace pex::slam {
 
 struct OdometryDriftOptions {
   // Take the estimate out of every update's step. Off: estimated and shown
-  // only (DAEMON_STATUS, pex-slam's last line), for calibrating the base;
-  // on the simulator's base correcting it did not make SLAM more accurate
-  // (docs/slam.md, "Odometry drift").
+  // only (DAEMON_STATUS, pex-slam's last line), for calibrating the base.
+  // On the simulator's base correcting it made long laps along a bare wall
+  // drift less and the other runs no better (docs/slam.md, "Odometry drift").
   bool correct = false;
   // Each step's weight decays by this factor per later step (0.998: the
   // last ~500 updates, about 250 m at 0.5 m per update).
@@ -49,10 +50,11 @@ class OdometryDrift {
  public:
   explicit OdometryDrift(const OdometryDriftOptions& options = {});
 
-  // One step's evidence: the odometry's translation (m) and turn (rad) over
-  // an update, and the turn the scan matching gave for the same step.
+  // One step's evidence: the odometry's forward travel (m, signed: the
+  // step's x in the robot frame) and turn (rad) over an update, and the
+  // turn the scan matching gave for the same step.
   // Returns false when the step was left out (max_step_residual_rad).
-  bool observe(double odometry_translation_m, double odometry_turn_rad, double matched_turn_rad);
+  bool observe(double odometry_forward_m, double odometry_turn_rad, double matched_turn_rad);
 
   // The odometry step with its heading corrected by the estimate (the
   // translation is kept: the drift model is about heading only); the step

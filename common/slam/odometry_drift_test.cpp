@@ -48,6 +48,25 @@ TEST(OdometryDrift, ABaseWithoutDriftStaysAtZeroAndAFewStepsMoveItLittle) {
   EXPECT_LT(early.drift_rad_per_m(), 0.01);
 }
 
+// Backwards, the same wheels bend the heading the other way per metre: the
+// drift goes with the signed forward travel.
+TEST(OdometryDrift, DrivingBackwardsShowsTheSameDriftTheOtherWay) {
+  OdometryDrift estimator;
+  std::mt19937_64 rng(10);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  for (int i = 0; i < 600; ++i) {
+    const double forward = i % 2 == 0 ? 0.5 : -0.5;
+    estimator.observe(forward, 0.0, 0.008 * forward + noise(rng));
+  }
+  EXPECT_NEAR(estimator.drift_rad_per_m(), 0.008, 0.001);
+  EXPECT_NEAR(estimator.correct({-0.5, 0.0, 0.0}).theta_rad, 0.0, 1e-12);  // not correcting
+  OdometryDriftOptions correcting;
+  correcting.correct = true;
+  OdometryDrift applied(correcting);
+  for (int i = 0; i < 600; ++i) applied.observe(i % 2 == 0 ? 0.5 : -0.5, 0.0, 0.008 * (i % 2 == 0 ? 0.5 : -0.5));
+  EXPECT_LT(applied.correct({-0.5, 0.0, 0.0}).theta_rad, -0.003);
+}
+
 TEST(OdometryDrift, FollowsABaseThatChanges) {
   OdometryDrift estimator;
   drive(estimator, 600, 0.008, 0.0, 0.002, 4);

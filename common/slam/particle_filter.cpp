@@ -135,7 +135,7 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   };
   // The step as the odometry measured it: the drift's evidence below.
   const double odometry_turn = odometry_step.theta_rad;
-  const double odometry_travel = std::hypot(odometry_step.x_m, odometry_step.y_m);
+  const double odometry_forward = odometry_step.x_m;
   if (options_.odometry_drift.correct) {
     const Pose2 corrected = drift_.correct(odometry_step);
     if (corrected.theta_rad != odometry_step.theta_rad) move_onto(corrected);
@@ -218,7 +218,7 @@ void ParticleFilter::update(const ScanPoints& points, const Pose2& odometry) {
   // the odometry step stood as measured.
   if (stats.unconstrained_directions == 0 && stats.failed_matches == 0 && stats.odometry_scale == 1.0) {
     const Particle& best = particles_[best_index()];
-    drift_.observe(odometry_travel, odometry_turn, geometry::wrap_angle(best.pose.theta_rad - best.pose_at_update.theta_rad));
+    drift_.observe(odometry_forward, odometry_turn, geometry::wrap_angle(best.pose.theta_rad - best.pose_at_update.theta_rad));
   }
   for (Particle& p : particles_) {
     stats.points_beyond_map_extent += p.map->insert(p.pose, points);
