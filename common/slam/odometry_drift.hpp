@@ -4,10 +4,9 @@
 // odometry's heading by a fixed amount per metre driven, a wheel base that
 // is slightly off scales every turn; neither averages out, and the motion
 // model takes its noise as zero-mean. On ground the particles' maps already
-// hold, the matcher corrects it; on new ground the prediction is all there
-// is to start from (the hill climb stops near where it started, the proposal's
-// motion prior pulls toward it), so part of the bias stays in every pose and
-// the map turns with it (docs/slam.md, "Odometry drift").
+// hold, the matcher corrects it; on new ground the prediction is what the
+// hill climb starts from and the proposal's motion prior pulls toward, so
+// part of the bias can stay in the poses (docs/slam.md, "Odometry drift").
 //
 // Model: over a step of forward travel d (signed: backwards is negative, and
 // so is the drift it brings) and odometry turn dtheta, the true turn is
@@ -26,8 +25,9 @@ namespace pex::slam {
 struct OdometryDriftOptions {
   // Take the estimate out of every update's step. Off: estimated and shown
   // only (DAEMON_STATUS, pex-slam's last line), for calibrating the base.
-  // On the simulator's base correcting it made long laps along a bare wall
-  // drift less and the other runs no better (docs/slam.md, "Odometry drift").
+  // On the simulator's base correcting it gave no reliable gain: less drift
+  // on replayed laps along a bare wall, not live, none elsewhere
+  // (docs/slam.md, "Odometry drift").
   bool correct = false;
   // Each step's weight decays by this factor per later step (0.998: the
   // last ~500 updates, about 250 m at 0.5 m per update).
