@@ -276,5 +276,33 @@ TEST(SlamOptions, NullLogLikelihoodOutsideItsRangeIsAConfigError) {
   }
 }
 
+// [odometry_drift]: each key reaches the filter's options, out-of-range
+// values are config errors, and the shipped file only shows the estimate.
+TEST(SlamOptions, OdometryDriftKeysReachTheFilterAndAreChecked) {
+  auto config = runtime::ConfigReader::from_string(
+      "[odometry_drift]\ncorrect = true\nforgetting = 0.99\nprior_travel_m = 2.0\nprior_turn_rad = 1.0\n"
+      "max_drift_rad_per_m = 0.02\nmax_turn_scale = 0.05\nmax_step_residual_rad = 0.1\n",
+      "slam.toml");
+  const auto drift = load_options(config).filter.odometry_drift;
+  EXPECT_TRUE(drift.correct);
+  EXPECT_EQ(drift.forgetting, 0.99);
+  EXPECT_EQ(drift.prior_travel_m, 2.0);
+  EXPECT_EQ(drift.prior_turn_rad, 1.0);
+  EXPECT_EQ(drift.max_drift_rad_per_m, 0.02);
+  EXPECT_EQ(drift.max_turn_scale, 0.05);
+  EXPECT_EQ(drift.max_step_residual_rad, 0.1);
+  for (const char* bad : {"forgetting = 0.2", "forgetting = 1.5", "prior_travel_m = 0", "max_turn_scale = 2",
+                          "max_drift_rad_per_m = -0.1"}) {
+    auto wrong = runtime::ConfigReader::from_string(std::string("[odometry_drift]\n") + bad + "\n", "slam.toml");
+    EXPECT_THROW(load_options(wrong), runtime::ConfigError) << bad;
+  }
+  // The key before it was named `correct` is no key (finish(): unknown keys).
+  auto renamed = runtime::ConfigReader::from_string("[odometry_drift]\nenabled = true\n", "slam.toml");
+  (void)load_options(renamed);
+  EXPECT_THROW(renamed.finish(), runtime::ConfigError);
+  auto shipped = runtime::ConfigReader::from_file(std::string(PEX_SOURCE_DIR) + "/config/slam.toml");
+  EXPECT_FALSE(load_options(shipped).filter.odometry_drift.correct);
+}
+
 }  // namespace
 }  // namespace pex::slam_daemon
