@@ -180,7 +180,6 @@ BENCHMARK(BM_InsertIntel)->Arg(1000)->Arg(5000)->Unit(benchmark::kMillisecond)
     ->Repetitions(5)->ReportAggregatesOnly(true);
 BENCHMARK(BM_MergePlanningMap)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
-
 }  // namespace
 
 int main(int argc, char** argv) {

@@ -503,7 +503,6 @@ BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Itera
 BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
     ->ReportAggregatesOnly(true);
 
-
 }  // namespace
 
 int main(int argc, char** argv) {

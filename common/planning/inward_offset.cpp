@@ -429,19 +429,17 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
     ++eroder.cache->call;
   }
 
-  for (const auto& input : free_space) {
-    bool far = false;
-    auto check = [&](const mapping::Ring& ring) {
-      for (const auto& p : ring)
-        far = far || !(std::abs(p.x()) <= kMaxAbsCoordinateM && std::abs(p.y()) <= kMaxAbsCoordinateM);
-    };
-    check(input.geometry.outer());
-    for (const auto& hole : input.geometry.inners()) check(hole);
-    if (far) {
+  auto beyond_grid = [](const mapping::Ring& ring) {
+    return std::any_of(ring.begin(), ring.end(), [](const auto& p) {
+      return !(std::abs(p.x()) <= kMaxAbsCoordinateM && std::abs(p.y()) <= kMaxAbsCoordinateM);
+    });
+  };
+  for (const auto& input : free_space)
+    if (beyond_grid(input.geometry.outer()) ||
+        std::any_of(input.geometry.inners().begin(), input.geometry.inners().end(), beyond_grid)) {
       result.error = "a coordinate is not finite or beyond 1e9 m";
       return result;
     }
-  }
   // Polygon by polygon: the polygons of a map are interior-disjoint, and a
   // point of one is nearer its own boundary than any other polygon's (a
   // segment to another polygon's edge leaves its own first), so its C-space
