@@ -13,14 +13,20 @@
 // and sorts only the split points, so on map-like inputs its cost grows about
 // linearly with the vertices and meeting points; its buffers are reused.
 //
-// Robustness: points within kOverlaySnap (1e-9 m) of each other or of an edge
-// are treated as meeting it (b's vertices are moved onto a's, edges are split
-// at the other side's vertices), so touching and overlapping edges, which
-// tiles and their pieces have along every tile border, become shared pieces.
-// The result is not checked here: callers check it (is_clearly_valid, then
-// bg::is_valid, after RDP: simplify_and_check in tile.hpp) and count a
-// failure when it is not valid or `ok` is false. Boost.Geometry's overlay is
-// the oracle of the tests, not a fallback.
+// Exact: the output lies on a grid of kOverlayGridM (2^-20 m, about 1 um;
+// coordinates up to kOverlayMaxCoordinateM), reached by snap rounding: the
+// operands' vertices and the crossings of their edges, taken as integers on
+// a far finer grid, mark their grid cells "hot", and every edge is bent
+// through the centre of every hot cell it passes, and again for the bent
+// pieces until none passes one it does not end in (iterated snap
+// rounding). Every predicate (orientation, angle order, point in polygon)
+// is computed on integers without rounding. The pieces then meet only at their ends or along whole
+// pieces, so classifying and linking them cannot disagree: the overlay of
+// valid operands succeeds by construction, moving the boundary by a cell or
+// two (kOverlayMovesM). Touching and overlapping edges, which tiles and their
+// pieces have along every tile border, become shared pieces; a sliver of one
+// operand thinner than a cell collapses and is dropped. Boost.Geometry's
+// overlay is the oracle of the tests, not a fallback.
 #include <optional>
 #include <span>
 #include <string>
@@ -32,11 +38,24 @@ namespace pex::mapping {
 
 enum class OverlayOp { kUnion, kIntersection, kDifference };
 
-inline constexpr double kOverlaySnap = 1e-9;
+// The overlay's grid, and the largest coordinate it takes (larger ones are
+// refused: ok false). Products of coordinate differences then fit 128 bits.
+inline constexpr int kOverlayGridBits = 20;
+inline constexpr double kOverlayGridM = 1.0 / (1 << kOverlayGridBits);
+inline constexpr double kOverlayMaxCoordinateM = 8192.0;
+// How far the overlay can move a point of the boundary: rounding moves a
+// vertex by 0.71 of a cell, and each round of snap rounding can bend a
+// piece by as much again; two cells bound what the tests see.
+inline constexpr double kOverlayMovesM = 2.0 * kOverlayGridM;
+
+// v rounded to the overlay's grid as the overlay rounds a vertex (to the
+// nearest line, a half up; v itself beyond kOverlayMaxCoordinateM). Tile
+// lines lie on it, so a tile's sides are not moved.
+double to_overlay_grid(double v);
 
 struct OverlayResult {
   bool ok = false;
-  std::string error;  // why not ok: pieces that do not link into rings, a hole with no polygon
+  std::string error;  // why not ok: a coordinate beyond kOverlayMaxCoordinateM or not finite, a hole with no polygon
   TypedMultiPolygon polygons;
 };
 

@@ -55,8 +55,11 @@ void expect_matches_boost(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   std::string why;
   ASSERT_TRUE(is_valid(r.polygons, &why)) << why;
   const MultiPolygon expected = boost_overlay(a, b, op);
+  // The overlay rounds every point onto its grid, moving the boundary by at
+  // most kOverlayMovesM: an area by at most the boundary's length times that.
   const double scale = std::max(1.0, bg::area(expected));
-  EXPECT_NEAR(area(r.polygons), bg::area(expected), 1e-9 * scale);
+  const double boundary_m = bg::perimeter(geometry_of(a)) + bg::perimeter(geometry_of(b));
+  EXPECT_NEAR(area(r.polygons), bg::area(expected), 1e-9 * scale + boundary_m * kOverlayMovesM);
   // Same point set: sampled points are inside both or outside both, but for
   // points on a boundary. (Boost's sym_difference of two equal inputs is not
   // reliable enough to be the oracle here.)
@@ -71,14 +74,14 @@ void expect_matches_boost(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   for (int k = 0; k < (expected.empty() ? 0 : 2000); ++k) {
     const Point s(ux(rng), uy(rng));
     if (bg::covered_by(s, ours) != bg::covered_by(s, expected) &&
-        boundary_distance(s, expected) > 1e-7)
+        boundary_distance(s, expected) > kOverlayMovesM)
       ++disagreements;
   }
   EXPECT_EQ(disagreements, 0) << "op " << int(op) << "\nours " << bg::wkt(ours) << "\nboost " << bg::wkt(expected);
   for_each_edge(r.polygons, [&](const Point& p, const Point& q, EdgeType t) {
     bool found = false;
     auto look = [&](const Point& u, const Point& v, EdgeType s) {
-      if (s == t && bg::distance(p, Segment(u, v)) < 1e-8 && bg::distance(q, Segment(u, v)) < 1e-8) found = true;
+      if (s == t && bg::distance(p, Segment(u, v)) < kOverlayMovesM && bg::distance(q, Segment(u, v)) < kOverlayMovesM) found = true;
     };
     for_each_edge(a, look);
     for_each_edge(b, look);
@@ -182,9 +185,11 @@ TEST(EdgeOverlay, DifferenceTakesTheSubtrahendsEdgesTurnedRound) {
   TypedMultiPolygon obstacles{rect(-0.1, -0.1, 10.1, 0.02, E::kObstacle), rect(4, 2, 5, 3, E::kObstacle)};
   const auto r = overlay(room, obstacles, OverlayOp::kDifference);
   expect_matches_boost(room, obstacles, OverlayOp::kDifference, r);
-  EXPECT_NEAR(area(r.polygons), 60.0 - 10 * 0.02 - 1.0, 1e-9);
-  EXPECT_NEAR(edge_length(r.polygons, E::kObstacle), 10.0 + 4.0, 1e-9);  // band's inner side, pillar
-  EXPECT_NEAR(edge_length(r.polygons, E::kFrontier), 10.0 + 2 * (6 - 0.02), 1e-9);
+  // y = 0.02 is not on the overlay's grid: the band's side moves onto it.
+  const double moved_area = (bg::perimeter(geometry_of(room)) + bg::perimeter(geometry_of(obstacles))) * kOverlayMovesM;
+  EXPECT_NEAR(area(r.polygons), 60.0 - 10 * 0.02 - 1.0, moved_area);
+  EXPECT_NEAR(edge_length(r.polygons, E::kObstacle), 10.0 + 4.0, 2 * 5 * kOverlayMovesM);  // band's inner side, pillar
+  EXPECT_NEAR(edge_length(r.polygons, E::kFrontier), 10.0 + 2 * (6 - 0.02), 2 * 3 * kOverlayMovesM);
   // A band edge lying on a room edge in the opposite direction bounds the
   // difference: the room's top (x 0..10 at y 6) against a band whose bottom is y 6.
   const TypedMultiPolygon cap{rect(2, 6, 8, 6.1, E::kObstacle)};
@@ -264,6 +269,87 @@ TEST(EdgeOverlay, RandomScanMapsAgreeWithBoost) {
   }
   EXPECT_EQ(cases, 720);
   EXPECT_EQ(failed, 0);
+}
+
+// Operands made to be near-degenerate: lattice shapes and the same shapes
+// moved by a fraction of a micrometre to a few (below, at and above the
+// overlay's grid), or turned by a microradian, so their edges nearly
+// coincide, nearly touch and cross at tiny angles everywhere. Every overlay
+// must succeed with a valid result whose areas agree with each other
+// (union + intersection = a + b, difference = a - intersection) up to the
+// rounding's bound: no oracle, whose own robustness such inputs test.
+TEST(EdgeOverlay, NearDegenerateOperandsAlwaysOverlay) {
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> lattice(0, 16);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const EdgeType kinds[3] = {E::kObstacle, E::kFrontier, E::kBorder};
+  auto typed = [&](const MultiPolygon& geometry) {
+    TypedMultiPolygon out;
+    for (const auto& g : geometry) {
+      TypedPolygon p{g, {}};
+      p.edge_types.emplace_back(g.outer().size() - 1, kinds[rng() % 3]);
+      for (const auto& inner : g.inners()) p.edge_types.emplace_back(inner.size() - 1, kinds[rng() % 3]);
+      out.push_back(std::move(p));
+    }
+    return out;
+  };
+  // A union of lattice rectangles and right triangles, 0.25 m apart.
+  auto lattice_shape = [&] {
+    MultiPolygon shape;
+    for (int k = 0; k < 6; ++k) {
+      const double x0 = 0.25 * lattice(rng), y0 = 0.25 * lattice(rng);
+      const double w = 0.25 * (1 + lattice(rng) % 6), h = 0.25 * (1 + lattice(rng) % 6);
+      Polygon part;
+      if (k % 2 == 0) {
+        part.outer() = {{x0, y0}, {x0 + w, y0}, {x0 + w, y0 + h}, {x0, y0 + h}, {x0, y0}};
+      } else {
+        part.outer() = {{x0, y0}, {x0 + w, y0}, {x0, y0 + h}, {x0, y0}};
+      }
+      MultiPolygon grown;
+      bg::union_(shape, part, grown);
+      shape = std::move(grown);
+    }
+    return shape;
+  };
+  auto moved = [](const MultiPolygon& shape, double dx, double dy, double turn_rad) {
+    MultiPolygon out = shape;
+    const double c = std::cos(turn_rad), s = std::sin(turn_rad);
+    auto move = [&](Point& p) { p = Point(c * p.x() - s * p.y() + dx, s * p.x() + c * p.y() + dy); };
+    for (auto& polygon : out) {
+      for (auto& p : polygon.outer()) move(p);
+      for (auto& inner : polygon.inners())
+        for (auto& p : inner) move(p);
+    }
+    return out;
+  };
+  const double scales[5] = {1e-9, 1e-7, 0.5 * kOverlayGridM, 2e-6, 1e-5};
+  int cases = 0;
+  for (int trial = 0; trial < 10000; ++trial) {
+    const MultiPolygon shape = lattice_shape();
+    const double scale = scales[trial % 5];
+    MultiPolygon other;
+    switch (trial / 5 % 3) {
+      case 0: other = moved(shape, scale * u(rng), scale * u(rng), 0.0); break;
+      case 1: other = moved(shape, 0.0, 0.0, scale * u(rng)); break;
+      case 2: other = moved(lattice_shape(), scale * u(rng), scale * u(rng), 0.0); break;
+    }
+    const TypedMultiPolygon a = typed(shape), b = typed(other);
+    if (!is_valid(a) || !is_valid(b)) continue;  // an operand Boost calls invalid: outside the contract
+    ++cases;
+    const auto united = overlay(a, b, OverlayOp::kUnion);
+    const auto common = overlay(a, b, OverlayOp::kIntersection);
+    const auto less = overlay(a, b, OverlayOp::kDifference);
+    for (const auto* r : {&united, &common, &less}) {
+      ASSERT_TRUE(r->ok) << r->error << " trial " << trial << "\na " << bg::wkt(shape) << "\nb " << bg::wkt(other);
+      std::string why;
+      ASSERT_TRUE(is_valid(r->polygons, &why)) << why << " trial " << trial << "\na " << bg::wkt(shape) << "\nb "
+                                               << bg::wkt(other) << "\nout " << bg::wkt(geometry_of(r->polygons));
+    }
+    const double moved_area = (bg::perimeter(shape) + bg::perimeter(other)) * kOverlayMovesM;
+    EXPECT_NEAR(area(united.polygons) + area(common.polygons), area(a) + area(b), 2 * moved_area) << trial;
+    EXPECT_NEAR(area(less.polygons), area(a) - area(common.polygons), 2 * moved_area) << trial;
+  }
+  EXPECT_GT(cases, 9000);
 }
 
 }  // namespace

@@ -66,9 +66,16 @@ std::optional<std::vector<TilePiece>> clip_to_tiles(const PreparedScan& prepared
       pieces.push_back({key, box, std::move(free.polygons), std::move(clipped_band.polygons)});
     }
   }
+  // The overlay moves the boundary by at most kOverlayMovesM, so an area by
+  // at most the boundary's length (with the tile sides the clip adds) times
+  // that; a lost piece is far more.
   const double scan_area = area(scan), band_area = area(band);
-  if (std::abs(free_sum - scan_area) <= 1e-6 * std::max(1.0, scan_area) &&
-      std::abs(band_sum - band_area) <= 1e-6 * std::max(1.0, band_area))
+  auto conserved = [](double whole, double sum, double boundary_m) {
+    return std::abs(sum - whole) <= 1e-9 * std::max(1.0, whole) + boundary_m * kOverlayMovesM;
+  };
+  const double tile_sides_m = 4.0 * grid.size_m * static_cast<double>(pieces.size());
+  if (conserved(scan_area, free_sum, bg::perimeter(scan[0].geometry) + tile_sides_m) &&
+      conserved(band_area, band_sum, bg::perimeter(band_geometry) + tile_sides_m))
     return pieces;
   why = "clipping to tiles does not conserve area (scan " + std::to_string(scan_area) + " vs " +
         std::to_string(free_sum) + " m2, band " + std::to_string(band_area) + " vs " + std::to_string(band_sum) +
@@ -95,7 +102,9 @@ bool unite_layer(const TypedMultiPolygon* old, TypedMultiPolygon& piece, const T
   }
   const double a_old = area(*old), a_new = area(piece);
   area_after_union = area(united.polygons);
-  if (area_after_union < std::max(a_old, a_new) - 1e-6 || area_after_union > a_old + a_new + 1e-6) {
+  if (!area_within(area_after_union, std::max(a_old, a_new), a_old + a_new, [&] {
+        return bg::perimeter(geometry_of(*old)) + bg::perimeter(geometry_of(piece));
+      })) {
     why = "union area out of bounds";
     return false;
   }

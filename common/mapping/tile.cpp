@@ -147,7 +147,9 @@ void Tile::compute_planning() const {
     if (difference.ok) {
       // A difference lies between (free - obstacles) and free.
       const double a_free = area(free), a_diff = area(difference.polygons);
-      if (a_diff > a_free + 1e-6 || a_diff < a_free - area(obstacles) - 1e-6)
+      if (!area_within(a_diff, a_free - area(obstacles), a_free, [&] {
+            return bg::perimeter(geometry_of(free)) + bg::perimeter(geometry_of(obstacles));
+          }))
         why = "difference area out of bounds";
       else if (!simplify_and_check(difference.polygons, difference.polygons.size(), options_.simplify_epsilon_m, why))
         why = "planning layer invalid: " + why;

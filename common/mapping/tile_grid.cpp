@@ -72,7 +72,12 @@ void split_ring(Ring& ring, std::vector<EdgeType>* types, const TileGrid& grid) 
 }  // namespace
 
 std::int32_t TileGrid::index(double v) const {
-  return static_cast<std::int32_t>(std::floor((v - origin_m) / size_m));
+  // The k with line(k) <= v < line(k + 1): the plain quotient, put right
+  // where line()'s rounding onto the overlay's grid moved the line across v.
+  auto k = static_cast<std::int64_t>(std::floor((v - origin_m) / size_m));
+  if (line(k) > v) --k;
+  else if (line(k + 1) <= v) ++k;
+  return static_cast<std::int32_t>(k);
 }
 
 Box TileGrid::box(const TileKey& key) const {

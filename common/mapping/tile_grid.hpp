@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <utility>
 
+#include "mapping/edge_overlay.hpp"
 #include "mapping/typed_polygon.hpp"
 
 namespace pex::mapping {
@@ -18,8 +19,9 @@ struct TileGrid {
   double size_m = 8.0;
   double origin_m = 0.0;
 
-  // Coordinate of line k; index of the tile column (row) holding v.
-  double line(std::int64_t k) const { return origin_m + static_cast<double>(k) * size_m; }
+  // Coordinate of line k, on the overlay's grid (so overlays leave a tile's
+  // sides where they are); index of the tile column (row) holding v.
+  double line(std::int64_t k) const { return to_overlay_grid(origin_m + static_cast<double>(k) * size_m); }
   std::int32_t index(double v) const;
   Box box(const TileKey& key) const;
   // The keys of the tiles an envelope meets: [first.first, last.first] x [first.second, last.second].

@@ -62,7 +62,7 @@ double net_area(std::span<const RingRef> rings) {
 
 // The bounds any correct result's area keeps (union: each operand and no more
 // than both; difference: a less b and no more than a; intersection: no more
-// than either), with room for the overlay's snapping. Why: on degenerate
+// than either), with room for the overlay's rounding (area_within). Why: on degenerate
 // operands (slivers of 1e-10 m², vertices repeated 1e-9 m apart: the fuzzer's
 // fuzz/corpus/typed_ops/regression_*)
 // the overlay can return ok with a hole filled or an operand lost; a map
@@ -77,9 +77,14 @@ std::optional<std::string> area_out_of_bounds(std::span<const RingRef> a, std::s
     case OverlayOp::kDifference: lo = std::max(0.0, area_a - area_b), hi = area_a; break;
     case OverlayOp::kIntersection: lo = 0.0, hi = std::min(area_a, area_b); break;
   }
-  const double tolerance = 1e-6 * std::max(1.0, hi);
   const double got = area(out);
-  if (got >= lo - tolerance && got <= hi + tolerance) return std::nullopt;
+  if (area_within(got, lo, hi, [&] {
+        double boundary_m = 0.0;
+        for (const auto* side : {&a, &b})
+          for (const RingRef& r : *side) boundary_m += bg::perimeter(*r.ring);
+        return boundary_m;
+      }))
+    return std::nullopt;
   return "overlay result of " + std::to_string(got) + " m2 outside [" + std::to_string(lo) + ", " +
          std::to_string(hi) + "] m2 (degenerate operands)";
 }
@@ -316,9 +321,10 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   // The overlay's output was checked alone. The whole result is checked
   // again when polygons were copied past the overlay or holes put back:
   // - a copy may touch the output (valid operands may touch at a point),
-  //   and the overlay splits an edge at a point up to kOverlaySnap from it,
-  //   which tilts the edge by as much: the copy then overlaps it;
-  // - a hole set aside may touch its outer ring, and the same tilt leaves
+  //   and the overlay moves the output's edges onto its grid (by up to
+  //   kOverlayMovesM) but not the copy, which took no part: it can then
+  //   overlap them;
+  // - a hole set aside may touch its outer ring, and the same move leaves
   //   the hole's vertex outside it;
   // - bg::is_valid rounds onto a grid scaled to the box of what it checks,
   //   so an output it accepts alone or with its near copies can be a
@@ -440,7 +446,7 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
     clipped = true;
   }
   // Each piece was checked alone; pieces of polygons that touch at a point
-  // can overlap once the overlay's snapping tilted an edge (as in
+  // can overlap once the overlay moved an edge onto its grid (as in
   // typed_union above): with validate on, the whole result is checked.
   std::string why;
   if (options.validate && clipped && result.polygons.size() > 1 && !is_valid_cheap_first(result.polygons, why))

@@ -3,6 +3,8 @@
 // clip run our edge overlay (edge_overlay.hpp), which carries each edge's
 // type; offsetting runs Boost.Geometry's buffer (the simpler tool there) and
 // types its output with the reassignment pass (edge_reassignment.hpp).
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 
@@ -27,8 +29,9 @@ struct TypedOpOptions {
   bool validate = true;
   // With validate: typed_union checks its whole result again (the
   // overlay's output with every polygon it copied unchanged and every hole
-  // it put back), since the overlay's 1e-9 m snapping can tilt an edge onto
-  // a copy and Boost's verdict depends on the box it checks. false: copies
+  // it put back), since the overlay moves its output onto its grid but not
+  // the copies, so an edge can come to overlap a copy, and Boost's verdict
+  // depends on the box it checks. false: copies
   // are not looked at (the explorer's live view, a planning-only overlay
   // whose rings Clipper's offset unions anyway: the check was a quarter of a
   // campus plan's time).
@@ -78,6 +81,18 @@ TypedOpResult typed_clip(const TypedMultiPolygon& polygons, const Box& box,
 // the input edge it was offset from.
 TypedOpResult typed_offset(const TypedMultiPolygon& polygons, double distance_m,
                            int points_per_circle = 16, const TypedOpOptions& options = {});
+
+// Whether an overlay's result area `got` lies in [lo, hi], the bounds any
+// correct result keeps, up to what the overlay's rounding onto its grid can
+// move an area: kOverlayMovesM times the operands' boundary length, which
+// boundary_m() measures (called only when the plain test fails).
+template <class BoundaryLength>
+bool area_within(double got, double lo, double hi, BoundaryLength&& boundary_m) {
+  const double plain = 1e-9 * std::max({1.0, std::abs(lo), std::abs(hi)});
+  if (got >= lo - plain && got <= hi + plain) return true;
+  const double moved = plain + boundary_m() * kOverlayMovesM;
+  return got >= lo - moved && got <= hi + moved;
+}
 
 // Types `geometry` from `index` (or all frontier when !assign_edge_types),
 // with border edges of options.border_box typed kBorder.

@@ -250,7 +250,10 @@ TEST(ExploreReport, UnreachableMapSpaceIsSplitIntoBeyondTheWallsAndCornersTheDis
   options.map_in_world = world.start;
   const auto r = make_report("room", *contents, world, reachable, options, nullptr, &world_free);
   ASSERT_TRUE(r.map_outside_free_m2 && r.map_unreachable_free_m2);
-  EXPECT_NEAR(*r.map_outside_free_m2, 0.5 * 4.0, 0.01);  // the strip beyond the wall (1 mm of it inside)
+  // The strip beyond the wall, and the 1 mm inside the walls the map
+  // covers that the 1 mm disk's free space leaves out: along the west wall
+  // (4 m) and along the north and south walls (3 m each).
+  EXPECT_NEAR(*r.map_outside_free_m2, 0.5 * 4.0 + 0.001 * (4.0 + 2 * 3.0), 1e-4);
   // Two corners the 0.25 m disk cannot reach: r^2 (1 - pi / 4) each.
   EXPECT_NEAR(*r.map_unreachable_free_m2, 2.0 * 0.0625 * (1.0 - std::numbers::pi / 4.0), 0.01);
   EXPECT_NE(to_json(r).find("\"map_outside_free_m2\":2.0"), std::string::npos) << to_json(r);
