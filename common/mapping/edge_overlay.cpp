@@ -442,9 +442,10 @@ class Overlay {
     for (std::size_t m = 0; m < hot_cells_.size(); ++m) hot_by_bucket_[m] = hot_[hot_cells_[m]];
   }
 
-  // The hot pixels within `margin` cells of the box of cells cp, cq, in
-  // `near`: every hot pixel a segment between those cells passes (margin 1),
-  // and those its bent pieces can pass (below).
+  // The hot pixels within `margin` cells of the box of cells cp, cq but
+  // those two, in `near`: every hot pixel a segment between those cells
+  // passes but does not end in (margin 1), and those its bent pieces can
+  // pass (below). Most edges have none.
   void gather_near(const IPoint& cp, const IPoint& cq, I64 margin, std::vector<IPoint>& near) {
     near.clear();
     const I64 min_x = std::min(cp.x, cq.x) - margin, max_x = std::max(cp.x, cq.x) + margin;
@@ -452,7 +453,8 @@ class Overlay {
     hot_buckets_.for_each(cp, cq, margin + 1, [&](std::size_t b) {
       const IPoint* last = hot_by_bucket_.data() + hot_start_[b + 1];
       for (const IPoint* c = hot_by_bucket_.data() + hot_start_[b]; c != last; ++c)
-        if (c->x >= min_x && c->x <= max_x && c->y >= min_y && c->y <= max_y) near.push_back(*c);
+        if (c->x >= min_x && c->x <= max_x && c->y >= min_y && c->y <= max_y && *c != cp && *c != cq)
+          near.push_back(*c);
     });
   }
 
@@ -485,8 +487,12 @@ class Overlay {
     for (std::uint32_t k = 0; k < edges_.size(); ++k) {
       const InputEdge& e = edges_[k];
       gather_near(e.cp, e.cq, kNearMargin, edge_near_);
+      if (edge_near_.empty()) continue;
       hot_pixels_on(e.p, e.q, e.cp, e.cq, edge_near_);
       if (found_.empty()) continue;
+      // The edge's own ends are hot too, and a bent piece may pass them.
+      edge_near_.push_back(e.cp);
+      edge_near_.push_back(e.cq);
       path_.clear();
       path_.push_back(e.cp);
       path_.insert(path_.end(), found_.begin(), found_.end());
