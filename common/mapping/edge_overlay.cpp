@@ -133,7 +133,8 @@ IPoint crossing_cell(const IPoint& p, const IPoint& q, const IPoint& r, const IP
   {
     const long double t = static_cast<long double>(n) / static_cast<long double>(m);
     auto cell = [&](I64 from, I64 along, I64& out) {
-      const long double u = (static_cast<long double>(from) + static_cast<long double>(along) * t) / kFinePerCell + 0.5L;
+      const long double x = static_cast<long double>(from) + static_cast<long double>(along) * t;
+      const long double u = x / kFinePerCell + 0.5L;
       const long double f = std::floor(u);
       if (u - f < 0x1p-10L || f + 1 - u < 0x1p-10L) return false;
       out = static_cast<I64>(f);
@@ -244,7 +245,8 @@ struct Buckets {
     const I64 height = I64{1} << shift_y;
     for (int r = first_row; r <= last_row; ++r) {
       const double slab_lo = static_cast<double>(r == 0 ? lo_y : std::max(lo_y, min_y + r * height - kMargin));
-      const double slab_hi = static_cast<double>(r == n - 1 ? hi_y : std::min(hi_y, min_y + (r + 1) * height + kMargin));
+      const double slab_hi =
+          static_cast<double>(r == n - 1 ? hi_y : std::min(hi_y, min_y + (r + 1) * height + kMargin));
       const double ta = std::clamp((slab_lo - static_cast<double>(p.y)) / dy, 0.0, 1.0);
       const double tb = std::clamp((slab_hi - static_cast<double>(p.y)) / dy, 0.0, 1.0);
       const double xa = static_cast<double>(p.x) + ta * dx, xb = static_cast<double>(p.x) + tb * dx;
@@ -408,7 +410,8 @@ class Overlay {
       build_lists(edge_buckets_.size(), bucket_start_, bucket_edges_, fill_, [&](auto&& emit) {
         for (std::uint32_t k = 0; k < edges_.size(); ++k) {
           const InputEdge& e = edges_[k];
-          if (e.side == 1 && near_meet_box(e)) edge_buckets_.for_each(e.cp, e.cq, 2, [&](std::size_t b) { emit(b, k); });
+          if (e.side == 1 && near_meet_box(e))
+            edge_buckets_.for_each(e.cp, e.cq, 2, [&](std::size_t b) { emit(b, k); });
         }
       });
       tested_by_.assign(edges_.size(), kNone);
@@ -814,15 +817,17 @@ class Overlay {
         ring.types.push_back(box_lo && on_box_side(vertices_[p.from], vertices_[p.to]) ? EdgeType::kBorder : p.type);
       }
       ring.ring.push_back(ring.ring.front());
+      const auto first_piece = static_cast<std::uint32_t>(loop_pieces_.size());
+      const auto size = static_cast<std::uint32_t>(loop.size());
       if (twice_area > 0) {
         TypedPolygon polygon;
         polygon.geometry.outer() = std::move(ring.ring);
         polygon.edge_types.push_back(std::move(ring.types));
         result.polygons.push_back(std::move(polygon));
-        outer_loops_.push_back({static_cast<std::uint32_t>(loop_pieces_.size()), static_cast<std::uint32_t>(loop.size()), twice_area});
+        outer_loops_.push_back(Loop{first_piece, size, twice_area});
       } else {
         holes.push_back(std::move(ring));
-        hole_loops_.push_back({static_cast<std::uint32_t>(loop_pieces_.size()), static_cast<std::uint32_t>(loop.size()), twice_area});
+        hole_loops_.push_back(Loop{first_piece, size, twice_area});
       }
       loop_pieces_.insert(loop_pieces_.end(), loop.begin(), loop.end());
     };

@@ -1,31 +1,34 @@
 #pragma once
 // Union, intersection and difference of two valid typed multi-polygons by
 // splitting their edges where they meet, keeping the pieces that bound the
-// result and linking them into rings. Every output edge is a piece of exactly one input edge, so
-// it carries that edge's type: no search for the best-matching input edge is
-// needed (it is the zero-penalty match of the reassignment pass by
-// construction).
+// result and linking them into rings. Every output edge is a piece of
+// exactly one input edge, so it carries that edge's type: no search for the
+// best-matching input edge is needed (it is the zero-penalty match of the
+// reassignment pass by construction).
 //
 // Why our own: PolygonMap's updates are small overlays (a tile of a few
 // hundred vertices and a scan piece), where Boost.Geometry's overlay costs
 // mostly set-up (sections, turn bookkeeping, traversal state; figures in
-// docs/mapping.md) and needs the reassignment pass afterwards. This one finds meeting edges through a grid
-// and sorts only the split points, so on map-like inputs its cost grows about
-// linearly with the vertices and meeting points; its buffers are reused.
+// docs/mapping.md) and needs the reassignment pass afterwards. This one
+// finds meeting edges and nearby vertices through bucket grids, so on
+// map-like inputs its cost grows about linearly with the vertices and
+// meeting points; its buffers are reused.
 //
-// Exact: the output lies on a grid of kOverlayGridM (2^-20 m, about 1 um;
-// coordinates up to kOverlayMaxCoordinateM), reached by snap rounding: the
-// operands' vertices and the crossings of their edges, taken as integers on
-// a far finer grid, mark their grid cells "hot", and every edge is bent
-// through the centre of every hot cell it passes, and again for the bent
-// pieces until none passes one it does not end in (iterated snap
-// rounding). Every predicate (orientation, angle order, point in polygon)
-// is computed on integers without rounding. The pieces then meet only at their ends or along whole
-// pieces, so classifying and linking them cannot disagree: the overlay of
-// valid operands succeeds by construction, moving the boundary by a cell or
-// two (kOverlayMovesM). Touching and overlapping edges, which tiles and their
-// pieces have along every tile border, become shared pieces; a sliver of one
-// operand thinner than a cell collapses and is dropped. Boost.Geometry's
+// Exact: the output lies on a grid of kOverlayGridM (2^-20 m, about 1 um),
+// reached by snap rounding. The operands are taken as integers on a far
+// finer grid (2^-40 m); their vertices and the crossings of an edge of a
+// with one of b mark the output grid's cells they lie in "hot"; every edge
+// is bent through the centre of every hot cell it passes, and the bent
+// pieces again until none passes one it does not end in (iterated snap
+// rounding). Every predicate after that (orientation, angle order, point in
+// polygon, the polygon a hole belongs to) is computed on integers without
+// rounding. The pieces meet only at their ends or along whole pieces, so
+// classifying and linking them cannot disagree: for operands valid on the
+// fine grid the overlay succeeds, and no vertex of its output lies within
+// half a cell of an edge it is not on. It moves the boundary by about a
+// cell (kOverlayMovesM). Touching and overlapping edges, which tiles and their
+// pieces have along every tile border, become shared pieces; a sliver of
+// one operand thinner than a cell collapses and is dropped. Boost.Geometry's
 // overlay is the oracle of the tests, not a fallback.
 #include <optional>
 #include <span>
@@ -43,9 +46,12 @@ enum class OverlayOp { kUnion, kIntersection, kDifference };
 inline constexpr int kOverlayGridBits = 20;
 inline constexpr double kOverlayGridM = 1.0 / (1 << kOverlayGridBits);
 inline constexpr double kOverlayMaxCoordinateM = 8192.0;
-// How far the overlay can move a point of the boundary: rounding moves a
-// vertex by 0.71 of a cell, and each round of snap rounding can bend a
-// piece by as much again; two cells bound what the tests see.
+// How far the overlay moves its operands' boundary, as callers' area checks
+// allow: a vertex goes to the centre of its cell (0.71 of a cell at most)
+// and a piece bent through a hot cell moves as much again. Iterated snap
+// rounding has no such bound in general (a piece bent round by round can
+// drift further; Halperin and Packer), so a result beyond it is refused by
+// those checks and counted, not taken.
 inline constexpr double kOverlayMovesM = 2.0 * kOverlayGridM;
 
 // v rounded to the overlay's grid as the overlay rounds a vertex (to the
@@ -55,7 +61,10 @@ double to_overlay_grid(double v);
 
 struct OverlayResult {
   bool ok = false;
-  std::string error;  // why not ok: a coordinate beyond kOverlayMaxCoordinateM or not finite, a hole with no polygon
+  // Why not ok: a coordinate not finite or beyond kOverlayMaxCoordinateM;
+  // or, for operands that were not valid, pieces that do not link or a hole
+  // with no polygon around it.
+  std::string error;
   TypedMultiPolygon polygons;
 };
 

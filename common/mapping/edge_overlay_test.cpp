@@ -81,7 +81,8 @@ void expect_matches_boost(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   for_each_edge(r.polygons, [&](const Point& p, const Point& q, EdgeType t) {
     bool found = false;
     auto look = [&](const Point& u, const Point& v, EdgeType s) {
-      if (s == t && bg::distance(p, Segment(u, v)) < kOverlayMovesM && bg::distance(q, Segment(u, v)) < kOverlayMovesM) found = true;
+      const Segment source(u, v);
+      if (s == t && bg::distance(p, source) < kOverlayMovesM && bg::distance(q, source) < kOverlayMovesM) found = true;
     };
     for_each_edge(a, look);
     for_each_edge(b, look);
