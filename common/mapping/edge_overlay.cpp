@@ -231,11 +231,10 @@ struct Buckets {
   // columns are found in double, which errs far less than a cell.
   template <class Fn>
   void for_each(const IPoint& p, const IPoint& q, I64 margin, Fn&& fn) const {
-    const I64 kMargin = margin;
     const I64 lo_x = std::min(p.x, q.x), hi_x = std::max(p.x, q.x);
     const I64 lo_y = std::min(p.y, q.y), hi_y = std::max(p.y, q.y);
-    const int first_row = row(lo_y - kMargin), last_row = row(hi_y + kMargin);
-    const int first_col = col(lo_x - kMargin), last_col = col(hi_x + kMargin);
+    const int first_row = row(lo_y - margin), last_row = row(hi_y + margin);
+    const int first_col = col(lo_x - margin), last_col = col(hi_x + margin);
     if (first_row == last_row || first_col == last_col || p.y == q.y) {
       for (int r = first_row; r <= last_row; ++r)
         for (int c = first_col; c <= last_col; ++c) fn(static_cast<std::size_t>(r * n + c));
@@ -244,14 +243,14 @@ struct Buckets {
     const double dx = static_cast<double>(q.x - p.x), dy = static_cast<double>(q.y - p.y);
     const I64 height = I64{1} << shift_y;
     for (int r = first_row; r <= last_row; ++r) {
-      const double slab_lo = static_cast<double>(r == 0 ? lo_y : std::max(lo_y, min_y + r * height - kMargin));
+      const double slab_lo = static_cast<double>(r == 0 ? lo_y : std::max(lo_y, min_y + r * height - margin));
       const double slab_hi =
-          static_cast<double>(r == n - 1 ? hi_y : std::min(hi_y, min_y + (r + 1) * height + kMargin));
+          static_cast<double>(r == n - 1 ? hi_y : std::min(hi_y, min_y + (r + 1) * height + margin));
       const double ta = std::clamp((slab_lo - static_cast<double>(p.y)) / dy, 0.0, 1.0);
       const double tb = std::clamp((slab_hi - static_cast<double>(p.y)) / dy, 0.0, 1.0);
       const double xa = static_cast<double>(p.x) + ta * dx, xb = static_cast<double>(p.x) + tb * dx;
-      const int c0 = std::max(first_col, col(static_cast<I64>(std::floor(std::min(xa, xb))) - kMargin));
-      const int c1 = std::min(last_col, col(static_cast<I64>(std::ceil(std::max(xa, xb))) + kMargin));
+      const int c0 = std::max(first_col, col(static_cast<I64>(std::floor(std::min(xa, xb))) - margin));
+      const int c1 = std::min(last_col, col(static_cast<I64>(std::ceil(std::max(xa, xb))) + margin));
       for (int c = c0; c <= c1; ++c) fn(static_cast<std::size_t>(r * n + c));
     }
   }
@@ -267,7 +266,8 @@ class Overlay {
     clear();
     if (!add_side(a, 0, side_types[0]) || !add_side(b, 1, side_types[1])) {
       OverlayResult result;
-      result.error = "overlay: a coordinate is not finite or beyond " + std::to_string(kOverlayMaxCoordinateM) + " m";
+      result.error = "overlay: a coordinate is not finite or beyond " +
+                     std::to_string(static_cast<int>(kOverlayMaxCoordinateM)) + " m";
       return result;
     }
     set_boxes();
@@ -283,12 +283,12 @@ class Overlay {
  private:
   std::vector<InputEdge> edges_;
   std::vector<InputRing> rings_;
-  std::vector<IPoint> hot_;                             // hot pixels: vertices and crossings where the sides meet
+  std::vector<IPoint> hot_;  // hot cells: of every vertex, of every crossing of a with b
   std::vector<std::uint32_t> bucket_start_, bucket_edges_;  // b's edges near the meet box by bucket
-  std::vector<std::uint32_t> hot_start_, hot_cells_;        // hot pixels by bucket
-  std::vector<IPoint> hot_by_bucket_;                       // hot_[hot_cells_[m]]
-  std::vector<std::uint32_t> tested_by_;                // by edge of b: the edge of a that last met it
-  std::vector<Bend> bends_;                             // by edge, then along it
+  std::vector<std::uint32_t> hot_start_, hot_cells_;        // hot cells by bucket
+  std::vector<IPoint> hot_by_bucket_;                       // hot_[hot_cells_[m]]: read without the hop
+  std::vector<std::uint32_t> tested_by_;  // by edge of b: the edge of a that last met it
+  std::vector<Bend> bends_;               // by edge, then along it
   std::vector<IPoint> path_, found_, edge_near_, piece_near_;  // scratch of bend_edges
   std::vector<IPoint> vertices_;
   std::vector<std::uint8_t> vertex_sides_;  // bit s: a piece of side s starts or ends here
