@@ -273,9 +273,9 @@ TEST(EdgeOverlay, RandomScanMapsAgreeWithBoost) {
 }
 
 // Operands made to be near-degenerate: lattice shapes and the same shapes
-// moved by a fraction of a micrometre to a few (below, at and above the
-// overlay's grid), or turned by a microradian, so their edges nearly
-// coincide, nearly touch and cross at tiny angles everywhere. Every overlay
+// moved by 1e-9 m to 1e-5 m (below, at and above the overlay's grid), or
+// turned by as many radians, so their edges nearly coincide, nearly touch
+// and cross at tiny angles everywhere. Every overlay
 // must succeed with a valid result whose areas agree with each other
 // (union + intersection = a + b, difference = a - intersection) up to the
 // rounding's bound: no oracle, whose own robustness such inputs test.
