@@ -272,6 +272,23 @@ TEST(EdgeOverlay, RandomScanMapsAgreeWithBoost) {
   EXPECT_EQ(failed, 0);
 }
 
+// Coordinates the grid cannot hold (beyond kOverlayMaxCoordinateM, or not
+// finite) are refused with the reason, not rounded into a wrong map.
+TEST(EdgeOverlay, CoordinatesBeyondTheGridAreRefusedWithTheReason) {
+  const TypedMultiPolygon room{rect(0, 0, 4, 4)};
+  const TypedMultiPolygon near_edge{rect(kOverlayMaxCoordinateM - 2, 0, kOverlayMaxCoordinateM, 1)};
+  EXPECT_TRUE(overlay(room, near_edge, OverlayOp::kUnion).ok);
+  const TypedMultiPolygon far{rect(1e5, 0, 1e5 + 1, 1)};
+  TypedMultiPolygon not_finite{rect(1, 1, 2, 2)};
+  not_finite[0].geometry.outer()[1] = Point(std::numeric_limits<double>::quiet_NaN(), 1);
+  for (const TypedMultiPolygon* bad : {&far, static_cast<const TypedMultiPolygon*>(&not_finite)}) {
+    const auto r = overlay(room, *bad, OverlayOp::kUnion);
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("not finite or beyond 8192 m"), std::string::npos) << r.error;
+    EXPECT_TRUE(r.polygons.empty());
+  }
+}
+
 // Operands made to be near-degenerate: lattice shapes and the same shapes
 // moved by 1e-9 m to 1e-5 m (below, at and above the overlay's grid), or
 // turned by as many radians, so their edges nearly coincide, nearly touch
