@@ -272,7 +272,7 @@ class Overlay {
     }
     set_boxes();
     find_hot_pixels();
-    bend_edges();
+    bend_edges(op);
     make_pieces();
     index_incidence();
     mark_coincident();
@@ -320,6 +320,7 @@ class Overlay {
   // Where the sides can cross: the overlap of their boxes (in cells),
   // widened by a cell.
   I64 meet_min_x_ = 0, meet_max_x_ = -1, meet_min_y_ = 0, meet_max_y_ = -1;
+  I64 side_box_[2][4] = {};  // each side's box in cells: min x, max x, min y, max y
   // Buckets over both sides: of b's edges near the meet box (to find
   // crossings) and, finer, of the hot pixels.
   Buckets edge_buckets_, hot_buckets_;
@@ -381,6 +382,7 @@ class Overlay {
         b[3] = std::max(b[3], r.max_y);
       }
     }
+    for (int side = 0; side < 2; ++side) std::copy(box[side], box[side] + 4, side_box_[side]);
     meet_min_x_ = std::max(box[0][0], box[1][0]) - 1;
     meet_max_x_ = std::min(box[0][1], box[1][1]) + 1;
     meet_min_y_ = std::max(box[0][2], box[1][2]) - 1;
@@ -392,6 +394,22 @@ class Overlay {
     // holds about its length over the buckets' side, so these are finer.
     const int hot_count = std::clamp(static_cast<int>(2.0 * std::sqrt(static_cast<double>(edges_.size()))), 1, 256);
     hot_buckets_.set(box[2][0], box[2][1], box[2][2], box[2][3], hot_count);
+  }
+  // Whether edge e is dropped by `op` however it is bent: an intersection
+  // keeps no piece outside the other side, a difference no piece of b
+  // outside a, and e lies farther outside the other side's box than bending
+  // moves a piece (kFarCells, many times the drift the area checks allow).
+  // Such an edge is not bent. The hot pixels of its ends stay and bend the
+  // edges near them; its pieces stay in the point-in-polygon tests, where
+  // bent or not it closes a thin loop far from every point tested, which a
+  // ray crosses an even number of times. In a clip of a scan to one of the
+  // tiles it spans, most of the scan's edges are such.
+  bool far_and_dropped(const InputEdge& e, OverlayOp op) const {
+    constexpr I64 kFarCells = 16;
+    if (op != OverlayOp::kIntersection && !(op == OverlayOp::kDifference && e.side == 1)) return false;
+    const I64* other = side_box_[1 - e.side];
+    return e.max_x < other[0] - kFarCells || e.min_x > other[1] + kFarCells || e.max_y < other[2] - kFarCells ||
+           e.min_y > other[3] + kFarCells;
   }
   bool meets_nothing() const { return meet_max_x_ < meet_min_x_ || meet_max_y_ < meet_min_y_; }
   bool near_meet_box(const InputEdge& e) const {
@@ -481,7 +499,7 @@ class Overlay {
   // each bent piece is a new segment (between cell centres) that may pass
   // other hot pixels, so the pieces are bent again until none does
   // (iterated snap rounding). The bends are recorded by edge, in order.
-  void bend_edges() {
+  void bend_edges(OverlayOp op) {
     // A bent piece's ends are hot pixels the edge passes, within a cell of
     // its box; the pixels such a piece passes are within a cell of that:
     // gathering kNearMargin cells around the edge's box serves its pieces
@@ -489,6 +507,7 @@ class Overlay {
     constexpr I64 kNearMargin = 4;
     for (std::uint32_t k = 0; k < edges_.size(); ++k) {
       const InputEdge& e = edges_[k];
+      if (far_and_dropped(e, op)) continue;
       gather_near(e.cp, e.cq, kNearMargin, edge_near_);
       if (edge_near_.empty()) continue;
       hot_pixels_on(e.p, e.q, e.cp, e.cq, edge_near_);
