@@ -75,6 +75,16 @@ struct InputRing {
   I64 min_x, max_x, min_y, max_y;
 };
 
+struct FineBox {
+  I64 min_x, max_x, min_y, max_y;
+};
+
+// A run of vertices farther than this beyond the other side's box is
+// collapsed where the operation drops it (Overlay::add_side): beyond the
+// cells whose edges far_and_dropped leaves unbent, so the edge made of it
+// is not bent either.
+constexpr I64 kCollapseCells = 32;
+
 // A hot pixel an edge is bent through.
 struct Bend {
   std::uint32_t edge;
@@ -264,7 +274,11 @@ class Overlay {
   OverlayResult run(std::span<const RingRef> a, std::span<const RingRef> b, OverlayOp op,
                     const std::optional<Box>& border_box, const std::optional<EdgeType> (&side_types)[2]) {
     clear();
-    if (!add_side(a, 0, side_types[0]) || !add_side(b, 1, side_types[1])) {
+    // What `op` drops of each side far outside the other (see add_side).
+    std::optional<FineBox> around[2];
+    if (op != OverlayOp::kUnion) around[1] = far_box_of(a);
+    if (op == OverlayOp::kIntersection) around[0] = far_box_of(b);
+    if (!add_side(a, 0, side_types[0], around[0]) || !add_side(b, 1, side_types[1], around[1])) {
       OverlayResult result;
       result.error = "overlay: a coordinate is not finite or beyond " +
                      std::to_string(static_cast<int>(kOverlayMaxCoordinateM)) + " m";
@@ -336,7 +350,40 @@ class Overlay {
     pieces_.clear();
   }
 
-  bool add_side(std::span<const RingRef> rings, std::uint8_t side, std::optional<EdgeType> type) {
+  // The box of `rings` in fine units, widened by kCollapseCells: a side's
+  // runs of vertices beyond it are collapsed (add_side). nullopt if a
+  // coordinate is out of range (add_side refuses it).
+  static std::optional<FineBox> far_box_of(std::span<const RingRef> rings) {
+    double lo_x = std::numeric_limits<double>::infinity(), hi_x = -lo_x, lo_y = lo_x, hi_y = -lo_x;
+    for (const RingRef& ref : rings)
+      for (const Point& p : *ref.ring) {
+        lo_x = std::min(lo_x, p.x()), hi_x = std::max(hi_x, p.x());
+        lo_y = std::min(lo_y, p.y()), hi_y = std::max(hi_y, p.y());
+      }
+    IPoint lo, hi;
+    if (!to_fine(Point(lo_x, lo_y), lo) || !to_fine(Point(hi_x, hi_y), hi)) return std::nullopt;
+    constexpr I64 widen = kCollapseCells * kFinePerCell;
+    return FineBox{lo.x - widen, hi.x + widen, lo.y - widen, hi.y + widen};
+  }
+
+  // Adds the rings' edges. With `collapse` (the other side's box, widened,
+  // where `op` drops this side's pieces outside the other side), a run of
+  // consecutive vertices that all lie beyond one of its sides becomes one
+  // edge from its first vertex to its last. The run and that edge lie in
+  // one half-plane the other side does not reach, so they are dropped
+  // alike, and together they close a loop there, which a ray from any point
+  // tested (near the other side) crosses an even number of times. The edge
+  // can cross others of its side there (a precondition the overlay needs
+  // only where pieces are kept). Most of a scan's vertices lie outside the
+  // tile it is clipped to.
+  bool add_side(std::span<const RingRef> rings, std::uint8_t side, std::optional<EdgeType> type,
+                const std::optional<FineBox>& collapse) {
+    // Bit per side of the box a point lies strictly beyond.
+    auto beyond = [&](const IPoint& p) -> unsigned {
+      if (!collapse) return 0;
+      return unsigned(p.x < collapse->min_x) | unsigned(p.x > collapse->max_x) << 1 |
+             unsigned(p.y < collapse->min_y) << 2 | unsigned(p.y > collapse->max_y) << 3;
+    };
     for (const RingRef& ref : rings) {
       const Ring& ring = *ref.ring;
       const std::vector<EdgeType>& types = *ref.types;
@@ -344,21 +391,40 @@ class Overlay {
       InputRing r{side, static_cast<std::uint32_t>(edges_.size()), 0, 0, 0, 0, 0, 0, 0};
       r.min_x = r.min_y = std::numeric_limits<I64>::max();
       r.max_x = r.max_y = std::numeric_limits<I64>::min();
-      IPoint p;
-      if (!to_fine(ring.front(), p)) return false;
-      for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
-        IPoint q;
-        if (!to_fine(ring[i + 1], q)) return false;
-        if (p == q) continue;  // repeated
+      auto add_edge = [&](const IPoint& p, const IPoint& q, EdgeType edge_type) {
+        if (p == q) return;  // repeated
         const IPoint cp = cell_of(p), cq = cell_of(q);
-        InputEdge e{p, q, cp, cq, type.value_or(types[i]), side, std::min(cp.x, cq.x), std::max(cp.x, cq.x),
+        InputEdge e{p, q, cp, cq, type.value_or(edge_type), side, std::min(cp.x, cq.x), std::max(cp.x, cq.x),
                     std::min(cp.y, cq.y), std::max(cp.y, cq.y)};
         r.min_x = std::min(r.min_x, e.min_x);
         r.max_x = std::max(r.max_x, e.max_x);
         r.min_y = std::min(r.min_y, e.min_y);
         r.max_y = std::max(r.max_y, e.max_y);
         edges_.push_back(e);
-        p = q;
+      };
+      IPoint start;  // where the next edge starts
+      if (!to_fine(ring.front(), start)) return false;
+      // The run from `start` to `last` (the vertex before ring[i]), all
+      // beyond the sides in `run`; last == start when it is one vertex.
+      unsigned run = beyond(start);
+      IPoint last = start;
+      for (std::size_t i = 1; i < ring.size(); ++i) {
+        IPoint q;
+        if (!to_fine(ring[i], q)) return false;
+        const bool closing = i + 1 == ring.size();  // the ring's first vertex again: kept
+        const unsigned where = beyond(q);
+        if (!closing && (run & where) != 0) {
+          last = q;
+          run &= where;
+          continue;
+        }
+        if (last != start) {  // the run ends at `last`: one edge to it, and its last edge from it
+          add_edge(start, last, type ? *type : types[i - 2]);
+          start = last;
+        }
+        add_edge(start, q, type ? *type : types[i - 1]);
+        start = last = q;
+        run = where;
       }
       r.last_edge = static_cast<std::uint32_t>(edges_.size());
       if (r.last_edge > r.first_edge) rings_.push_back(r);
