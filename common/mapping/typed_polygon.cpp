@@ -194,6 +194,13 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons, UnclearPolygons* u
           const SweepEdge& first = f_follows ? e : f;
           const SweepEdge& second = f_follows ? f : e;
           const double d2 = clearance * clearance;
+          // As in clearly_apart: each far end farther than the clearance
+          // from the other edge's line (one cross product serves both).
+          const double c = cross(first.a, first.b, second.b);
+          const double fx = first.b.x() - first.a.x(), fy = first.b.y() - first.a.y();
+          const double sx = second.b.x() - second.a.x(), sy = second.b.y() - second.a.y();
+          const double first_len2 = fx * fx + fy * fy, second_len2 = sx * sx + sy * sy;
+          if (c * c > d2 * first_len2 && c * c > d2 * second_len2) continue;
           if (segment_distance_sq(second.b, first.a, first.b) <= d2 ||
               segment_distance_sq(first.a, second.a, second.b) <= d2)
             return fail(ring_polygon[e.ring], ring_polygon[e.ring]);
