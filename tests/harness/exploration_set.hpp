@@ -57,9 +57,10 @@ struct SetOptions {
   // true: pex-slam in the set, the mapper on SLAM_UPDATE (a map per particle)
   // and the explorer on SLAM_POSE, as on the robot.
   bool slam = false;
-  ConfigKeys explorer_keys, mapper_keys, slam_keys;
+  // (Braced: designated initializers may then leave them out without a warning.)
+  ConfigKeys explorer_keys{}, mapper_keys{}, slam_keys{};
   // Daemons of the set not started with it ("sim", "slam", ...): start() starts them.
-  std::vector<std::string> held_back;
+  std::vector<std::string> held_back{};
 };
 
 // The exploration set on a world: pex-sim, pex-lidar-reader, pex-base-driver,
