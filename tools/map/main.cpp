@@ -2,9 +2,11 @@
 //   pex-map save OUT.geojson [--log IN.lcm]             the current MAP (next on the bus, or a log's last) as GeoJSON
 //   pex-map export --pgm OUT.pgm [--resolution-m 0.05]  a ROS map_server grid (OUT.pgm + OUT.yaml)
 //                  [--map IN.geojson | --log IN.lcm]    ... of a saved map, a log's last MAP, or the bus's next
-// Exit codes: 0 written; 64 bad command line; 65 no MAP in the log or a bad map
-// file; 66 an input cannot be opened; 69 no MAP on the bus in time; 73 an output
-// cannot be written.
+//   pex-map check [--log IN.lcm | --map IN.geojson]     the geometry of every MAP of a log (or of a map file,
+//                                                       or the bus's next) checked: valid, by OGC's rules
+// Exit codes: 0 written (or every map checked valid); 64 bad command line; 65 no
+// MAP in the log, a bad map file, or a map checked not valid; 66 an input cannot
+// be opened; 69 no MAP on the bus in time; 73 an output cannot be written.
 #include <sysexits.h>
 
 #include <chrono>
@@ -60,8 +62,42 @@ int write(const std::string& path, const std::string& bytes) {
   return 0;
 }
 
-void add_source_options(CLI::App& cmd, Source& src, bool with_map_file) {
-  auto* log = cmd.add_option("--log", src.log, "read the last MAP of this LCM log (default: the next MAP on the bus)");
+// Every map of the source checked (geometry_problem); prints the first few
+// that are not valid and a summary line.
+int check(const Source& src) {
+  constexpr long kShown = 5;
+  long checked = 0, invalid = 0, rejected = 0;
+  auto check_one = [&](const pex::polygon_map_t& map) {
+    ++checked;
+    if (const auto why = pex::map_files::geometry_problem(map); !why.empty() && ++invalid <= kShown)
+      std::printf("not valid: %s #%ld (utime %lld, particle %d, %d rings): %s\n", src.channel.c_str(), checked,
+                  static_cast<long long>(map.utime), map.particle, map.nrings, why.c_str());
+  };
+  if (!src.log.empty()) {
+    try {
+      rejected = pex::map_files::for_each_log_map(src.log, src.channel, check_one);
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "pex-map: %s\n", e.what());
+      return EX_NOINPUT;
+    }
+    if (checked == 0) {
+      std::fprintf(stderr, "pex-map: no decodable %s message in %s (%ld rejected)\n", src.channel.c_str(),
+                   src.log.c_str(), rejected);
+      return EX_DATAERR;
+    }
+  } else {
+    pex::polygon_map_t map{};
+    if (int rc = load(src, map); rc != 0) return rc;
+    check_one(map);
+  }
+  std::printf("checked %ld %s message%s: %ld not valid, %ld undecodable\n", checked, src.channel.c_str(),
+              checked == 1 ? "" : "s", invalid, rejected);
+  return invalid > 0 || rejected > 0 ? EX_DATAERR : 0;
+}
+
+void add_source_options(CLI::App& cmd, Source& src, bool with_map_file,
+                        const std::string& log_help = "read the last MAP of this LCM log (default: the next MAP on the bus)") {
+  auto* log = cmd.add_option("--log", src.log, log_help);
   if (with_map_file)
     cmd.add_option("--map", src.map_file, "read a saved map file (GeoJSON, from pex-map save)")->excludes(log);
   cmd.add_option("--channel", src.channel, "channel of the pex.polygon_map_t messages");
@@ -72,7 +108,7 @@ void add_source_options(CLI::App& cmd, Source& src, bool with_map_file) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Save the polygonal map to a file (GeoJSON) or export it as a ROS occupancy grid (PGM + YAML)",
+  CLI::App app{"Save the polygonal map to a file (GeoJSON), export it as a ROS occupancy grid (PGM + YAML), or check it",
                "pex-map"};
   app.require_subcommand(1);
   Source save_src, export_src;
@@ -86,7 +122,12 @@ int main(int argc, char** argv) {
   exp->add_option("--resolution-m", resolution_m, "cell side, m")->check(CLI::Range(0.001, 10.0));
   exp->add_option("--margin-m", margin_m, "unknown space around the map, m")->check(CLI::Range(0.0, 100.0));
   add_source_options(*exp, export_src, true);
+  Source check_src;
+  auto* chk = app.add_subcommand("check", "check that the map's geometry is valid (exit 65 if not)");
+  add_source_options(*chk, check_src, true, "check every MAP of this LCM log (default: the next MAP on the bus)");
   if (const auto code = pex::cli::parse_command_line(app, "pex-map", argc, argv)) return *code;
+
+  if (chk->parsed()) return check(check_src);
 
   pex::polygon_map_t map{};
   if (save->parsed()) {

@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mapping/typed_polygon.hpp"
+
 namespace pex::map_files {
 
 namespace {
@@ -59,6 +61,28 @@ std::string check_map(const pex::polygon_map_t& map) {
     last_ring_of[ring.polygon] = r;
   }
   return {};
+}
+
+std::string geometry_problem(const pex::polygon_map_t& map) {
+  if (auto why = check_map(map); !why.empty()) return why;
+  mapping::TypedMultiPolygon polygons;
+  for (std::size_t r = 0; r < map.rings.size(); ++r) {
+    const auto& ring = map.rings[r];
+    if (!ring.hole) polygons.emplace_back();  // check_map: a hole follows its outer ring
+    mapping::Ring points;
+    for (std::size_t i = 0; i < ring.x.size(); ++i) points.emplace_back(ring.x[i], ring.y[i]);
+    points.push_back(points.front());
+    std::vector<mapping::EdgeType> types;
+    for (const auto t : ring.edge_type)
+      types.push_back(t == pex::polygon_ring_t::EDGE_OBSTACLE ? mapping::EdgeType::kObstacle
+                                                              : mapping::EdgeType::kFrontier);
+    auto& polygon = polygons.back();
+    (ring.hole ? polygon.geometry.inners().emplace_back() : polygon.geometry.outer()) = std::move(points);
+    polygon.edge_types.push_back(std::move(types));
+  }
+  std::string why;
+  if (mapping::is_valid(polygons, &why)) return {};
+  return why.empty() ? "not a valid multi-polygon" : why;
 }
 
 std::string to_geojson(const pex::polygon_map_t& map) {

@@ -23,6 +23,14 @@ class MapFileError : public std::runtime_error {
 // ring followed by its holes. "" when good, else why not.
 std::string check_map(const pex::polygon_map_t& map);
 
+// Checks the map's geometry as a whole, as the mapper promises it: each
+// polygon's outer ring counter-clockwise and its holes clockwise, no ring
+// crossing or touching itself or another along an edge, holes inside their
+// polygon, polygons apart but at points (OGC's rules, bg::is_valid). Rings
+// are taken as they are, not mended as the explorer mends them. "" when
+// valid, else why not (check_map's reason first).
+std::string geometry_problem(const pex::polygon_map_t& map);
+
 // GeoJSON (RFC 7946): a FeatureCollection with one Polygon Feature a polygon
 // of the map, rings closed, coordinates in metres in the map frame. Each
 // feature's properties give the type of every edge ("obstacle" | "frontier",

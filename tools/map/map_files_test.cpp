@@ -5,6 +5,7 @@
 
 #include "test_maps.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -67,6 +68,41 @@ TEST(MapFiles, BadFilesAreRefusedSayingWhereAndWhy) {
   bad = two_rooms_map();
   bad.rings[3].x[1] = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(to_geojson(bad), MapFileError);
+}
+
+// What pex-map check reports: a map the mapper may not publish. Each case
+// breaks the two-rooms map in one way; the map itself is valid.
+TEST(MapFiles, GeometryProblemFindsWhatIsNotAValidMultiPolygon) {
+  EXPECT_EQ(geometry_problem(two_rooms_map()), "");
+  auto broken = [](auto&& change) {
+    auto m = two_rooms_map();
+    change(m);
+    return geometry_problem(m);
+  };
+  const std::vector<std::int8_t> four(4, kObstacle);
+  // A hole that crosses itself (a bow tie).
+  EXPECT_NE(broken([&](pex::polygon_map_t& m) {
+              m.rings[1] = ring(0, true, {{8.5, 2}, {9.3, 2.8}, {8.5, 2.8}, {9.3, 2}}, four);
+            }),
+            "");
+  // A hole outside its polygon.
+  EXPECT_NE(broken([&](pex::polygon_map_t& m) {
+              m.rings[1] = ring(0, true, {{14, 2}, {14, 3}, {15, 3}, {15, 2}}, four);
+            }),
+            "");
+  // The island moved onto the rooms: two polygons overlap.
+  EXPECT_NE(broken([](pex::polygon_map_t& m) {
+              for (auto& x : m.rings[3].x) x -= 18.0;
+            }),
+            "");
+  // The outer ring clockwise.
+  EXPECT_NE(broken([](pex::polygon_map_t& m) {
+              std::reverse(m.rings[0].x.begin(), m.rings[0].x.end());
+              std::reverse(m.rings[0].y.begin(), m.rings[0].y.end());
+            }),
+            "");
+  // check_map's reason comes first.
+  EXPECT_NE(broken([](pex::polygon_map_t& m) { m.nrings = 9; }).find("nrings 9"), std::string::npos);
 }
 
 TEST(MapFiles, PgmReadsBackIntoTheSameGrid) {

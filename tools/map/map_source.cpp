@@ -12,21 +12,30 @@
 
 namespace pex::map_files {
 
-LogMaps read_log_maps(const std::string& path, const std::string& channel) {
+long for_each_log_map(const std::string& path, const std::string& channel,
+                      const std::function<void(pex::polygon_map_t&&)>& fn) {
   lcm::LogFile log(path, "r");
   if (!log.good()) throw std::runtime_error("cannot read " + path);
-  LogMaps out;
+  long rejected = 0;
   for (const lcm::LogEvent* event = log.readNextEvent(); event; event = log.readNextEvent()) {
     if (event->channel != channel) continue;
     pex::polygon_map_t msg{};
     if (msg.decode(event->data, 0, event->datalen) != event->datalen) {
-      ++out.rejected;
+      ++rejected;
       continue;
     }
+    fn(std::move(msg));
+  }
+  return rejected;
+}
+
+LogMaps read_log_maps(const std::string& path, const std::string& channel) {
+  LogMaps out;
+  out.rejected = for_each_log_map(path, channel, [&](pex::polygon_map_t&& msg) {
     if (out.robot_path.empty() || out.robot_path.back() != std::make_pair(msg.robot_x, msg.robot_y))
       out.robot_path.emplace_back(msg.robot_x, msg.robot_y);
     out.last = std::move(msg);
-  }
+  });
   return out;
 }
 

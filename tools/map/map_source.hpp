@@ -2,6 +2,7 @@
 // Where a map comes from for the map tools (pex-map, pex-render-map): the MAP
 // messages of an LCM log, the next MAP on the bus, or a saved map file.
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,6 +21,12 @@ struct LogMaps {
 // Every message on `channel` of the LCM log at `path`. Throws std::runtime_error
 // if the log cannot be opened.
 LogMaps read_log_maps(const std::string& path, const std::string& channel);
+
+// fn(message) for every message on `channel` of the LCM log at `path` that
+// decodes, in the log's order; returns how many did not. Throws
+// std::runtime_error if the log cannot be opened.
+long for_each_log_map(const std::string& path, const std::string& channel,
+                      const std::function<void(pex::polygon_map_t&&)>& fn);
 
 // The next message on `channel` of the bus at `lcm_url` ("" = LCM's default),
 // waiting at most `timeout`; nullopt if none came. Throws std::runtime_error if

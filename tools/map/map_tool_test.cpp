@@ -1,7 +1,8 @@
 // pex-map and pex-render-map as programs, on a real LCM bus in a private
 // network namespace: the map saved from the bus and from a log reads back
-// into the identical map, its PGM export is the grid of the same map, and
-// pex-render-map draws a saved map file.
+// into the identical map, its PGM export is the grid of the same map,
+// pex-render-map draws a saved map file, and pex-map check names the maps of
+// a log that are not valid.
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
@@ -17,6 +18,23 @@ using pex::testing::bin_path;
 using pex::testing::kTestLcmUrl;
 using pex::testing::read_file;
 using pex::testing::run_to_completion;
+
+// An LCM log of `maps` on MAP, a second apart; false if it cannot be written.
+bool write_map_log(const std::string& path, const std::vector<pex::polygon_map_t>& maps) {
+  lcm::LogFile log(path, "w");
+  if (!log.good()) return false;
+  std::int64_t t = 1'000'000;
+  for (const auto& m : maps) {
+    std::vector<std::uint8_t> bytes = encoded(m);
+    lcm::LogEvent event{};
+    event.timestamp = t += 1'000'000;
+    event.channel = "MAP";
+    event.datalen = static_cast<int32_t>(bytes.size());
+    event.data = bytes.data();
+    if (log.writeEvent(&event) != 0) return false;
+  }
+  return true;
+}
 
 TEST(MapTool, SaveFromTheBusReadsBackIntoTheIdenticalMap) {
   std::string why;
@@ -55,23 +73,39 @@ TEST(MapTool, SaveFromALogTakesItsLastMap) {
   older.rings.pop_back();
   older.nrings = 3;
   auto last = two_rooms_map();
-  {
-    lcm::LogFile log(dir + "/run.lcm", "w");
-    ASSERT_TRUE(log.good());
-    std::int64_t t = 1'000'000;
-    for (const pex::polygon_map_t* m : {&older, &last}) {
-      std::vector<std::uint8_t> bytes = encoded(*m);
-      lcm::LogEvent event{};
-      event.timestamp = t += 1'000'000;
-      event.channel = "MAP";
-      event.datalen = static_cast<int32_t>(bytes.size());
-      event.data = bytes.data();
-      ASSERT_EQ(log.writeEvent(&event), 0);
-    }
-  }
+  ASSERT_TRUE(write_map_log(dir + "/run.lcm", {older, last}));
   const auto r = run_to_completion({bin_path("pex-map"), "save", dir + "/log.geojson", "--log", dir + "/run.lcm"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(encoded(from_geojson(read_file(dir + "/log.geojson"))), encoded(last));
+}
+
+// pex-map check on a log: every MAP is checked, each invalid one named, and
+// the exit code says whether all were valid.
+TEST(MapTool, CheckNamesEveryInvalidMapOfALog) {
+  const std::string dir = pex::testing::make_temp_dir("map-tool-check");
+  const auto good = two_rooms_map();
+  auto crossed = two_rooms_map();  // the island moved onto the rooms
+  for (auto& x : crossed.rings[3].x) x -= 18.0;
+  crossed.utime = 77;
+  ASSERT_TRUE(write_map_log(dir + "/good.lcm", {good, good}));
+  ASSERT_TRUE(write_map_log(dir + "/mixed.lcm", {good, crossed, good}));
+
+  auto r = run_to_completion({bin_path("pex-map"), "check", "--log", dir + "/good.lcm"});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("checked 2 MAP messages: 0 not valid, 0 undecodable"), std::string::npos) << r.output;
+
+  r = run_to_completion({bin_path("pex-map"), "check", "--log", dir + "/mixed.lcm"});
+  EXPECT_EQ(r.exit_code, 65) << r.output;
+  EXPECT_NE(r.output.find("not valid: MAP #2 (utime 77"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("checked 3 MAP messages: 1 not valid"), std::string::npos) << r.output;
+
+  // A saved map file is checked as one map.
+  ASSERT_EQ(run_to_completion({bin_path("pex-map"), "save", dir + "/good.geojson", "--log", dir + "/good.lcm"})
+                .exit_code,
+            0);
+  r = run_to_completion({bin_path("pex-map"), "check", "--map", dir + "/good.geojson"});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("checked 1 MAP message: 0 not valid"), std::string::npos) << r.output;
 }
 
 }  // namespace
