@@ -68,14 +68,12 @@ std::optional<std::vector<TilePiece>> clip_to_tiles(const PreparedScan& prepared
   }
   // The overlay moves the boundary by at most kOverlayMovesM, so an area by
   // at most the boundary's length (with the tile sides the clip adds) times
-  // that; a lost piece is far more.
+  // that (area_within, which measures the boundary only when the sum is off
+  // by more than the plain rounding); a lost piece is far more.
   const double scan_area = area(scan), band_area = area(band);
-  auto conserved = [](double whole, double sum, double boundary_m) {
-    return std::abs(sum - whole) <= 1e-9 * std::max(1.0, whole) + boundary_m * kOverlayMovesM;
-  };
   const double tile_sides_m = 4.0 * grid.size_m * static_cast<double>(pieces.size());
-  if (conserved(scan_area, free_sum, bg::perimeter(scan[0].geometry) + tile_sides_m) &&
-      conserved(band_area, band_sum, bg::perimeter(band_geometry) + tile_sides_m))
+  if (area_within(free_sum, scan_area, scan_area, [&] { return bg::perimeter(scan[0].geometry) + tile_sides_m; }) &&
+      area_within(band_sum, band_area, band_area, [&] { return bg::perimeter(band_geometry) + tile_sides_m; }))
     return pieces;
   why = "clipping to tiles does not conserve area (scan " + std::to_string(scan_area) + " vs " +
         std::to_string(free_sum) + " m2, band " + std::to_string(band_area) + " vs " + std::to_string(band_sum) +
