@@ -80,14 +80,14 @@ std::optional<std::string> area_out_of_bounds(std::span<const RingRef> a, std::s
     case OverlayOp::kIntersection: lo = 0.0, hi = std::min(area_a, area_b); break;
   }
   const double got = area(out);
+  auto boundary_m = [&] {
+    double length = 0.0;
+    for (const auto* side : {&a, &b})
+      for (const RingRef& r : *side) length += bg::perimeter(*r.ring);
+    return length;
+  };
   const double relative = 1e-6 * std::max(1.0, hi);
-  if (!rounded && got >= lo - relative && got <= hi + relative) return std::nullopt;
-  if (rounded && area_within(got, lo, hi, [&] {
-        double boundary_m = 0.0;
-        for (const auto* side : {&a, &b})
-          for (const RingRef& r : *side) boundary_m += bg::perimeter(*r.ring);
-        return boundary_m;
-      }))
+  if (rounded ? area_within(got, lo, hi, boundary_m) : got >= lo - relative && got <= hi + relative)
     return std::nullopt;
   return "overlay result of " + std::to_string(got) + " m2 outside [" + std::to_string(lo) + ", " +
          std::to_string(hi) + "] m2 (degenerate operands)";
