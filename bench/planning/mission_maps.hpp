@@ -40,6 +40,7 @@ struct MissionMaps {
   int plans = 0;
   double travelled_m = 0.0;
   bool done = false;  // no reachable candidate left before max_goals
+  mapping::TypedMultiPolygon free_space;  // the map's free space (MAP_FREE) when the mission ended
   std::string error;
 };
 
@@ -175,6 +176,9 @@ inline MissionMaps emulate_mission(
     blacklist.push_back(goal->position);
     ++out.goals;
   }
+  auto free_space = map.free_space();
+  if (!free_space.ok) out.error = "free space merge failed";
+  out.free_space = std::move(free_space.polygons);
   return out;
 }
 

@@ -3,7 +3,9 @@
 // exactly (bench/planning/mission_maps.hpp, replanning on the way and leaving
 // a goal whose frontier it has seen, as the explorer's mission does), with the
 // explorer's planner options from its config. One JSON line per world and
-// strategy, then the path summed per strategy over the worlds both finished.
+// strategy (path driven, and the final map's coverage of the floor a 0.25 m
+// disk can sweep from START, as pex-explore-report scores MAP_FREE), then the
+// path summed per strategy over the worlds both finished.
 // Deterministic (fixed seeds, true poses): a strategy change can be judged on
 // every world in minutes, before the exploration benchmark (scripts/bench.sh
 // explore) runs the whole set with SLAM for the figures of record.
@@ -12,12 +14,16 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "evaluation/exploration_metrics.hpp"
 #include "explorer_options.hpp"
 #include "mapper.hpp"
 #include "mission_maps.hpp"
@@ -71,6 +77,19 @@ int main(int argc, char** argv) {
   std::map<std::string, std::map<std::string, double>> path_of;  // world -> strategy -> m
   for (const auto& world : worlds) {
     const std::string name = std::filesystem::path(world).stem().string();
+    // The floor the simulator's robot (a 0.25 m disk) can sweep, to score the maps against.
+    std::ifstream in(world);
+    std::stringstream text;
+    text << in.rdbuf();
+    auto parsed = pex::sim::parse_world(text.str(), world);
+    if (const auto* e = std::get_if<pex::sim::WorldError>(&parsed)) {
+      std::fprintf(stderr, "pex-bench-strategies: %s\n", e->message.c_str());
+      return 65;
+    }
+    const pex::sim::World& sim_world = std::get<pex::sim::World>(parsed);
+    constexpr double kSimRobotRadiusM = 0.25, kWallToleranceM = 0.1;
+    const auto reachable = pex::evaluation::reachable_free_space(sim_world, kSimRobotRadiusM, sim_world.start);
+    const pex::evaluation::WallIndex walls(sim_world.walls);
     for (const auto& strategy_name : strategies) {
       const auto strategy = pex::planning::parse_goal_strategy(strategy_name);
       if (!strategy) {
@@ -94,16 +113,24 @@ int main(int argc, char** argv) {
       const auto maps = pex::bench::emulate_mission(
           world, mission, [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
             Plan plan = pex::planning::plan_exploration(map, pose, blacklist, options);
-            return plan.best_candidate() || !fallback ? plan : pex::planning::plan_exploration(map, pose, blacklist, tight);
+            // As the mission does (Mission::on_plan, on_select_plan): without the
+            // margin only when nothing is reachable and the margin may be why.
+            if (plan.best_candidate() || !fallback || !pex::planning::margin_may_block(plan)) return plan;
+            return pex::planning::plan_exploration(map, pose, blacklist, tight);
           });
       if (!maps.error.empty()) {
         std::fprintf(stderr, "pex-bench-strategies: %s: %s\n", name.c_str(), maps.error.c_str());
         return 70;
       }
       if (maps.done) path_of[name][strategy_name] = maps.travelled_m;
-      std::printf("{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"plans\":%d}\n",
-                  name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
-                  maps.goals_seen, maps.plans);
+      // Poses are the world's (the emulated robot starts at START in world coordinates).
+      const auto score = pex::evaluation::score_map(maps.free_space, pex::geometry::Pose2{0.0, 0.0, 0.0}, reachable,
+                                                    walls, kWallToleranceM);
+      std::printf(
+          "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,"
+          "\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f}\n",
+          name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
+          maps.goals_seen, maps.plans, score.coverage, score.iou);
       std::fflush(stdout);
     }
   }

@@ -69,6 +69,13 @@ bool segments_intersect(const Point& p1, const Point& p2, const Point& q1, const
   return false;
 }
 
+double segment_distance(const Point& p1, const Point& p2, const Point& q1, const Point& q2) {
+  if (segments_intersect(p1, p2, q1, q2)) return 0.0;
+  // Apart, the nearest points of two segments include an end of one of them.
+  return std::min({distance(p1, closest_point_on_segment(p1, q1, q2)), distance(p2, closest_point_on_segment(p2, q1, q2)),
+                   distance(q1, closest_point_on_segment(q1, p1, p2)), distance(q2, closest_point_on_segment(q2, p1, p2))});
+}
+
 double polyline_length(const std::vector<Point>& points) {
   double length = 0.0;
   for (std::size_t i = 1; i < points.size(); ++i) length += distance(points[i - 1], points[i]);

@@ -160,6 +160,8 @@ double distance(const Point& a, const Point& b);
 Point closest_point_on_segment(const Point& p, const Point& a, const Point& b);
 // True if the closed segments p1-p2 and q1-q2 share a point.
 bool segments_intersect(const Point& p1, const Point& p2, const Point& q1, const Point& q2);
+// Distance between the closed segments p1-p2 and q1-q2 (0 if they share a point).
+double segment_distance(const Point& p1, const Point& p2, const Point& q1, const Point& q2);
 // Length of a polyline.
 double polyline_length(const std::vector<Point>& points);
 

@@ -42,6 +42,15 @@ class ObstacleEdges {
     const Point short_of_f(f.x() + (from.x() - f.x()) * 0.01 / d, f.y() + (from.y() - f.y()) * 0.01 / d);
     return !blocks(from, short_of_f);
   }
+  // True if no obstacle edge comes within `clearance` of the segment a-b:
+  // a disk of that radius moves along it touching no wall.
+  bool clear_of(const Point& a, const Point& b, double clearance) const {
+    const mapping::Box box(Point(std::min(a.x(), b.x()) - clearance, std::min(a.y(), b.y()) - clearance),
+                           Point(std::max(a.x(), b.x()) + clearance, std::max(a.y(), b.y()) + clearance));
+    for (auto it = tree_.qbegin(bgi::intersects(box)); it != tree_.qend(); ++it)
+      if (segment_distance(a, b, it->first.first, it->first.second) < clearance) return false;
+    return true;
+  }
 
  private:
   using Value = std::pair<mapping::Segment, std::size_t>;
@@ -87,6 +96,66 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
     if (obstacles.in_view(*inside, f)) return inside;
   }
   return std::nullopt;
+}
+
+// Whether the robot's disk reaches `reach_m` past the frontier somewhere
+// along [from_m, to_m] of `chain` (PlannerOptions::reach_past_frontier_m).
+// The arc is sampled every kStep. At a sample f the disk (centre c within
+// radius - reach_m of f, so it covers reach_m beyond f) must keep the
+// radius from every obstacle edge, and get there straight from the C-space:
+//  - from the C-space point nearest f (the C-space keeps the radius plus the
+//    margin from every map edge, the frontier's too), moving towards f;
+//  - or square in front of f (c on the free side's normal), from the
+//    C-space point nearest c within way_m: a gap between the margin and
+//    the radius (0.6 m for a 0.54 m robot) has no C-space of its own, and
+//    the robot still looks into it from its mouth.
+// Why that is enough: the centre of a robot that first touches unknown
+// space behind some frontier has come from the C-space through points
+// closer than radius plus margin to frontier edges only, starting at the
+// C-space's boundary, within radius plus margin of that frontier; so while
+// floor the robot could sweep is unknown, some frontier passes this test
+// (up to the sampling step and a way in that is not straight).
+bool disk_reaches_past(const ConfigurationSpace& cspace, const ObstacleEdges& obstacles, const FrontierChain& chain,
+                       double from_m, double to_m, double reach_m, double way_m) {
+  constexpr double kStep = 0.05;  // m between samples along the frontier
+  const CSpaceOptions& o = cspace.options();
+  const double radius = o.robot_radius_m;
+  // The C-space lies radius + margin from the frontier, less RDP's epsilon;
+  // a sample may be half a step from the nearest point of the frontier.
+  const double search_m = radius + o.clearance_margin_m + o.simplify_epsilon_m + kStep;
+  const double centre_m = radius - reach_m;  // from f, where the centre must get
+  if (!(centre_m > 0.0)) return true;
+  // f on edge a-b of the chain; free space is on the edge's left.
+  auto reaches_at = [&](const Point& f, const Point& a, const Point& b) {
+    if (const auto c = cspace.nearest_interior_point(f, search_m)) {
+      const double d = distance(*c, f);
+      if (d <= centre_m) return true;
+      const Point end(f.x() + (c->x() - f.x()) * centre_m / d, f.y() + (c->y() - f.y()) * centre_m / d);
+      if (obstacles.clear_of(*c, end, radius)) return true;
+    }
+    const double length = distance(a, b);
+    if (!(length > 0.0)) return false;
+    const Point front(f.x() - (b.y() - a.y()) * centre_m / length, f.y() + (b.x() - a.x()) * centre_m / length);
+    if (!obstacles.clear_of(front, front, radius)) return false;
+    const auto c = cspace.nearest_interior_point(front, way_m);
+    return c && obstacles.clear_of(*c, front, radius);
+  };
+  // Every kStep from from_m, and to_m itself.
+  double at = 0.0;  // arc length at points[i - 1]
+  double next = from_m;
+  for (std::size_t i = 1; i < chain.points.size(); ++i) {
+    const Point& a = chain.points[i - 1];
+    const Point& b = chain.points[i];
+    const double length = distance(a, b);
+    const bool last = i + 1 == chain.points.size();
+    for (; next <= to_m && (next <= at + length || last); next = next < to_m ? std::min(next + kStep, to_m) : to_m + 1.0) {
+      const double t = length > 0.0 ? std::clamp((next - at) / length, 0.0, 1.0) : 0.0;
+      if (reaches_at(Point(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y())), a, b)) return true;
+    }
+    at += length;
+    if (next > to_m) break;
+  }
+  return false;
 }
 
 // The C-space of `map` and the robot's node in it, with their statistics in
@@ -142,6 +211,12 @@ int Plan::reachable_count() const {
   int n = 0;
   for (const auto& c : candidates) n += (c.reachable && !c.blacklisted) ? 1 : 0;
   return n;
+}
+
+bool margin_may_block(const Plan& plan) {
+  if (plan.robot_outside_cspace || plan.stats.candidates_not_in_cspace > 0) return true;
+  return std::any_of(plan.candidates.begin(), plan.candidates.end(),
+                     [](const GoalCandidate& c) { return !c.blacklisted && !c.reachable; });
 }
 
 double GoalFocus::distance_to(const GoalCandidate& c) const {
@@ -202,6 +277,17 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     if (!position && out_of_view) {
       ++plan.stats.candidates_out_of_view;
       plan.out_of_view_frontier_points.push_back(fp.point);
+      continue;
+    }
+    // Only a frontier the robot would be sent to can be a pocket: one with no
+    // C-space point near it stays too narrow, which has the mission plan
+    // again without the margin (a corridor the margin closes), and that plan
+    // decides.
+    if (position && options.reach_past_frontier_m > 0.0 &&
+        !disk_reaches_past(cspace, obstacles, chains[static_cast<std::size_t>(fp.chain)], fp.arc_from_m, fp.arc_to_m,
+                           options.reach_past_frontier_m, options.candidate_snap_distance_m)) {
+      ++plan.stats.candidates_in_pockets;
+      plan.pocket_frontier_points.push_back(fp.point);
       continue;
     }
     if (!position) {

@@ -57,6 +57,18 @@ struct PlannerOptions {
   // Cost = path length + this times the turn the first leg needs (|rad|):
   // among nearly equal paths, prefer the one ahead.
   double turn_cost_m_per_rad = 0.1;
+  // A frontier candidate is a goal only if the robot's disk (radius
+  // cspace.robot_radius_m) can reach this far past its arc of the frontier:
+  // from the C-space point nearest some point of the arc, moved straight
+  // towards that point, keeping the radius from every obstacle edge. A
+  // frontier no such disk reaches past is a *pocket*: the far side of a gap
+  // narrower than the robot (between desks, between a chair's legs, a notch
+  // of a ragged wall), into which no visit takes the robot or its laser
+  // much further, and where floor the robot could sweep is reached through
+  // another frontier, which stays a goal (docs/exploration.md, "Pockets").
+  // Pockets are listed, are not goals, and do not keep the mission from
+  // DONE. 0 = off: every frontier with a C-space point near it is a goal.
+  double reach_past_frontier_m = 0.02;
 };
 
 struct GoalCandidate {
@@ -87,6 +99,7 @@ struct PlanStats {
   // frontier point, and no approach point: no reachable place sees it.
   int candidates_out_of_view = 0;
   int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
+  int candidates_in_pockets = 0;     // PlannerOptions::reach_past_frontier_m: no disk reaches past them
   int cspace_vertices = 0;
   int reflex_nodes = 0;
   std::int64_t segment_tests = 0;
@@ -102,6 +115,8 @@ struct Plan {
   // between it and them, and no point of the robot's piece within
   // approach_range_m has them in view (PlanStats::candidates_out_of_view).
   std::vector<Point> out_of_view_frontier_points;
+  // Frontier candidates in pockets (PlannerOptions::reach_past_frontier_m).
+  std::vector<Point> pocket_frontier_points;
   int best = -1;                        // index into candidates, -1: none reachable
   std::vector<int> tour;                // kTour: the visiting order (indices into candidates), best first
   PlanStats stats;
@@ -109,6 +124,13 @@ struct Plan {
   int reachable_count() const;
   const GoalCandidate* best_candidate() const { return best >= 0 ? &candidates[static_cast<std::size_t>(best)] : nullptr; }
 };
+
+// Whether planning again without the clearance margin may find what this
+// plan could not: the robot stands where the margin leaves no room
+// (robot_outside_cspace), a frontier has no C-space point near it (too
+// narrow), or a candidate that is not blacklisted has no path. A pocket is
+// none of these: the margin does not decide it.
+bool margin_may_block(const Plan& plan);
 
 // The goal a robot follows (Mission's goal commitment): the candidates the
 // mission will take for it — within radius_m of the goal or of its frontier

@@ -62,6 +62,7 @@ TEST(PlanExploration, WithoutApproachTheSameFrontierHasNoPath) {
   for (const auto& c : plan.candidates)
     if (c.frontier_point.y() > 6.9) unreachable_far = !c.reachable;
   EXPECT_TRUE(unreachable_far);
+  EXPECT_TRUE(margin_may_block(plan));
 }
 
 TEST(PlanExploration, NoApproachThroughAWall) {
@@ -124,6 +125,73 @@ mapping::TypedMultiPolygon corridor_with_windows() {
   pts.push_back(Point(0, 3));
   types.push_back(E::kObstacle);
   return {typed_polygon(testing::RingSpec{pts, types})};
+}
+
+// A 6 x 4 m room whose top wall has a slot 0.2 m wide and 0.8 m deep at
+// x = 3..3.2 (the gap between two desks against a wall): the laser saw
+// into it from below, its right side and back are walls, and the shadow of
+// the slot's left corner is a frontier from (3, 4) to (3.15, 4.8).
+mapping::TypedMultiPolygon room_with_a_slot(double slot_width_m) {
+  const double right = 3.0 + slot_width_m;
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(6, 0), Point(6, 4), Point(right, 4), Point(right, 4.8), Point(right - 0.05, 4.8),
+       Point(3, 4), Point(0, 4)},
+      {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle,
+       E::kObstacle}})};
+}
+
+TEST(PlanExploration, AFrontierInAGapNarrowerThanTheRobotIsAPocketNotAGoal) {
+  const auto map = room_with_a_slot(0.2);
+  const Plan plan = plan_exploration(map, Pose2{1, 2, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_TRUE(plan.candidates.empty());
+  EXPECT_EQ(plan.best, -1);
+  EXPECT_EQ(plan.stats.candidates_in_pockets, 1);
+  ASSERT_EQ(plan.pocket_frontier_points.size(), 1u);
+  EXPECT_NEAR(plan.pocket_frontier_points[0].y(), 4.4, 0.01);
+  EXPECT_FALSE(margin_may_block(plan));  // planning without the margin is not asked for
+  // The cause: without the test the slot's frontier is a goal, and a
+  // reachable one (the robot would stand below the slot and look in).
+  PlannerOptions off = options();
+  off.reach_past_frontier_m = 0.0;
+  const Plan without = plan_exploration(map, Pose2{1, 2, 0}, {}, off);
+  ASSERT_EQ(without.candidates.size(), 1u);
+  EXPECT_TRUE(without.candidates[0].reachable);
+  EXPECT_EQ(without.stats.candidates_in_pockets, 0);
+}
+
+TEST(PlanExploration, ASlotTheRobotFitsInIsNoPocket) {
+  // 0.8 m wide: the robot (0.54 m) drives in and sees past the frontier.
+  const Plan plan = plan_exploration(room_with_a_slot(0.8), Pose2{1, 2, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.candidates_in_pockets, 0);
+  ASSERT_EQ(plan.candidates.size(), 1u);
+  EXPECT_TRUE(plan.candidates[0].reachable);
+}
+
+TEST(PlanExploration, ASlotTheMarginClosesIsNoPocket) {
+  // 0.6 m wide: no C-space inside (it needs 2 x (0.27 + 0.05) m), but the
+  // robot's disk (0.54 m) fits into its mouth and reaches past the frontier.
+  const Plan plan = plan_exploration(room_with_a_slot(0.6), Pose2{1, 2, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.candidates_in_pockets, 0);
+  ASSERT_EQ(plan.candidates.size(), 1u);
+  EXPECT_TRUE(plan.candidates[0].reachable);
+}
+
+TEST(PlanExploration, ADoorNarrowerThanTheRobotIsNoPocket) {
+  // A doorway 0.45 m wide in the top wall, unknown beyond it: the robot
+  // does not pass, but its disk reaches into the doorway, past the frontier
+  // across it, so the door stays a goal (and the mission does not call the
+  // space beyond it explored).
+  const mapping::TypedMultiPolygon map = {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(6, 0), Point(6, 4), Point(3.45, 4), Point(3, 4), Point(0, 4)},
+      {E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}})};
+  const Plan plan = plan_exploration(map, Pose2{1, 2, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.candidates_in_pockets, 0);
+  ASSERT_EQ(plan.candidates.size(), 1u);
+  EXPECT_TRUE(plan.candidates[0].reachable);
 }
 
 TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {

@@ -94,7 +94,7 @@ std::vector<FrontierPoint> frontier_candidates(const std::vector<FrontierChain>&
     const double piece = chain.length_m / n;
     for (int i = 0; i < n; ++i)
       out.push_back(FrontierPoint{point_at_arc_length(chain.points, (i + 0.5) * piece), static_cast<int>(c),
-                                  chain.length_m});
+                                  chain.length_m, i * piece, (i + 1) * piece});
   }
   if (dropped_chains) *dropped_chains = dropped;
   return out;

@@ -38,6 +38,9 @@ struct FrontierPoint {
   Point point;               // on the chain
   int chain = -1;            // index into the chains
   double chain_length_m = 0.0;
+  // The arc of the chain this candidate covers, [arc_from_m, arc_to_m] in
+  // arc length from the chain's first point; `point` is its middle.
+  double arc_from_m = 0.0, arc_to_m = 0.0;
 };
 
 // Candidates on the chains: a chain of length L >= min_frontier_length_m gets

@@ -49,6 +49,27 @@ TEST(FrontierChains, ChainWrappingPastVertexZeroIsOneChain) {
   EXPECT_EQ(chains[0].points.back().x(), 4.0);
 }
 
+TEST(FrontierCandidates, TheirArcsSplitEachChainAndHoldTheirPoint) {
+  FrontierGoalOptions options;
+  options.sensor_range_m = 4.0;
+  const auto chains = frontier_chains(l_room());
+  const auto candidates = frontier_candidates(chains, options);
+  std::vector<double> covered(chains.size(), 0.0);  // arc length covered so far, chain by chain
+  for (const auto& c : candidates) {
+    const auto& chain = chains[static_cast<std::size_t>(c.chain)];
+    EXPECT_NEAR(c.arc_from_m, covered[static_cast<std::size_t>(c.chain)], 1e-9);  // in order, no gap
+    EXPECT_GT(c.arc_to_m, c.arc_from_m);
+    EXPECT_LE(c.arc_to_m - c.arc_from_m, 2.0 * options.sensor_range_m + 1e-9);
+    const Point middle = point_at_arc_length(chain.points, 0.5 * (c.arc_from_m + c.arc_to_m));
+    EXPECT_NEAR(distance(middle, c.point), 0.0, 1e-9);
+    covered[static_cast<std::size_t>(c.chain)] = c.arc_to_m;
+  }
+  for (std::size_t k = 0; k < chains.size(); ++k) {
+    if (chains[k].length_m < options.min_frontier_length_m) continue;
+    EXPECT_NEAR(covered[k], chains[k].length_m, 1e-9);
+  }
+}
+
 TEST(FrontierCandidates, EveryFrontierPointIsWithinSensorRange) {
   FrontierGoalOptions options;
   options.sensor_range_m = 4.0;

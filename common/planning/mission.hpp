@@ -77,6 +77,7 @@ enum class FrontierReason : std::int8_t {
   kGivenUp = 3,
   kVisited = 4,
   kOutOfView = 5,
+  kPocket = 6,
 };
 
 struct FrontierLeft {

@@ -609,6 +609,36 @@ TEST(Mission, DoneWhenTheOnlyFrontierLeftIsBehindAWall) {
   EXPECT_NE(out.status.find("1 behind walls"), std::string::npos) << out.status;
 }
 
+TEST(Mission, DoneWhenTheOnlyFrontierLeftIsAPocket) {
+  // A room whose only frontier is the shadow in a 0.2 m slot of its top wall
+  // (the gap between two desks): no robot reaches past it, so the room is
+  // explored, and the slot's frontier is listed as a pocket.
+  const mapping::TypedMultiPolygon map = {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(6, 0), Point(6, 4), Point(3.2, 4), Point(3.2, 4.8), Point(3.15, 4.8), Point(3, 4),
+       Point(0, 4)},
+      {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle,
+       E::kObstacle}})};
+  for (const double reach_m : {0.02, 0.0}) {
+    MissionOptions o = test_options();
+    o.planner.reach_past_frontier_m = reach_m;
+    Mission m(o);
+    for (std::int64_t t : {0 * kSecond, 1 * kSecond}) {
+      m.on_map(map, t);
+      m.on_pose(Pose2{1, 2, 0}, t);
+      (void)step_with_inline_planning(m, t);
+    }
+    const auto out = step_with_inline_planning(m, kSecond + 1);
+    if (reach_m == 0.0) {  // the test off: the slot is a goal
+      EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+      continue;
+    }
+    EXPECT_EQ(out.phase, Phase::kDone) << out.status;
+    ASSERT_EQ(out.frontiers.size(), 1u);
+    EXPECT_EQ(out.frontiers[0].reason, FrontierReason::kPocket);
+    EXPECT_NE(out.status.find("1 in pockets narrower than the robot"), std::string::npos) << out.status;
+  }
+}
+
 TEST(Mission, CountsDistanceTravelledButNotPoseJumps) {
   Mission m(test_options());
   m.on_pose(Pose2{0, 0, 0}, 0);

@@ -56,6 +56,12 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("blacklist_radius_m", planner.blacklist_radius_m, non_negative<double>());
   planner.turn_cost_m_per_rad =
       config.get<double>("turn_cost_m_per_rad", planner.turn_cost_m_per_rad, non_negative<double>());
+  planner.reach_past_frontier_m =
+      config.get<double>("reach_past_frontier_m", planner.reach_past_frontier_m, in_range(0.0, 1.0));
+  if (planner.reach_past_frontier_m >= cspace.robot_radius_m)
+    throw runtime::ConfigError(config.origin() +
+                               ": reach_past_frontier_m must be less than robot_radius_m (the disk reaches past a "
+                               "frontier by its radius at most)");
   if (planner.candidate_snap_distance_m < cspace.robot_radius_m + cspace.clearance_margin_m)
     throw runtime::ConfigError(config.origin() +
                                ": candidate_snap_distance_m must be at least robot_radius_m + clearance_margin_m "

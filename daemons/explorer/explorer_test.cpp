@@ -137,7 +137,8 @@ TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
 TEST(ExplorerOptions, RejectsBadValues) {
   for (const char* text : {"pose_channel = \"MAP\"", "robot_radius_m = -1.0", "max_speed_mps = 0.0",
                            "turn_in_place_rad = 0.2\nturn_in_place_exit_rad = 0.5",
-                           "robot_radius_m = 1.5\ncandidate_snap_distance_m = 1.0"}) {
+                           "robot_radius_m = 1.5\ncandidate_snap_distance_m = 1.0",
+                           "robot_radius_m = 0.3\nreach_past_frontier_m = 0.3", "reach_past_frontier_m = -0.01"}) {
     auto config = runtime::ConfigReader::from_string(text, "test.toml");
     EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
   }

@@ -151,8 +151,9 @@ TEST_P(BadConfig, VersionAndHelpNameTheProgramAsInstalled) {
   const auto help = run_to_completion({bin_path(program), "--help"});
   EXPECT_EQ(help.exit_code, 0) << help.output;
   EXPECT_THAT(help.output, HasSubstr(program));
-  if (GetParam().find('_') != std::string::npos)
+  if (GetParam().find('_') != std::string::npos) {
     EXPECT_THAT(help.output, Not(HasSubstr("pex-" + GetParam())));
+  }
   const auto bad_flag = run_to_completion({bin_path(program), "--no-such-flag"});
   EXPECT_EQ(bad_flag.exit_code, 64) << bad_flag.output;
 }
