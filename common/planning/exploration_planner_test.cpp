@@ -131,6 +131,13 @@ mapping::TypedMultiPolygon corridor_with_windows() {
 // x = 3..3.2 (the gap between two desks against a wall): the laser saw
 // into it from below, its right side and back are walls, and the shadow of
 // the slot's left corner is a frontier from (3, 4) to (3.15, 4.8).
+// The planner with the pocket test on (PlannerOptions::reach_past_frontier_m).
+PlannerOptions pocket_options() {
+  PlannerOptions o = options();
+  o.reach_past_frontier_m = 0.02;
+  return o;
+}
+
 mapping::TypedMultiPolygon room_with_a_slot(double slot_width_m) {
   const double right = 3.0 + slot_width_m;
   return {typed_polygon(testing::RingSpec{
@@ -142,7 +149,7 @@ mapping::TypedMultiPolygon room_with_a_slot(double slot_width_m) {
 
 TEST(PlanExploration, AFrontierInAGapNarrowerThanTheRobotIsAPocketNotAGoal) {
   const auto map = room_with_a_slot(0.2);
-  const Plan plan = plan_exploration(map, Pose2{1, 2, 0}, {}, options());
+  const Plan plan = plan_exploration(map, Pose2{1, 2, 0}, {}, pocket_options());
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_TRUE(plan.candidates.empty());
   EXPECT_EQ(plan.best, -1);
@@ -152,7 +159,7 @@ TEST(PlanExploration, AFrontierInAGapNarrowerThanTheRobotIsAPocketNotAGoal) {
   EXPECT_FALSE(margin_may_block(plan));  // planning without the margin is not asked for
   // The cause: without the test the slot's frontier is a goal, and a
   // reachable one (the robot would stand below the slot and look in).
-  PlannerOptions off = options();
+  PlannerOptions off = pocket_options();
   off.reach_past_frontier_m = 0.0;
   const Plan without = plan_exploration(map, Pose2{1, 2, 0}, {}, off);
   ASSERT_EQ(without.candidates.size(), 1u);
@@ -162,7 +169,7 @@ TEST(PlanExploration, AFrontierInAGapNarrowerThanTheRobotIsAPocketNotAGoal) {
 
 TEST(PlanExploration, ASlotTheRobotFitsInIsNoPocket) {
   // 0.8 m wide: the robot (0.54 m) drives in and sees past the frontier.
-  const Plan plan = plan_exploration(room_with_a_slot(0.8), Pose2{1, 2, 0}, {}, options());
+  const Plan plan = plan_exploration(room_with_a_slot(0.8), Pose2{1, 2, 0}, {}, pocket_options());
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_EQ(plan.stats.candidates_in_pockets, 0);
   ASSERT_EQ(plan.candidates.size(), 1u);
@@ -172,7 +179,7 @@ TEST(PlanExploration, ASlotTheRobotFitsInIsNoPocket) {
 TEST(PlanExploration, ASlotTheMarginClosesIsNoPocket) {
   // 0.6 m wide: no C-space inside (it needs 2 x (0.27 + 0.05) m), but the
   // robot's disk (0.54 m) fits into its mouth and reaches past the frontier.
-  const Plan plan = plan_exploration(room_with_a_slot(0.6), Pose2{1, 2, 0}, {}, options());
+  const Plan plan = plan_exploration(room_with_a_slot(0.6), Pose2{1, 2, 0}, {}, pocket_options());
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_EQ(plan.stats.candidates_in_pockets, 0);
   ASSERT_EQ(plan.candidates.size(), 1u);
@@ -187,7 +194,7 @@ TEST(PlanExploration, ADoorNarrowerThanTheRobotIsNoPocket) {
   const mapping::TypedMultiPolygon map = {typed_polygon(testing::RingSpec{
       {Point(0, 0), Point(6, 0), Point(6, 4), Point(3.45, 4), Point(3, 4), Point(0, 4)},
       {E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}})};
-  const Plan plan = plan_exploration(map, Pose2{1, 2, 0}, {}, options());
+  const Plan plan = plan_exploration(map, Pose2{1, 2, 0}, {}, pocket_options());
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_EQ(plan.stats.candidates_in_pockets, 0);
   ASSERT_EQ(plan.candidates.size(), 1u);
