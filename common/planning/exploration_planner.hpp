@@ -58,9 +58,11 @@ struct PlannerOptions {
   // among nearly equal paths, prefer the one ahead.
   double turn_cost_m_per_rad = 0.1;
   // A frontier candidate is a goal only if the robot's disk (radius
-  // cspace.robot_radius_m) can reach this far past its arc of the frontier:
-  // from the C-space point nearest some point of the arc, moved straight
-  // towards that point, keeping the radius from every obstacle edge. A
+  // cspace.robot_radius_m) can reach this far past its arc of the frontier,
+  // at some point of the arc (sampled every 5 cm), moved there straight from
+  // the C-space (from the C-space point nearest the point, or to the place
+  // square in front of it from the C-space point nearest that) keeping the
+  // radius from every obstacle edge. A
   // frontier no such disk reaches past is a *pocket*: the far side of a gap
   // narrower than the robot (between desks, between a chair's legs, a notch
   // of a ragged wall), into which no visit takes the robot or its laser
