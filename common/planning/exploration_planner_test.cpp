@@ -127,10 +127,6 @@ mapping::TypedMultiPolygon corridor_with_windows() {
   return {typed_polygon(testing::RingSpec{pts, types})};
 }
 
-// A 6 x 4 m room whose top wall has a slot 0.2 m wide and 0.8 m deep at
-// x = 3..3.2 (the gap between two desks against a wall): the laser saw
-// into it from below, its right side and back are walls, and the shadow of
-// the slot's left corner is a frontier from (3, 4) to (3.15, 4.8).
 // The planner with the pocket test on (PlannerOptions::reach_past_frontier_m).
 PlannerOptions pocket_options() {
   PlannerOptions o = options();
@@ -138,6 +134,10 @@ PlannerOptions pocket_options() {
   return o;
 }
 
+// A 6 x 4 m room whose top wall has a slot `slot_width_m` wide and 0.8 m
+// deep from x = 3 (0.2 m: the gap between two desks against a wall): the
+// laser saw into it from below, its right side and back are walls, and the
+// shadow of the slot's left corner is a frontier from (3, 4) to the back.
 mapping::TypedMultiPolygon room_with_a_slot(double slot_width_m) {
   const double right = 3.0 + slot_width_m;
   return {typed_polygon(testing::RingSpec{
