@@ -64,26 +64,31 @@ struct MissionMapsOptions {
   mapping::PolygonMapOptions map;
 };
 
-// `plan` is the planner the emulated robot follows (the goal order and so the
-// maps depend on it: use one fixed planner for a benchmark's maps).
-inline MissionMaps emulate_mission(
-    const std::string& world_path, const MissionMapsOptions& options,
-    const std::function<planning::Plan(const mapping::TypedMultiPolygon&, const planning::Pose2&,
-                                       const std::vector<mapping::Point>&)>& plan) {
-  MissionMaps out;
-  std::ifstream in(world_path);
+// The world file at `path`; nullopt and `error` when it cannot be read or parsed.
+inline std::optional<sim::World> read_world(const std::string& path, std::string& error) {
+  std::ifstream in(path);
   if (!in) {
-    out.error = "cannot read " + world_path;
-    return out;
+    error = "cannot read " + path;
+    return std::nullopt;
   }
   std::stringstream text;
   text << in.rdbuf();
-  auto parsed = sim::parse_world(text.str(), world_path);
+  auto parsed = sim::parse_world(text.str(), path);
   if (const auto* e = std::get_if<sim::WorldError>(&parsed)) {
-    out.error = e->message;
-    return out;
+    error = e->message;
+    return std::nullopt;
   }
-  const sim::World world = std::get<sim::World>(std::move(parsed));
+  return std::get<sim::World>(std::move(parsed));
+}
+
+using MissionPlanner = std::function<planning::Plan(const mapping::TypedMultiPolygon&, const planning::Pose2&,
+                                                    const std::vector<mapping::Point>&)>;
+
+// `plan` is the planner the emulated robot follows (the goal order and so the
+// maps depend on it: use one fixed planner for a benchmark's maps).
+inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOptions& options,
+                                   const MissionPlanner& plan) {
+  MissionMaps out;
   const sim::RayCaster caster(world);
   sim::Laser laser(sim::LaserOptions{}, 11);
   mapping::ScanPolygonOptions scan_options = options.scan;
@@ -180,6 +185,14 @@ inline MissionMaps emulate_mission(
   if (!free_space.ok) out.error = "free space merge failed";
   out.free_space = std::move(free_space.polygons);
   return out;
+}
+
+// The same on the world file at `world_path`.
+inline MissionMaps emulate_mission(const std::string& world_path, const MissionMapsOptions& options,
+                                   const MissionPlanner& plan) {
+  MissionMaps out;
+  const auto world = read_world(world_path, out.error);
+  return world ? emulate_mission(*world, options, plan) : out;
 }
 
 }  // namespace pex::bench

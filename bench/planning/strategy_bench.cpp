@@ -14,11 +14,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -77,19 +74,16 @@ int main(int argc, char** argv) {
   std::map<std::string, std::map<std::string, double>> path_of;  // world -> strategy -> m
   for (const auto& world : worlds) {
     const std::string name = std::filesystem::path(world).stem().string();
-    // The floor the simulator's robot (a 0.25 m disk) can sweep, to score the maps against.
-    std::ifstream in(world);
-    std::stringstream text;
-    text << in.rdbuf();
-    auto parsed = pex::sim::parse_world(text.str(), world);
-    if (const auto* e = std::get_if<pex::sim::WorldError>(&parsed)) {
-      std::fprintf(stderr, "pex-bench-strategies: %s\n", e->message.c_str());
+    std::string error;
+    const auto sim_world = pex::bench::read_world(world, error);
+    if (!sim_world) {
+      std::fprintf(stderr, "pex-bench-strategies: %s\n", error.c_str());
       return 65;
     }
-    const pex::sim::World& sim_world = std::get<pex::sim::World>(parsed);
+    // The floor the simulator's robot (a 0.25 m disk) can sweep, to score the maps against.
     constexpr double kSimRobotRadiusM = 0.25, kWallToleranceM = 0.1;
-    const auto reachable = pex::evaluation::reachable_free_space(sim_world, kSimRobotRadiusM, sim_world.start);
-    const pex::evaluation::WallIndex walls(sim_world.walls);
+    const auto reachable = pex::evaluation::reachable_free_space(*sim_world, kSimRobotRadiusM, sim_world->start);
+    const pex::evaluation::WallIndex walls(sim_world->walls);
     for (const auto& strategy_name : strategies) {
       const auto strategy = pex::planning::parse_goal_strategy(strategy_name);
       if (!strategy) {
@@ -111,7 +105,7 @@ int main(int argc, char** argv) {
       mission.map = mapper.map;
       const bool fallback = explorer.mission.tight_fallback;
       const auto maps = pex::bench::emulate_mission(
-          world, mission, [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
+          *sim_world, mission, [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
             Plan plan = pex::planning::plan_exploration(map, pose, blacklist, options);
             // As the mission does (Mission::on_plan, on_select_plan): without the
             // margin only when nothing is reachable and the margin may be why.

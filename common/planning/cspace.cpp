@@ -40,12 +40,6 @@ bool within_box(const Point& p, const Point& q, const Point& r) {
          std::min(p.y(), q.y()) <= r.y() && r.y() <= std::max(p.y(), q.y());
 }
 
-Point left_normal(const Point& a, const Point& b) {
-  const double len = distance(a, b);
-  if (len <= 0.0) return Point(0.0, 0.0);
-  return Point(-(b.y() - a.y()) / len, (b.x() - a.x()) / len);
-}
-
 double segment_distance(const Point& p, const Point& a, const Point& b) {
   return distance(p, closest_point_on_segment(p, a, b));
 }
@@ -69,11 +63,17 @@ bool segments_intersect(const Point& p1, const Point& p2, const Point& q1, const
   return false;
 }
 
+Point left_normal(const Point& a, const Point& b) {
+  const double len = distance(a, b);
+  if (len <= 0.0) return Point(0.0, 0.0);
+  return Point(-(b.y() - a.y()) / len, (b.x() - a.x()) / len);
+}
+
 double segment_distance(const Point& p1, const Point& p2, const Point& q1, const Point& q2) {
   if (segments_intersect(p1, p2, q1, q2)) return 0.0;
   // Apart, the nearest points of two segments include an end of one of them.
-  return std::min({distance(p1, closest_point_on_segment(p1, q1, q2)), distance(p2, closest_point_on_segment(p2, q1, q2)),
-                   distance(q1, closest_point_on_segment(q1, p1, p2)), distance(q2, closest_point_on_segment(q2, p1, p2))});
+  return std::min({segment_distance(p1, q1, q2), segment_distance(p2, q1, q2), segment_distance(q1, p1, p2),
+                   segment_distance(q2, p1, p2)});
 }
 
 double polyline_length(const std::vector<Point>& points) {

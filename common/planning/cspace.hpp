@@ -160,6 +160,9 @@ double distance(const Point& a, const Point& b);
 Point closest_point_on_segment(const Point& p, const Point& a, const Point& b);
 // True if the closed segments p1-p2 and q1-q2 share a point.
 bool segments_intersect(const Point& p1, const Point& p2, const Point& q1, const Point& q2);
+// The unit normal on the left of the direction a -> b (the free side of a
+// map or C-space edge); (0, 0) when a == b.
+Point left_normal(const Point& a, const Point& b);
 // Distance between the closed segments p1-p2 and q1-q2 (0 if they share a point).
 double segment_distance(const Point& p1, const Point& p2, const Point& q1, const Point& q2);
 // Length of a polyline.

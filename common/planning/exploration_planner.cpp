@@ -133,27 +133,30 @@ bool disk_reaches_past(const ConfigurationSpace& cspace, const ObstacleEdges& ob
       const Point end(f.x() + (c->x() - f.x()) * centre_m / d, f.y() + (c->y() - f.y()) * centre_m / d);
       if (obstacles.clear_of(*c, end, radius)) return true;
     }
-    const double length = distance(a, b);
-    if (!(length > 0.0)) return false;
-    const Point front(f.x() - (b.y() - a.y()) * centre_m / length, f.y() + (b.x() - a.x()) * centre_m / length);
+    const Point n = left_normal(a, b);
+    if (n.x() == 0.0 && n.y() == 0.0) return false;  // a == b: no free side
+    const Point front(f.x() + n.x() * centre_m, f.y() + n.y() * centre_m);
     if (!obstacles.clear_of(front, front, radius)) return false;
     const auto c = cspace.nearest_interior_point(front, way_m);
     return c && obstacles.clear_of(*c, front, radius);
   };
-  // Every kStep from from_m, and to_m itself.
-  double at = 0.0;  // arc length at points[i - 1]
-  double next = from_m;
-  for (std::size_t i = 1; i < chain.points.size(); ++i) {
+  // Every kStep from from_m, and to_m itself; the samples are in arc order,
+  // so the edge each lies on is found walking forward.
+  if (chain.points.size() < 2) return false;
+  const int steps = std::max(1, static_cast<int>(std::ceil((to_m - from_m) / kStep)));
+  std::size_t i = 1;  // the sample lies on edge points[i - 1] - points[i]
+  double at = 0.0;    // arc length at points[i - 1]
+  for (int k = 0; k <= steps; ++k) {
+    const double s = k == steps ? to_m : from_m + k * kStep;
+    while (i + 1 < chain.points.size() && s > at + distance(chain.points[i - 1], chain.points[i])) {
+      at += distance(chain.points[i - 1], chain.points[i]);
+      ++i;
+    }
     const Point& a = chain.points[i - 1];
     const Point& b = chain.points[i];
     const double length = distance(a, b);
-    const bool last = i + 1 == chain.points.size();
-    for (; next <= to_m && (next <= at + length || last); next = next < to_m ? std::min(next + kStep, to_m) : to_m + 1.0) {
-      const double t = length > 0.0 ? std::clamp((next - at) / length, 0.0, 1.0) : 0.0;
-      if (reaches_at(Point(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y())), a, b)) return true;
-    }
-    at += length;
-    if (next > to_m) break;
+    const double t = length > 0.0 ? std::clamp((s - at) / length, 0.0, 1.0) : 0.0;
+    if (reaches_at(Point(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y())), a, b)) return true;
   }
   return false;
 }
