@@ -601,6 +601,16 @@ std::vector<Frame> DriveNode::step(std::int64_t now_us) {
   return out;
 }
 
+bool DriveNode::consumes(const Frame& frame) const {
+  return consumer_time_us_ > 0 && is_plain_data_frame(frame) && function_of(frame) == kCobHeartbeat &&
+         node_of(frame) == consumer_node_;
+}
+
+std::optional<std::int64_t> DriveNode::heartbeat_deadline_us() const {
+  if (silent_ || producer_heard_ || !consumer_armed_ || consumer_time_us_ <= 0) return std::nullopt;
+  return producer_heard_us_ + consumer_time_us_;
+}
+
 Frame DriveNode::inject_fault(std::uint16_t error_code) {
   state_ = DriveState::kFault;
   return emcy_frame(options_.node_id, error_code, 0x01);  // error register bit 0: generic error

@@ -293,6 +293,15 @@ class DriveNode {
   std::int64_t consumer_heartbeat_time_us() const { return consumer_time_us_; }
   AbortConnectionOption abort_option() const { return abort_option_; }
   std::uint64_t heartbeat_events() const { return heartbeat_events_; }
+  // Whether `frame` is a heartbeat of the producer this drive's watchdog
+  // consumes (0x1016:01 set).
+  bool consumes(const Frame& frame) const;
+  // The heartbeat watchdog's deadline: a step() later than this raises the
+  // heartbeat event unless a heartbeat of its producer comes first. nullopt
+  // while it cannot fire (not armed, a heartbeat waiting for the next step,
+  // or the node silenced). The simulator holds its clock here while the
+  // producer is alive (sim/pacer.hpp).
+  std::optional<std::int64_t> heartbeat_deadline_us() const;
 
  private:
   void apply_controlword(std::uint16_t controlword);

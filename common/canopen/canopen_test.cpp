@@ -334,5 +334,38 @@ TEST(Cia402, DriveRefusesWatchdogValuesOutOfRange) {
   EXPECT_EQ(drive.consumer_heartbeat_time_us(), 150'000);
 }
 
+// What the simulator paces on: the watchdog's deadline is the last heartbeat
+// of its producer (timed at the step after it came) plus the consumer time; a
+// step at the deadline raises nothing, one later the event. Other nodes'
+// heartbeats and a silenced drive have no deadline the simulator could hold.
+TEST(Cia402, DriveTellsItsHeartbeatDeadline) {
+  DriveNode drive(DriveNode::Options{1, 100'000, 200'000.0});
+  drive.step(0);  // boot-up: pre-operational, SDO accepted
+  EXPECT_FALSE(drive.consumes(heartbeat_frame(0x7F, NmtState::kOperational)));  // no watchdog yet
+  ASSERT_EQ(drive.handle(sdo_write_frame(1, kObjConsumerHeartbeatTime, 1, 0x7F0096, 4)).size(), 1u);
+  EXPECT_TRUE(drive.consumes(heartbeat_frame(0x7F, NmtState::kOperational)));
+  EXPECT_FALSE(drive.consumes(heartbeat_frame(0x05, NmtState::kOperational)));
+  EXPECT_FALSE(drive.consumes(sync_frame()));
+  EXPECT_EQ(drive.heartbeat_deadline_us(), std::nullopt);  // not armed before the first heartbeat
+
+  drive.handle(heartbeat_frame(0x7F, NmtState::kOperational));
+  EXPECT_EQ(drive.heartbeat_deadline_us(), std::nullopt);  // heard, timed at the next step
+  drive.step(10'000);
+  EXPECT_EQ(drive.heartbeat_deadline_us(), 160'000);
+  drive.handle(heartbeat_frame(0x05, NmtState::kOperational));  // another node's: no re-arm
+  drive.step(160'000);
+  EXPECT_EQ(drive.heartbeat_events(), 0u);
+  EXPECT_EQ(drive.heartbeat_deadline_us(), 160'000);
+  drive.step(160'001);
+  EXPECT_EQ(drive.heartbeat_events(), 1u);
+  EXPECT_EQ(drive.heartbeat_deadline_us(), std::nullopt);  // fired: disarmed until the next heartbeat
+
+  drive.handle(heartbeat_frame(0x7F, NmtState::kOperational));
+  drive.step(200'000);
+  EXPECT_EQ(drive.heartbeat_deadline_us(), 350'000);
+  drive.set_silent(true);  // a cut cable: the watchdog fires, nothing may hold it
+  EXPECT_EQ(drive.heartbeat_deadline_us(), std::nullopt);
+}
+
 }  // namespace
 }  // namespace pex::canopen

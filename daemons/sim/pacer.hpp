@@ -16,6 +16,10 @@
 // A channel that has gone silent (a daemon died or never started) stops
 // holding the clock after silence_wall_s of wall time, so faults can still be
 // simulated; it holds again once it is heard again. Pure: times come in.
+//
+// The simulator holds its clock by the same rule at each simulated drive's
+// heartbeat watchdog (Simulator::drive_watchdog_waits): a master heard within
+// silence_wall_s of wall time is late, not dead, and the watchdog waits for it.
 #include <cstdint>
 #include <string>
 #include <vector>

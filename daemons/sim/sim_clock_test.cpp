@@ -3,11 +3,16 @@
 // messages. Asserts the clock's contract, not how fast the host ran it.
 #include <unistd.h>
 
+#include <chrono>
+#include <optional>
+
 #include <gtest/gtest.h>
 
 #include <pex/pose_t.hpp>
 #include <pex/sim_clock_t.hpp>
 
+#include "canopen/canopen.hpp"
+#include "hwio/hwio.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/node.hpp"
 #include "runtime/run_guarded.hpp"
@@ -64,6 +69,54 @@ TEST(SimClock, StepsInSimulatedTimeWithTruthOnTheSameTimeLineAndCountsContacts) 
   // The same counts go to DAEMON_STATUS.
   EXPECT_EQ(node.counter("collisions"), 1);
   EXPECT_EQ(node.counter("collision_steps"), 0);
+}
+
+// The drives' heartbeat watchdog (0x1016) fires when the master has gone
+// silent, not because the master's next heartbeat is late in wall time while
+// the simulated clock runs fast: the clock waits at the drive's deadline for
+// pacing's silence time, then goes on, and the watchdog fires (EMCY 0x8130).
+// At x20 without the wait, the 150 ms consumer time is 7.5 ms of wall time.
+TEST(SimClock, WaitsAtADrivesWatchdogUntilItsMasterHasBeenSilentForTheSilenceTime) {
+  runtime::Node node(runtime::NodeOptions{"sim", "memq://", false, "", 1.0});
+  SimOptions o;
+  o.world_file = std::string(PEX_SOURCE_DIR) + "/worlds/two_rooms.wkt";
+  o.speed_factor = 20.0;
+  o.cola_port = 0;
+  o.can_local_path = "@pex-sim-watchdog-test-" + std::to_string(getpid());
+  o.pacing.silence_wall_s = 0.5;
+  Simulator sim(node, o);
+  auto master = hwio::connect_local_bus(o.can_local_path);
+  ASSERT_TRUE(master) << master.error();
+  hwio::FrameTransport& bus = **master;
+
+  using Clock = std::chrono::steady_clock;
+  const auto started = Clock::now();
+  std::optional<Clock::time_point> heartbeat_sent, watchdog_fired;
+  bool configured = false;
+  std::string error;
+  node.every(std::chrono::milliseconds(2), [&](std::int64_t) {
+    while (auto frame = bus.receive()) {
+      if (frame->can_id == canopen::kCobSdoTx + 1) configured = true;  // node 1 took the consumer time
+      if (frame->can_id == canopen::kCobEmcy + 1 && heartbeat_sent && !watchdog_fired) {
+        watchdog_fired = Clock::now();
+        node.request_stop();
+      }
+    }
+    if (!configured) {
+      // Until the drive has booted and answers: consumer 0x7F, 150 ms (0x96).
+      bus.send(canopen::sdo_write_frame(1, canopen::kObjConsumerHeartbeatTime, 1, 0x7F0096, 4), &error);
+    } else if (!heartbeat_sent) {
+      bus.send(canopen::heartbeat_frame(0x7F, canopen::NmtState::kOperational), &error);  // arms it; then silence
+      heartbeat_sent = Clock::now();
+    }
+    if (Clock::now() - started > std::chrono::seconds(30)) node.request_stop();  // guard only
+  });
+  pex::runtime::run_guarded(node);
+
+  ASSERT_TRUE(heartbeat_sent);
+  ASSERT_TRUE(watchdog_fired) << "the watchdog never fired with the master silent";
+  EXPECT_GE(std::chrono::duration<double>(*watchdog_fired - *heartbeat_sent).count(), o.pacing.silence_wall_s);
+  EXPECT_GT(node.counter("watchdog_holds"), 0);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include "runtime/channels.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -387,6 +388,11 @@ void Simulator::tick() {
       held = true;
       break;
     }
+    if (drive_watchdog_waits(static_cast<std::int64_t>(std::llround((steps_done_ + 1) * step_s * 1e6)), wall_s)) {
+      held = true;
+      ++node_.counter("watchdog_holds");
+      break;
+    }
     ++steps_done_;
     sim_time_us_ = static_cast<std::int64_t>(std::llround(steps_done_ * step_s * 1e6));
     physics_step();
@@ -400,6 +406,22 @@ void Simulator::tick() {
     wall_start_s_ += (due - limit) * step_s / options_.speed_factor;
     ++node_.counter("physics_overruns");
   }
+}
+
+// A drive's heartbeat watchdog (0x1016) fires when its master has died, hung
+// or lost the bus, not because the master's next heartbeat is late in wall
+// time while the simulated clock runs ten times faster: on the robot the
+// master is never 150 ms late. So, as the pacer does for the bus channels,
+// the clock waits at a drive's deadline while the master's heartbeats were
+// heard within pacing's silence time (wall); after that it goes on and the
+// watchdog fires as on the robot (the fault tests kill the driver).
+bool Simulator::drive_watchdog_waits(std::int64_t next_sim_us, double wall_s) const {
+  if (options_.pacing.max_lag_us <= 0 || wall_s - master_heartbeat_wall_s_ > options_.pacing.silence_wall_s)
+    return false;
+  return std::any_of(drives_.begin(), drives_.end(), [next_sim_us](const canopen::DriveNode& drive) {
+    const auto deadline = drive.heartbeat_deadline_us();
+    return deadline && next_sim_us > *deadline;
+  });
 }
 
 void Simulator::physics_step() {
@@ -534,7 +556,10 @@ void Simulator::drop_closed_clients() {
 void Simulator::receive_can() {
   while (auto frame = can_->receive()) {
     ++node_.counter("can_frames_in");
-    for (auto& drive : drives_) send_can(drive.handle(*frame));
+    for (auto& drive : drives_) {
+      if (drive.consumes(*frame)) master_heartbeat_wall_s_ = node_.monotonic_us() * 1e-6;
+      send_can(drive.handle(*frame));
+    }
   }
   node_.counter("can_malformed") = static_cast<std::int64_t>(can_->malformed());
 }

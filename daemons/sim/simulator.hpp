@@ -3,6 +3,7 @@
 // a CoLa-A TCP server, the CiA 402 wheel drives on a CAN transport, and the
 // world/plant stepping in simulated time.
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -115,6 +116,9 @@ class Simulator {
   void read_client(ColaClient& client);
   void drop_closed_clients();
   void receive_can();
+  // Whether the step to next_sim_us must wait: a drive's heartbeat watchdog
+  // would fire while its master is alive, only late in wall time.
+  bool drive_watchdog_waits(std::int64_t next_sim_us, double wall_s) const;
   void send_can(const std::vector<canopen::Frame>& frames);
   // SIM_FAULT: the laser stalls or refuses connections for a while.
   void start_laser_fault(std::int8_t fault, double duration_s);
@@ -133,6 +137,8 @@ class Simulator {
   std::vector<std::unique_ptr<ColaClient>> clients_;
   std::unique_ptr<hwio::FrameTransport> can_;
   std::vector<canopen::DriveNode> drives_;  // left, right
+  // Steady clock (s) at the last heartbeat of the drives' master (-inf: none yet).
+  double master_heartbeat_wall_s_ = -std::numeric_limits<double>::infinity();
 
   std::int64_t sim_time_us_ = 0;
   std::int64_t next_laser_us_ = 0;
