@@ -607,7 +607,10 @@ bool DriveNode::consumes(const Frame& frame) const {
 }
 
 std::optional<std::int64_t> DriveNode::heartbeat_deadline_us() const {
-  if (silent_ || producer_heard_ || !consumer_armed_ || consumer_time_us_ <= 0) return std::nullopt;
+  // Booting (after a reset of communication), the node hears nothing until
+  // its next step: a clock held for its heartbeat would never get there.
+  if (silent_ || boot_up_pending_ || producer_heard_ || !consumer_armed_ || consumer_time_us_ <= 0)
+    return std::nullopt;
   return producer_heard_us_ + consumer_time_us_;
 }
 

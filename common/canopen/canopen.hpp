@@ -298,9 +298,10 @@ class DriveNode {
   bool consumes(const Frame& frame) const;
   // The heartbeat watchdog's deadline: a step() later than this raises the
   // heartbeat event unless a heartbeat of its producer comes first. nullopt
-  // while it cannot fire (not armed, a heartbeat waiting for the next step,
-  // or the node silenced). The simulator holds its clock here while the
-  // producer is alive (sim/pacer.hpp).
+  // while it cannot fire (not armed, a heartbeat waiting for the next step)
+  // or must not be waited for (the node silenced, or booting: it hears
+  // nothing before its next step). The simulator holds its clock here while
+  // the producer is alive (sim/pacer.hpp).
   std::optional<std::int64_t> heartbeat_deadline_us() const;
 
  private:

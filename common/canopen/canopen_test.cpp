@@ -363,6 +363,12 @@ TEST(Cia402, DriveTellsItsHeartbeatDeadline) {
   drive.handle(heartbeat_frame(0x7F, NmtState::kOperational));
   drive.step(200'000);
   EXPECT_EQ(drive.heartbeat_deadline_us(), 350'000);
+  // A reset of communication: booting, the node hears nothing before its
+  // next step, so a clock held for its heartbeat would never get there.
+  drive.handle(nmt_frame(NmtCommand::kResetCommunication, 1));
+  EXPECT_EQ(drive.heartbeat_deadline_us(), std::nullopt);
+  drive.step(250'000);  // boot-up sent; still armed
+  EXPECT_EQ(drive.heartbeat_deadline_us(), 350'000);
   drive.set_silent(true);  // a cut cable: the watchdog fires, nothing may hold it
   EXPECT_EQ(drive.heartbeat_deadline_us(), std::nullopt);
 }
