@@ -515,13 +515,19 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
                                best->position.y(), best->path_length_m, static_cast<double>(plan.candidates.size())));
 }
 
-void Mission::give_up_goal(const std::string& why) {
+void Mission::give_up_goal(GiveUp kind, const std::string& why) {
   if (goal_) blacklist_.push_back(*goal_);
   goal_.reset();
   follower_.clear();
   last_request_utime_ = -1;  // plan again at the next step
-  if (++goal_failures_ >= options_.max_consecutive_failures) {
-    finish(Phase::kFailed, "gave up " + std::to_string(goal_failures_) + " goals in a row; the last: " + why,
+  // A blocked goal leaves the count as it is: the end of a mission in clutter
+  // gives up goals behind passages SLAM's corrections open and close, one
+  // after another (intel, greedy: FAILED at coverage 0.993 after five), and
+  // each is blacklisted, so they run out; a stuck robot still fails on the
+  // goals it makes no progress to.
+  if (kind == GiveUp::kNoProgress && ++goal_failures_ >= options_.max_consecutive_failures) {
+    finish(Phase::kFailed,
+           "gave up " + std::to_string(goal_failures_) + " goals in a row for want of progress; the last: " + why,
            now_utime_);
   } else {
     enter(Phase::kSelecting, "gave up a goal: " + why);
@@ -566,7 +572,7 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   const GoalCandidate& same = plan.candidates[static_cast<std::size_t>(match)];
   if (!same.reachable) {
     ++outcomes_.blocked;
-    give_up_goal("no path to it any more");
+    give_up_goal(GiveUp::kBlocked, "no path to it any more");
     return;
   }
   // Commitment: the goal is kept even when another candidate is now cheaper;
@@ -714,10 +720,11 @@ MissionOutput Mission::step(std::int64_t now_utime) {
     if (plan_due(now_utime)) request_plan(now_utime, Purpose::kFollow, goal_tight_);
     if (now_utime - progress_utime_ > options_.progress_timeout_us) {
       ++outcomes_.no_progress;
-      give_up_goal(format("no progress for %.0f s", static_cast<double>(options_.progress_timeout_us) * 1e-6));
+      give_up_goal(GiveUp::kNoProgress,
+                   format("no progress for %.0f s", static_cast<double>(options_.progress_timeout_us) * 1e-6));
     } else if (now_utime > goal_deadline_utime_) {
       ++outcomes_.no_progress;
-      give_up_goal("not reached in four times its path's driving time");
+      give_up_goal(GiveUp::kNoProgress, "not reached in four times its path's driving time");
     }
   }
 

@@ -20,7 +20,10 @@
 //                  confirmed on done_confirmations maps
 //   DONE_WITH_UNREACHABLE  frontiers are left that the robot could not get to
 //                  (no path, too narrow, given up); each listed with why
-//   FAILED         max_consecutive_failures goals given up or plans failed in a row
+//   FAILED         max_consecutive_failures goals given up for want of progress
+//                  (the robot could not get closer: stuck) or plans failed in a
+//                  row; goals blocked by a newer map are given up and
+//                  blacklisted but are no failure of the robot
 //   PAUSED         `pause`: wheels stopped, goal and state kept; `resume` goes on
 //   HOMING / HOME  `home`: back to the pose the mission started at, then stopped
 //   STOPPED        `stop`: wheels stopped until `start`
@@ -249,7 +252,11 @@ class Mission {
   void on_follow_plan(const Plan& plan, std::int64_t now_utime);
   void on_home_plan(const Plan& plan);
   void select(const Plan& plan, std::int64_t now_utime);
-  void give_up_goal(const std::string& why);
+  // Why a goal is given up. Only kNoProgress (the robot could not get
+  // closer: stuck) counts toward FAILED; kBlocked (a newer map has no path
+  // to it) is the map changing, not the robot failing.
+  enum class GiveUp { kBlocked, kNoProgress };
+  void give_up_goal(GiveUp kind, const std::string& why);
   void count_plan_failure(const Plan& plan);
   void enter(Phase phase, std::string status);
   void finish(Phase phase, std::string status, std::int64_t now_utime);

@@ -357,6 +357,46 @@ TEST(Mission, AnUnreachableMatchDoesNotBlockAGoalAReachableMatchStillHas) {
   EXPECT_EQ(m.goal_outcomes().blocked, 1);
 }
 
+// Goals blocked by a newer map (no path any more) are given up and
+// blacklisted, but they are not failures of the robot: at the end of a
+// mission in clutter the last goals often lie behind passages SLAM's
+// corrections open and close (intel, greedy: FAILED at coverage 0.993 after
+// five of them in a row). Only goals without progress, the robot stuck, make
+// the mission FAILED.
+TEST(Mission, GoalsBlockedInARowDoNotFailTheMission) {
+  MissionOptions o = test_options();
+  o.max_consecutive_failures = 2;
+  Mission m(o);
+  // The goal followed finds no path at its next plan on a newer map.
+  auto block_followed_goal = [&](std::int64_t t) {
+    m.on_map(corridor(true, true), t);
+    m.on_pose(Pose2{10, 1.5, 0}, t);
+    auto out = m.step(t + 1);  // replan period reached
+    ASSERT_TRUE(out.plan_request.has_value()) << out.status;
+    PlanResult result = compute_plan(*out.plan_request);
+    for (auto& c : result.plan.candidates) {
+      c.reachable = false;
+      c.path.clear();
+    }
+    result.plan.best = -1;
+    m.on_plan(result, t + 2);
+  };
+  m.on_map(corridor(true, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  const Point first = *out.goal;
+  block_followed_goal(kSecond);
+  out = step_with_inline_planning(m, kSecond + 3);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;  // the other end
+  EXPECT_GT(distance(*out.goal, first), 5.0);
+  block_followed_goal(3 * kSecond);
+  out = m.step(3 * kSecond + 3);
+  EXPECT_EQ(m.goal_outcomes().blocked, 2);
+  EXPECT_EQ(m.blacklist().size(), 2u);
+  EXPECT_NE(out.phase, Phase::kFailed) << out.status;
+}
+
 TEST(Mission, FailsAfterRepeatedGoalsWithoutProgress) {
   MissionOptions o = test_options();
   o.max_consecutive_failures = 2;
