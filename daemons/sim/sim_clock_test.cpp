@@ -23,15 +23,21 @@ namespace {
 
 namespace ch = runtime::channels;
 
-TEST(SimClock, StepsInSimulatedTimeWithTruthOnTheSameTimeLineAndCountsContacts) {
-  runtime::Node node(runtime::NodeOptions{"sim", "memq://", false, "", 1.0});
+// two_rooms at `speed`, the laser on any free loopback port, a CAN bus of its own.
+SimOptions two_rooms_at(double speed, const std::string& bus_name) {
   SimOptions o;
   o.world_file = std::string(PEX_SOURCE_DIR) + "/worlds/two_rooms.wkt";
-  o.speed_factor = 4.0;
+  o.speed_factor = speed;
+  o.cola_port = 0;
+  o.can_local_path = "@" + bus_name + "-" + std::to_string(getpid());
+  return o;
+}
+
+TEST(SimClock, StepsInSimulatedTimeWithTruthOnTheSameTimeLineAndCountsContacts) {
+  runtime::Node node(runtime::NodeOptions{"sim", "memq://", false, "", 1.0});
+  SimOptions o = two_rooms_at(4.0, "pex-sim-clock-test");
   o.clock_rate_hz = 100.0;
   o.truth_rate_hz = 50.0;
-  o.cola_port = 0;  // any free port
-  o.can_local_path = "@pex-sim-clock-test-" + std::to_string(getpid());
   // Parked against a wall (the outer wall at x = 0): one contact, no motion.
   o.start_override = true;
   o.start = geometry::Pose2{o.plant.robot_radius_m - 0.01, 3.5, 0.0};
@@ -78,11 +84,7 @@ TEST(SimClock, StepsInSimulatedTimeWithTruthOnTheSameTimeLineAndCountsContacts) 
 // At x20 without the wait, the 150 ms consumer time is 7.5 ms of wall time.
 TEST(SimClock, WaitsAtADrivesWatchdogUntilItsMasterHasBeenSilentForTheSilenceTime) {
   runtime::Node node(runtime::NodeOptions{"sim", "memq://", false, "", 1.0});
-  SimOptions o;
-  o.world_file = std::string(PEX_SOURCE_DIR) + "/worlds/two_rooms.wkt";
-  o.speed_factor = 20.0;
-  o.cola_port = 0;
-  o.can_local_path = "@pex-sim-watchdog-test-" + std::to_string(getpid());
+  SimOptions o = two_rooms_at(20.0, "pex-sim-watchdog-test");
   o.pacing.silence_wall_s = 0.5;
   Simulator sim(node, o);
   auto master = hwio::connect_local_bus(o.can_local_path);
