@@ -488,7 +488,7 @@ std::vector<Frame> DriveNode::handle(const Frame& frame) {
     }
     return out;
   }
-  if (function == kCobHeartbeat && consumer_time_us_ > 0 && id == consumer_node_) {
+  if (consumes(frame)) {
     if (read_heartbeat(frame)) producer_heard_ = true;  // timed at the next step
     return out;
   }

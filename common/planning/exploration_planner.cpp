@@ -146,15 +146,16 @@ bool disk_reaches_past(const ConfigurationSpace& cspace, const ObstacleEdges& ob
   const int steps = std::max(1, static_cast<int>(std::ceil((to_m - from_m) / kStep)));
   std::size_t i = 1;  // the sample lies on edge points[i - 1] - points[i]
   double at = 0.0;    // arc length at points[i - 1]
+  double length = distance(chain.points[0], chain.points[1]);  // of that edge
   for (int k = 0; k <= steps; ++k) {
     const double s = k == steps ? to_m : from_m + k * kStep;
-    while (i + 1 < chain.points.size() && s > at + distance(chain.points[i - 1], chain.points[i])) {
-      at += distance(chain.points[i - 1], chain.points[i]);
+    while (i + 1 < chain.points.size() && s > at + length) {
+      at += length;
       ++i;
+      length = distance(chain.points[i - 1], chain.points[i]);
     }
     const Point& a = chain.points[i - 1];
     const Point& b = chain.points[i];
-    const double length = distance(a, b);
     const double t = length > 0.0 ? std::clamp((s - at) / length, 0.0, 1.0) : 0.0;
     if (reaches_at(Point(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y())), a, b)) return true;
   }

@@ -388,13 +388,14 @@ void Simulator::tick() {
       held = true;
       break;
     }
-    if (drive_watchdog_waits(static_cast<std::int64_t>(std::llround((steps_done_ + 1) * step_s * 1e6)), wall_s)) {
+    const auto next_us = static_cast<std::int64_t>(std::llround((steps_done_ + 1) * step_s * 1e6));
+    if (drive_watchdog_waits(next_us, wall_s)) {
       held = true;
       ++node_.counter("watchdog_holds");
       break;
     }
     ++steps_done_;
-    sim_time_us_ = static_cast<std::int64_t>(std::llround(steps_done_ * step_s * 1e6));
+    sim_time_us_ = next_us;
     physics_step();
   }
   if (held) {
