@@ -180,19 +180,23 @@ TEST(ShippedConfig, EveryDaemonOnTheSimClockHasARobotOverlayOnTheSystemClockWith
 }
 
 // Layering: defaults < each file in order, key by key (docs/deployment.md).
-namespace {
+// Each test writes its files into a folder of its own, removed after it.
+class ConfigLayers : public ::testing::Test {
+ protected:
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string write_file(const std::string& name, const std::string& text) {
+    std::filesystem::create_directories(dir_ / "robot");
+    const auto path = dir_ / name;
+    std::ofstream(path) << text;
+    return path.string();
+  }
 
-std::string write_file(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / ("pex_config_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir / "robot");
-  const auto path = dir / name;
-  std::ofstream(path) << text;
-  return path.string();
-}
+ private:
+  const std::filesystem::path dir_ =
+      std::filesystem::temp_directory_path() / ("pex_config_test_" + std::to_string(::getpid()));
+};
 
-}  // namespace
-
-TEST(ConfigLayers, EachKeyFromTheLastFileThatSetsItElseItsDefault) {
+TEST_F(ConfigLayers, EachKeyFromTheLastFileThatSetsItElseItsDefault) {
   const std::string base = write_file("slam.toml", "clock = \"sim\"\nrate_hz = 2.0\n[filter]\nparticles = 30\nseed = 7\n");
   const std::string robot = write_file("robot/slam.toml", "clock = \"system\"\n\n[filter]\nparticles = 60\n");
   ConfigReader c = ConfigReader::from_files({base, robot});
@@ -224,7 +228,7 @@ TEST(ConfigLayers, EachKeyFromTheLastFileThatSetsItElseItsDefault) {
   EXPECT_EQ(reversed.get<std::string>("clock", "x"), "sim");
 }
 
-TEST(ConfigLayers, ErrorsNameTheFileThatSetTheKey) {
+TEST_F(ConfigLayers, ErrorsNameTheFileThatSetTheKey) {
   const std::string base = write_file("mapper.toml", "rate_hz = 2.0\n");
   const std::string robot = write_file("robot/mapper.toml", "rate_hz = -1.0\ntypo_m = 3\n");
   ConfigReader c = ConfigReader::from_files({base, robot});
@@ -237,7 +241,7 @@ TEST(ConfigLayers, ErrorsNameTheFileThatSetTheKey) {
               AllOf(HasSubstr(table), HasSubstr("'rate_hz' is a table here but a value in " + base)));
 }
 
-TEST(ConfigLayers, ARelativePathIsTakenFromTheFolderOfTheFileThatSetIt) {
+TEST_F(ConfigLayers, ARelativePathIsTakenFromTheFolderOfTheFileThatSetIt) {
   const std::string base = write_file("sim.toml", "world_file = \"../worlds/a.wkt\"\nlog_file = \"a.log\"\n");
   const std::string robot = write_file("robot/sim.toml", "world_file = \"b.wkt\"\n");
   ConfigReader c = ConfigReader::from_files({base, robot});
@@ -247,7 +251,7 @@ TEST(ConfigLayers, ARelativePathIsTakenFromTheFolderOfTheFileThatSetIt) {
   EXPECT_EQ(c.effective()[0].value, "\"" + dir + "/robot/b.wkt\"");  // printed as resolved
 }
 
-TEST(ConfigLayers, TheEffectiveConfigIsAConfigThatReadsBackToTheSameValues) {
+TEST_F(ConfigLayers, TheEffectiveConfigIsAConfigThatReadsBackToTheSameValues) {
   const std::string base = write_file(
       "explorer.toml", "name = \"a \\\"quoted\\\" b\"\nstep_m = 0.1\nxs_m = [1, 2.5, -0.3]\non = true\nn = 3\n");
   ConfigReader c = ConfigReader::from_files({base});
