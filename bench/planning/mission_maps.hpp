@@ -182,7 +182,7 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
     ++out.goals;
   }
   auto free_space = map.free_space();
-  if (!free_space.ok) out.error = "free space merge failed";
+  if (!free_space.ok) out.error = "free space merge failed: " + free_space.error;
   out.free_space = std::move(free_space.polygons);
   return out;
 }

@@ -210,6 +210,58 @@ TypedMultiPolygon assign_types(const MultiPolygon& geometry, const EdgeTypeIndex
   return out;
 }
 
+void keep_holes_near_overlaid_rings(const TypedPolygon& polygon, std::vector<char>& set_aside, double clearance_m) {
+  // The edges of the rings that go through the overlay, with their boxes;
+  // holes cleared are appended, so one pass per round tests the new ones.
+  struct Edge {
+    Point a, b;
+    Box box;
+  };
+  std::vector<Edge> overlaid;
+  auto add_ring = [&](const Ring& ring) {
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+      Box box(ring[i], ring[i]);
+      bg::expand(box, ring[i + 1]);
+      overlaid.push_back({ring[i], ring[i + 1], box});
+    }
+  };
+  const auto& holes = polygon.geometry.inners();
+  add_ring(polygon.geometry.outer());
+  std::vector<Box> near_box(holes.size());  // the hole's box grown by the clearance
+  for (std::size_t k = 0; k < holes.size(); ++k) {
+    if (!set_aside[k]) {
+      add_ring(holes[k]);
+      continue;
+    }
+    near_box[k] = bg::return_envelope<Box>(holes[k]);
+    near_box[k].min_corner().x(near_box[k].min_corner().x() - clearance_m);
+    near_box[k].min_corner().y(near_box[k].min_corner().y() - clearance_m);
+    near_box[k].max_corner().x(near_box[k].max_corner().x() + clearance_m);
+    near_box[k].max_corner().y(near_box[k].max_corner().y() + clearance_m);
+  }
+  using EdgeSegment = bg::model::segment<Point>;
+  auto near = [&](const Ring& hole, const Box& hole_near_box, const Edge& e) {
+    if (bg::disjoint(hole_near_box, e.box)) return false;
+    const EdgeSegment s(e.a, e.b);
+    for (std::size_t i = 0; i + 1 < hole.size(); ++i)
+      if (bg::distance(EdgeSegment(hole[i], hole[i + 1]), s) <= clearance_m) return true;
+    return false;
+  };
+  for (std::size_t tested = 0; tested < overlaid.size();) {
+    const std::size_t end = overlaid.size();
+    for (std::size_t k = 0; k < holes.size(); ++k) {
+      if (!set_aside[k]) continue;
+      for (std::size_t i = tested; i < end; ++i)
+        if (near(holes[k], near_box[k], overlaid[i])) {
+          set_aside[k] = 0;
+          add_ring(holes[k]);
+          break;
+        }
+    }
+    tested = end;
+  }
+}
+
 bool put_back_holes(TypedMultiPolygon& polygons, std::vector<TypedRing> holes) {
   if (holes.empty()) return true;
   std::vector<Box> boxes;

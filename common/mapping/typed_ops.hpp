@@ -7,6 +7,7 @@
 #include <cmath>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "mapping/edge_overlay.hpp"
 #include "mapping/edge_reassignment.hpp"
@@ -107,18 +108,33 @@ struct TypedRing {
   std::vector<EdgeType> types;
 };
 
-// The polygon without the holes for which set_aside(ring) is true; those are
-// appended to `aside` with their types (to go back with put_back_holes).
+// Clears set_aside[k] (hole k of `polygon` to be left out of an overlay) for
+// every hole that comes within clearance_m of a ring that goes through it:
+// the outer ring, the holes not set aside and, in turn, the holes cleared
+// here. The overlay moves those rings by up to kOverlayMovesM, and a hole
+// left out beside one (valid rings may touch at a point) could then overlap
+// it: the hole would not go back (office, START turned 90 degrees: the free
+// space merge refused the map).
+void keep_holes_near_overlaid_rings(const TypedPolygon& polygon, std::vector<char>& set_aside, double clearance_m);
+
+// The polygon without the holes for which set_aside(ring) is true and that
+// keep clear of the rings that stay (keep_holes_near_overlaid_rings, by twice
+// kOverlayMovesM); those are appended to `aside` with their types (to go back
+// with put_back_holes).
 template <class Pred>
 TypedPolygon without_holes(const TypedPolygon& polygon, Pred&& set_aside, std::vector<TypedRing>& aside) {
+  const auto& holes = polygon.geometry.inners();
+  std::vector<char> leave_out(holes.size());
+  bool any = false;
+  for (std::size_t k = 0; k < holes.size(); ++k) any = (leave_out[k] = set_aside(holes[k]) ? 1 : 0) || any;
+  if (any) keep_holes_near_overlaid_rings(polygon, leave_out, 2.0 * kOverlayMovesM);
   TypedPolygon kept{Polygon{}, {polygon.edge_types[0]}};
   kept.geometry.outer() = polygon.geometry.outer();
-  for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k) {
-    const Ring& hole = polygon.geometry.inners()[k];
-    if (set_aside(hole)) {
-      aside.push_back({hole, polygon.edge_types[1 + k]});
+  for (std::size_t k = 0; k < holes.size(); ++k) {
+    if (leave_out[k]) {
+      aside.push_back({holes[k], polygon.edge_types[1 + k]});
     } else {
-      kept.geometry.inners().push_back(hole);
+      kept.geometry.inners().push_back(holes[k]);
       kept.edge_types.push_back(polygon.edge_types[1 + k]);
     }
   }
