@@ -23,6 +23,7 @@
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "planning/exploration_planner.hpp"
+#include "planning/path_follower.hpp"
 #include "sim/sim.hpp"
 
 namespace pex::bench {
@@ -37,6 +38,7 @@ struct MissionMaps {
   std::vector<MissionSnapshot> snapshots;  // in mission order
   int goals = 0;       // goals taken (reached, or seen on the way with replan_on_the_way)
   int goals_seen = 0;  // ... of which left on the way because their frontier was seen
+  int backs_out = 0;   // ways back (MissionMapsOptions::back_out_m)
   int plans = 0;
   double travelled_m = 0.0;
   bool done = false;  // no reachable candidate left before max_goals
@@ -55,6 +57,11 @@ struct MissionMapsOptions {
   // Off: every goal is driven to its end (the planning benchmark's maps).
   bool replan_on_the_way = false;
   double goal_match_radius_m = 1.5;
+  // As the mission does before it ends with frontiers left it cannot reach
+  // (MissionOptions::back_out_m): back the way the robot came, up to this
+  // far, planning every replan_step_m on the way; once until the next goal.
+  // 0: off (the planning benchmark's maps).
+  double back_out_m = 0.0;
   // Snapshots are kept (the planning benchmark plans on them again); off for
   // long runs that only want the outcome.
   bool keep_snapshots = true;
@@ -104,6 +111,8 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
   };
   planning::Pose2 pose = world.start;
   insert_at(pose.x_m, pose.y_m, pose.theta_rad);
+  std::vector<mapping::Point> trail{mapping::Point(pose.x_m, pose.y_m)};  // every scan's place
+  bool backed_out = false;
   std::vector<mapping::Point> blacklist;
   MissionSnapshot latest;
   auto snapshot = [&]() -> const MissionSnapshot* {
@@ -127,10 +136,40 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
     if (!next_plan) ++out.plans;
     next_plan.reset();
     const planning::GoalCandidate* goal = p.best_candidate();
+    const bool unreachable_left = std::any_of(p.candidates.begin(), p.candidates.end(), [](const auto& c) {
+      return !c.reachable && !c.blacklisted;
+    }) || p.stats.candidates_not_in_cspace > 0;
+    if (!goal && unreachable_left && p.stats.robot_in_a_lesser_piece && options.back_out_m > 0.0 && !backed_out) {
+      // Back the way it came, planning on the way; the first plan with a goal is followed.
+      backed_out = true;
+      ++out.backs_out;
+      const auto way = planning::way_back(trail, options.back_out_m);
+      double since = 0.0;
+      for (std::size_t k = 1; k < way.size() && !next_plan; ++k) {
+        const double length = boost::geometry::distance(way[k - 1], way[k]);
+        if (length <= 0.0) continue;
+        pose = {way[k].x(), way[k].y(), std::atan2(way[k].y() - way[k - 1].y(), way[k].x() - way[k - 1].x())};
+        insert_at(pose.x_m, pose.y_m, pose.theta_rad);
+        out.travelled_m += length;
+        since += length;
+        if (since < options.replan_step_m) continue;
+        since = 0.0;
+        const MissionSnapshot* on_the_way = snapshot();
+        if (!on_the_way) {
+          out.error = "planning map failed";
+          return out;
+        }
+        planning::Plan again = plan(on_the_way->map, on_the_way->pose, on_the_way->blacklist);
+        ++out.plans;
+        if (again.best_candidate()) next_plan = std::move(again);
+      }
+      continue;
+    }
     if (!goal) {
       out.done = true;
       break;
     }
+    backed_out = false;
     bool seen = false;
     // Along the path: a scan every scan_step_m, a snapshot every replan_step_m.
     const auto& path = goal->path;
@@ -143,6 +182,7 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
         const double t = s_m / length;
         pose = {path[k - 1].x() + t * dx, path[k - 1].y() + t * dy, heading};
         insert_at(pose.x_m, pose.y_m, pose.theta_rad);
+        trail.emplace_back(pose.x_m, pose.y_m);
         since_replan += options.scan_step_m;
         if (since_replan >= options.replan_step_m) {
           since_replan = 0.0;

@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
       mission.replan_step_m = 0.4;  // 0.4 m/s, a plan a second
       mission.replan_on_the_way = true;
       mission.goal_match_radius_m = explorer.mission.goal_match_radius_m;
+      mission.back_out_m = explorer.mission.back_out_m;
       mission.keep_snapshots = false;
       mission.scan = mapper.scan;
       mission.map = mapper.map;
@@ -125,10 +126,10 @@ int main(int argc, char** argv) {
       const auto score = pex::evaluation::score_map(maps.free_space, pex::geometry::Pose2{0.0, 0.0, 0.0}, reachable,
                                                     walls, kWallToleranceM);
       std::printf(
-          "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,"
+          "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"backs_out\":%d,"
           "\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f}\n",
           name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
-          maps.goals_seen, maps.plans, score.coverage, score.iou);
+          maps.goals_seen, maps.backs_out, maps.plans, score.coverage, score.iou);
       std::fflush(stdout);
     }
   }

@@ -247,6 +247,13 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   const Point& robot_point = setup->robot_point;
   const std::optional<Point> start = setup->start;
   const int own_piece = cspace.piece_of(*start);
+  {
+    const auto& pieces_of_cspace = cspace.polygons();
+    double largest = 0.0;
+    for (const auto& piece : pieces_of_cspace) largest = std::max(largest, bg::area(piece.geometry));
+    plan.stats.robot_in_a_lesser_piece =
+        own_piece >= 0 && bg::area(pieces_of_cspace[static_cast<std::size_t>(own_piece)].geometry) < largest;
+  }
   const ObstacleEdges obstacles(map);
 
   // 2. Candidates on the frontiers, moved into the C-space, or to an

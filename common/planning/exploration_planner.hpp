@@ -106,6 +106,9 @@ struct PlanStats {
   int candidates_in_pockets = 0;     // PlannerOptions::reach_past_frontier_m: no disk reaches past them
   int cspace_vertices = 0;
   int reflex_nodes = 0;
+  // The robot's piece of the C-space is not its largest (a nook the map
+  // shut behind it: Mission backs out before it calls the rest unreachable).
+  bool robot_in_a_lesser_piece = false;
   std::int64_t segment_tests = 0;
 };
 

@@ -65,6 +65,16 @@ TEST(PlanExploration, WithoutApproachTheSameFrontierHasNoPath) {
   EXPECT_TRUE(margin_may_block(plan));
 }
 
+TEST(PlanExploration, SaysWhenTheRobotIsInALesserPieceOfTheCSpace) {
+  const auto map = corridor_with_a_room_seen_through_a_door();  // the room cut off by its 0.5 m neck
+  const Plan corridor = plan_exploration(map, Pose2{2, 1.5, 0}, {}, options());
+  ASSERT_TRUE(corridor.ok) << corridor.error;
+  EXPECT_FALSE(corridor.stats.robot_in_a_lesser_piece);
+  const Plan room = plan_exploration(map, Pose2{16, 5.5, 0}, {}, options());
+  ASSERT_TRUE(room.ok) << room.error;
+  EXPECT_TRUE(room.stats.robot_in_a_lesser_piece);
+}
+
 TEST(PlanExploration, NoApproachThroughAWall) {
   // The same room behind a solid wall (no neck): its frontier is not in view
   // from the corridor, so there is no approach point and no candidate for it.

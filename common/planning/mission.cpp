@@ -219,6 +219,15 @@ void Mission::on_pose(const Pose2& pose, std::int64_t utime) {
   if (pose_ && phase_ != Phase::kWaitingStart) {  // a robot pushed before the start is not the mission's travel
     const double step = std::hypot(pose.x_m - pose_->x_m, pose.y_m - pose_->y_m);
     if (step <= options_.max_travel_step_m) travelled_m_ += step;
+    if (step > options_.max_travel_step_m) trail_.clear();  // the way before the jump is elsewhere in this frame
+  }
+  if (started_ && (phase_ == Phase::kMoving || phase_ == Phase::kSelecting) && options_.back_out_m > 0.0) {
+    constexpr double kTrailStepM = 0.1;
+    const Point here(pose.x_m, pose.y_m);
+    if (trail_.empty() || distance(trail_.back(), here) >= kTrailStepM) trail_.push_back(here);
+    // Bounded: the oldest half goes when it holds twice what a way back needs.
+    const auto cap = static_cast<std::size_t>(2.0 * options_.back_out_m / kTrailStepM) + 2;
+    if (trail_.size() > 2 * cap) trail_.erase(trail_.begin(), trail_.end() - static_cast<std::ptrdiff_t>(cap));
   }
   pose_ = pose;
   pose_utime_ = utime;
@@ -231,6 +240,7 @@ void Mission::enter(Phase phase, std::string status) {
 
 void Mission::finish(Phase phase, std::string status, std::int64_t now_utime) {
   follower_.clear();
+  backing_out_ = false;
   goal_.reset();
   outstanding_id_ = 0;
   pending_request_.reset();
@@ -251,6 +261,8 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
         end_utime_ = -1;
         want_tight_ = false;
         with_margin_.reset();
+        trail_.clear();
+        backing_out_ = backed_out_ = false;
         enter(Phase::kIdle, "started");
         return {};
       }
@@ -276,6 +288,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
       if (!home_) return "no start pose yet: the mission has not run";
       goal_.reset();
       follower_.clear();
+      backing_out_ = false;
       outstanding_id_ = 0;
       end_utime_ = -1;
       enter(Phase::kHoming, format("going home to (%.2f, %.2f)", home_->x_m, home_->y_m));
@@ -307,6 +320,7 @@ MissionOutput Mission::output() const {
   out.goals = outcomes_;
   out.plans = plans_;
   out.looks_around = looks_around_;
+  out.backs_out = backs_out_;
   out.plan_stats = plan_stats_;
   return out;
 }
@@ -363,6 +377,12 @@ void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
       // tight C-space had 41 candidates).
       want_tight_ = true;
       last_request_utime_ = -1;
+      return;
+    }
+    if (backing_out_ && phase_ == Phase::kSelecting) {
+      // On the way back through a door the map shows too narrow: no plan
+      // starts there, and that is why the robot backs out.
+      status_ = "backing out the way it came: " + plan.error;
       return;
     }
     count_plan_failure(plan);  // MOVING / HOMING keep following the last path meanwhile
@@ -435,7 +455,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
   goal_tight_ = false;
   const GoalCandidate* best = plan.best_candidate();
   if (!best) {
-    if (!looking_around_) follower_.clear();  // a turn on the spot goes on through its plans
+    if (!looking_around_ && !backing_out_) follower_.clear();  // a turn or a way back goes on through its plans
     goal_.reset();
     phase_ = Phase::kSelecting;
     if (map_utime_ != last_empty_map_utime_) {
@@ -504,6 +524,23 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       status_ = "looking around before finishing (" + why + ")";
       return;
     }
+    if (empty_plans_ >= options_.done_confirmations && !nothing_left && options_.back_out_m > 0.0 && !backing_out_ &&
+        !backed_out_ && plan.stats.robot_in_a_lesser_piece) {
+      // Then back the way it came, planning on the way (MissionOptions::back_out_m).
+      auto way = way_back(trail_, options_.back_out_m);
+      if (way.size() >= 2) {
+        follower_.set_path(std::move(way));
+        backing_out_ = true;
+        empty_plans_ = 0;
+        ++backs_out_;
+        status_ = "backing out the way it came before finishing (" + why + ")";
+        return;
+      }
+    }
+    if (backing_out_) {
+      status_ = "backing out the way it came before finishing (" + why + ")";
+      return;
+    }
     if (empty_plans_ >= options_.done_confirmations) {
       finish(nothing_left ? Phase::kDone : Phase::kDoneWithUnreachable, "exploration done: " + why, now_utime);
     } else {
@@ -513,6 +550,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
   }
   empty_plans_ = 0;
   looking_around_ = false;
+  backing_out_ = backed_out_ = false;
   goal_ = best->position;
   goal_frontier_ = best->frontier_point;
   progress_goal_ = best->frontier_point;
@@ -695,6 +733,20 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       } else {
         MissionOutput out = output();
         out.command = follower_.turn_to(*pose_, pose_->theta_rad + 1.0, dt_s);  // always 1 rad ahead: round and round
+        out.plan_request = pending_request_;
+        return out;
+      }
+    }
+    if (backing_out_) {
+      if (follower_.goal_reached()) {
+        // Back as far as it goes: the plans made there decide.
+        backing_out_ = false;
+        backed_out_ = true;
+        follower_.clear();
+        status_ = "backed out; confirming on a newer map";
+      } else {
+        MissionOutput out = output();
+        out.command = follower_.update(*pose_, dt_s);
         out.plan_request = pending_request_;
         return out;
       }

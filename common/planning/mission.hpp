@@ -136,6 +136,14 @@ struct MissionOptions {
   // look_around_max_us (a robot that cannot turn ends the look then).
   bool look_around = true;
   std::int64_t look_around_max_us = 15'000'000;
+  // Then, before it ends DONE_WITH_UNREACHABLE, the robot drives back the way
+  // it came, up to this far, planning as it goes; once until it next has a
+  // goal. A door it came through on a plan without the margin can look too
+  // narrow on the map made from inside (its frame seen from there), and
+  // shut it in with the rest of the building unexplored
+  // (pex-bench-strategies, tour: intel and fr079 ended at coverage 0.49-0.58
+  // in a nook). The way it drove is the way it fits. 0: off.
+  double back_out_m = 20.0;
 };
 
 // How goals ended (counted over the mission).
@@ -191,6 +199,7 @@ struct MissionOutput {
   GoalOutcomes goals;
   std::int64_t plans = 0;       // plan results used
   std::int64_t looks_around = 0;  // turns on the spot before DONE_WITH_UNREACHABLE (MissionOptions::look_around)
+  std::int64_t backs_out = 0;     // drives back the way it came before DONE_WITH_UNREACHABLE (back_out_m)
   std::optional<PlanRequest> plan_request;  // run compute_plan() on it and call on_plan()
   PlanStats plan_stats;         // of the last plan
 };
@@ -303,6 +312,11 @@ class Mission {
   std::int64_t look_until_utime_ = 0;
   std::optional<Point> looked_around_at_;
   std::int64_t looks_around_ = 0;
+  // The way back before DONE_WITH_UNREACHABLE (MissionOptions::back_out_m).
+  std::vector<Point> trail_;  // where the robot has been, oldest first (a SLAM jump starts it anew)
+  bool backing_out_ = false;
+  bool backed_out_ = false;   // since the last goal
+  std::int64_t backs_out_ = 0;
   std::int64_t last_request_utime_ = -1;
   std::int64_t last_request_map_utime_ = -1;
   std::int64_t select_after_map_utime_ = -1;  // SELECTING waits for a map newer than this

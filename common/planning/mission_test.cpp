@@ -853,6 +853,84 @@ TEST(Mission, AGoalBothWaysReachIsDrivenToWithTheMargin) {
   EXPECT_EQ(out.plans, 2);
 }
 
+// The corridor and, above it, a 3 x 3 m nook through a door at x 6..7: 1 m
+// wide in the first map, with the nook's far side frontier and the corridor
+// closed; 0.4 m wide in the second (its frame seen from inside), with the
+// nook mapped and the corridor's right end frontier.
+mapping::TypedMultiPolygon corridor_with_a_nook(bool door_open) {
+  const double x0 = door_open ? 6.0 : 6.3, x1 = door_open ? 7.0 : 6.7;
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(20, 0), Point(20, 3), Point(x1, 3), Point(x1, 3.5), Point(8, 3.5), Point(8, 6.5),
+       Point(5, 6.5), Point(5, 3.5), Point(x0, 3.5), Point(x0, 3), Point(0, 3)},
+      {E::kObstacle, door_open ? E::kObstacle : E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
+       E::kObstacle, door_open ? E::kFrontier : E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle,
+       E::kObstacle, E::kObstacle}})};
+}
+
+// Into the nook (door open), to its goal; then the map shuts the door. The
+// mission is left at the goal (in `at`), the new map in, at `t`.
+void shut_in_the_nook(Mission& m, std::int64_t& t, Pose2& at) {
+  m.on_map(corridor_with_a_nook(true), 0);
+  m.on_pose(Pose2{6.5, 1.5, std::numbers::pi / 2}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  ASSERT_GT(out.goal->y(), 5.0);
+  const Point goal = *out.goal;
+  for (t = 100'000; out.phase == Phase::kMoving && t < 10 * kSecond; t += 100'000) {
+    const double y = std::min(goal.y(), 1.5 + 0.4 * static_cast<double>(t) * 1e-6 * 4);
+    at = Pose2{goal.x(), y, std::numbers::pi / 2};
+    m.on_pose(at, t);
+    out = step_with_inline_planning(m, t);
+  }
+  ASSERT_EQ(out.phase, Phase::kSelecting) << out.status;
+  m.on_map(corridor_with_a_nook(false), t);
+}
+
+TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
+  MissionOptions o = test_options();
+  o.look_around = false;  // the way back alone
+  Mission m(o);
+  std::int64_t t = 0;
+  Pose2 at;
+  shut_in_the_nook(m, t, at);
+  // No goal from the nook: after the confirmations it backs out, driving.
+  MissionOutput out;
+  for (int k = 0; k < 5 && out.backs_out == 0; ++k, t += kSecond) {
+    m.on_map(corridor_with_a_nook(false), t);
+    m.on_pose(at, t);
+    out = step_with_inline_planning(m, t);
+    ASSERT_FALSE(is_finished(out.phase)) << out.status;
+  }
+  ASSERT_EQ(out.backs_out, 1) << out.status;
+  EXPECT_EQ(out.phase, Phase::kSelecting);
+  EXPECT_NE(out.status.find("backing out"), std::string::npos) << out.status;
+  // Down the way it came (the robot put where the commands take it, roughly):
+  // in the corridor the right end is a goal again.
+  double fastest = 0.0;
+  for (double y = at.y_m; y > 1.0 && out.phase != Phase::kMoving; y -= 0.1, t += 100'000) {
+    if (t % kSecond == 0) m.on_map(corridor_with_a_nook(false), t);
+    m.on_pose(Pose2{6.5, y, -std::numbers::pi / 2}, t);
+    out = step_with_inline_planning(m, t);
+    ASSERT_FALSE(is_finished(out.phase)) << out.status;
+    if (out.phase == Phase::kSelecting) fastest = std::max(fastest, out.command.v_mps);
+  }
+  EXPECT_GT(fastest, 0.1);  // it drove itself back
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_GT(out.goal->x(), 19.0);
+
+  // Without the way back the mission ends there, the corridor unexplored.
+  o.back_out_m = 0.0;
+  Mission shut(o);
+  shut_in_the_nook(shut, t, at);
+  for (int k = 0; k < 5 && !is_finished(out.phase); ++k, t += kSecond) {
+    shut.on_map(corridor_with_a_nook(false), t);
+    shut.on_pose(at, t);
+    out = step_with_inline_planning(shut, t);
+  }
+  EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
+  EXPECT_EQ(out.backs_out, 0);
+}
+
 TEST(Mission, AnswersToOldPlanRequestsAreIgnored) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);

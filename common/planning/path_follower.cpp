@@ -110,4 +110,16 @@ VelocityCommand PathFollower::turn_to(const Pose2& pose, double heading_rad, dou
   return last_;
 }
 
+std::vector<Point> way_back(const std::vector<Point>& trail, double max_length_m) {
+  std::vector<Point> way;
+  if (trail.size() < 2) return way;
+  way.push_back(trail.back());
+  double length = 0.0;
+  for (std::size_t k = trail.size() - 1; k-- > 0 && length < max_length_m;) {
+    length += distance(trail[k + 1], trail[k]);
+    way.push_back(trail[k]);
+  }
+  return way;
+}
+
 }  // namespace pex::planning

@@ -39,6 +39,11 @@ struct VelocityCommand {
   double omega_radps = 0.0;
 };
 
+// The way back along `trail` (the robot's positions, oldest first, its
+// position now last): the trail reversed, as far as max_length_m along it.
+// Empty for a trail of fewer than two points.
+std::vector<Point> way_back(const std::vector<Point>& trail, double max_length_m);
+
 class PathFollower {
  public:
   explicit PathFollower(FollowerOptions options = {});

@@ -67,6 +67,19 @@ void expect_within_limits(const SimRun& run, const FollowerOptions& o) {
   EXPECT_LE(run.max_angular_accel_radps2, o.max_angular_accel_radps2 + 1e-9);
 }
 
+TEST(WayBack, TheTrailReversedAsFarAsAsked) {
+  const std::vector<Point> trail{Point(0, 0), Point(1, 0), Point(2, 0), Point(2, 1), Point(2, 2)};
+  const auto all = way_back(trail, 100.0);
+  ASSERT_EQ(all.size(), 5u);
+  EXPECT_DOUBLE_EQ(all.front().y(), 2.0);  // from where the robot is
+  EXPECT_DOUBLE_EQ(all.back().x(), 0.0);   // to where it was first
+  // 2.5 m: the point that reaches it is the last (3 m along).
+  const auto part = way_back(trail, 2.5);
+  ASSERT_EQ(part.size(), 4u);
+  EXPECT_DOUBLE_EQ(part.back().x(), 1.0);
+  EXPECT_TRUE(way_back({Point(1, 1)}, 10.0).empty());
+}
+
 TEST(PathFollower, ConvergesOnAStraightPathFromAnOffset) {
   FollowerOptions o;
   const std::vector<Point> path{Point(0, 0), Point(8, 0)};

@@ -94,6 +94,7 @@ class ExplorerNode {
     counters_.visit_counters(v);
     v.total("plans", last_.plans);
     v.total("looks_around", last_.looks_around);
+    v.total("backs_out", last_.backs_out);
     v.total("goals_reached", last_.goals.reached);
     v.total("goals_seen", last_.goals.seen);
     v.total("goals_blocked", last_.goals.blocked);

@@ -112,6 +112,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   m.max_travel_step_m = config.get<double>("max_travel_step_m", m.max_travel_step_m, positive<double>());
   m.tight_fallback = config.get<bool>("tight_fallback", m.tight_fallback);
   m.look_around = config.get<bool>("look_around", m.look_around);
+  m.back_out_m = config.get<double>("back_out_m", m.back_out_m, in_range(0.0, 1000.0));
   m.look_around_max_us = static_cast<std::int64_t>(
       config.get<double>("look_around_max_s", static_cast<double>(m.look_around_max_us) * 1e-6, in_range(1.0, 600.0)) * 1e6);
   o.scan_guard = config.get<bool>("scan_guard", o.scan_guard);
