@@ -398,6 +398,13 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     const OpenTour tour = solve_open_tour(first_leg, between, options.tour);
     plan.tour = tour.order;
     if (!tour.order.empty()) plan.best = tour.order.front();
+    if (plan.best >= 0 && options.tour.max_first_leg_ratio > 0.0) {
+      const auto nearest = static_cast<std::size_t>(
+          std::min_element(first_leg.begin(), first_leg.end()) - first_leg.begin());
+      const auto first = static_cast<std::size_t>(plan.best);
+      if (first_leg[first] > options.tour.max_first_leg_ratio * first_leg[nearest] + options.tour.first_leg_slack_m)
+        plan.best = static_cast<int>(nearest);
+    }
   } else {
     for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
       const auto& c = plan.candidates[i];

@@ -125,7 +125,9 @@ struct Plan {
   // Frontier candidates in pockets (PlannerOptions::reach_past_frontier_m).
   std::vector<Point> pocket_frontier_points;
   int best = -1;                        // index into candidates, -1: none reachable
-  std::vector<int> tour;                // kTour: the visiting order (indices into candidates), best first
+  // kTour: the visiting order (indices into candidates); best is its first,
+  // or the nearest when the first is too far (TourOptions::max_first_leg_ratio).
+  std::vector<int> tour;
   PlanStats stats;
 
   int reachable_count() const;

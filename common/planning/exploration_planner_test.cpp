@@ -256,6 +256,17 @@ TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
   EXPECT_FALSE(followed.candidates[far].path.empty());
   o.strategy = GoalStrategy::kTour;
 
+  // Bounded: the tour's first (2 m away) only within 1.5 x the nearest's
+  // 1 m + 0.2 m; else the nearest. The order stays the tour's.
+  o.tour.max_first_leg_ratio = 1.5;
+  o.tour.first_leg_slack_m = 0.2;
+  const Plan bounded = plan_exploration(corridor_with_windows(), robot, {}, o);
+  ASSERT_NE(bounded.best_candidate(), nullptr);
+  EXPECT_NEAR(bounded.best_candidate()->frontier_point.x(), 11.0, 0.01);
+  EXPECT_EQ(bounded.tour, tour.tour);
+  o.tour.max_first_leg_ratio = 0.0;  // no bound: the tour's first
+  EXPECT_NEAR(plan_exploration(corridor_with_windows(), robot, {}, o).best_candidate()->frontier_point.x(), 8.0, 0.01);
+
   // A blacklisted candidate is not in the tour.
   const Plan without = plan_exploration(corridor_with_windows(), robot, {tour.best_candidate()->position}, o);
   ASSERT_NE(without.best_candidate(), nullptr);

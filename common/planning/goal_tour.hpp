@@ -37,6 +37,17 @@ struct TourOptions {
   // still pulls the first goal. A receding horizon plans the order where it
   // will hold.
   int horizon_candidates = 0;
+  // The tour's first candidate is the goal only when its path costs at most
+  // max_first_leg_ratio times the nearest candidate's plus first_leg_slack_m;
+  // else the nearest is (plan_exploration; <= 0: no bound, the pure tour).
+  // Where frontiers recede as the robot drives (open ground: every goal is
+  // seen before it is reached) the order beyond the nearest candidates is
+  // guesswork, and a pure tour sent the robot back and forth (campus: 1.43
+  // times greedy's path); what a tour is for is the leftover near the robot
+  // that greedy leaves for a trip back (a corner of the room it is leaving).
+  // Figures: docs/exploration.md, "The bounded tour".
+  double max_first_leg_ratio = 1.5;
+  double first_leg_slack_m = 2.0;
 };
 
 struct OpenTour {

@@ -92,6 +92,10 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       "goal_strategy", planning::to_string(planner.strategy), runtime::one_of({"greedy", "tour"})));
   planner.tour.horizon_candidates =
       config.get<int>("tour_horizon_candidates", planner.tour.horizon_candidates, runtime::in_range(0, 1000));
+  planner.tour.max_first_leg_ratio = config.get<double>("tour_max_first_leg_ratio", planner.tour.max_first_leg_ratio,
+                                                        runtime::in_range(0.0, 1000.0));
+  planner.tour.first_leg_slack_m =
+      config.get<double>("tour_first_leg_slack_m", planner.tour.first_leg_slack_m, runtime::in_range(0.0, 1000.0));
   m.plan_timeout_us =
       us_from_ms(config.get<int>("plan_timeout_ms", static_cast<int>(m.plan_timeout_us / 1000), in_range(100, 600'000)));
   m.replan_period_us =
