@@ -108,14 +108,10 @@ int main(int argc, char** argv) {
       const auto maps = pex::bench::emulate_mission(
           *sim_world, mission, [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
             Plan plan = pex::planning::plan_exploration(map, pose, blacklist, options);
-            // As the mission does (Mission::on_select_plan): without the margin
-            // too when the margin may block a goal, and its goal when only the
-            // plan without the margin reaches it.
-            if (!fallback || !pex::planning::margin_may_block(plan)) return plan;
-            Plan without = pex::planning::plan_exploration(map, pose, blacklist, tight);
-            if (!plan.best_candidate() || pex::planning::prefer_tight_goal(plan, without, mission.goal_match_radius_m))
-              return without;
-            return plan;
+            // As the mission does (Mission::on_plan, on_select_plan): without the
+            // margin only when nothing is reachable and the margin may be why.
+            if (plan.best_candidate() || !fallback || !pex::planning::margin_may_block(plan)) return plan;
+            return pex::planning::plan_exploration(map, pose, blacklist, tight);
           });
       if (!maps.error.empty()) {
         std::fprintf(stderr, "pex-bench-strategies: %s: %s\n", name.c_str(), maps.error.c_str());

@@ -223,14 +223,6 @@ bool margin_may_block(const Plan& plan) {
                      [](const GoalCandidate& c) { return !c.blacklisted && !c.reachable; });
 }
 
-bool prefer_tight_goal(const Plan& with_margin, const Plan& tight, double match_radius_m) {
-  const GoalCandidate* goal = tight.best_candidate();
-  if (!goal) return false;
-  const GoalFocus focus{goal->position, goal->frontier_point, match_radius_m};
-  return std::none_of(with_margin.candidates.begin(), with_margin.candidates.end(),
-                      [&](const GoalCandidate& c) { return c.reachable && focus.matches(c); });
-}
-
 double GoalFocus::distance_to(const GoalCandidate& c) const {
   return std::min(distance(c.position, goal), distance(c.frontier_point, frontier));
 }

@@ -154,17 +154,6 @@ struct GoalFocus {
   bool matches(const GoalCandidate& c) const { return !c.blacklisted && distance_to(c) <= radius_m; }
 };
 
-// Whether a robot should take the goal of `tight` (a plan without the
-// clearance margin) rather than that of `with_margin` (the same request with
-// it): when `tight` has a goal and the margin leaves it without a path (no
-// reachable candidate of `with_margin` within match_radius_m of it or of its
-// frontier point, as GoalFocus matches). A goal both plans reach is driven
-// to with the margin. Taken while the robot is near it, a goal only the
-// plan without the margin reaches costs a short leg; left for the end, when
-// nothing else is left, it cost a trip back across the building
-// (docs/exploration.md, "Goals only without the margin").
-bool prefer_tight_goal(const Plan& with_margin, const Plan& tight, double match_radius_m);
-
 // Plans on `map` (the planning map: free space whose edges are typed obstacle
 // or frontier) from `robot`. Candidates near a point of `blacklist` are kept
 // in the plan (so a caller can still recognise them) but never chosen.

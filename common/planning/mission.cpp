@@ -260,7 +260,6 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
         goal_failures_ = plan_failures_ = empty_plans_ = 0;
         end_utime_ = -1;
         want_tight_ = false;
-        with_margin_.reset();
         trail_.clear();
         backing_out_ = backed_out_ = false;
         enter(Phase::kIdle, "started");
@@ -335,7 +334,6 @@ void Mission::request_plan(std::int64_t now_utime, Purpose purpose, bool tight) 
   r.options = options_.planner;
   r.tight = tight;
   if (tight) r.options.cspace.clearance_margin_m = 0.0;
-  if (!tight) with_margin_.reset();  // kept only for its twin without the margin
   if (purpose == Purpose::kHome) r.home = Point(home_->x_m, home_->y_m);
   if (purpose == Purpose::kFollow && goal_) r.focus = GoalFocus{*goal_, goal_frontier_, options_.goal_match_radius_m};
   outstanding_id_ = r.id;
@@ -423,27 +421,16 @@ void Mission::list_frontiers(const Plan& plan) {
 
 void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime) {
   list_frontiers(plan);
-  if (!tight && options_.tight_fallback && options_.planner.cspace.clearance_margin_m > 0.0 &&
-      margin_may_block(plan)) {
-    // Plan once more without the margin, right away, on the same map, and
-    // keep this plan to choose between the two (prefer_tight_goal): a goal
-    // only the plan without the margin reaches is taken while it is near,
-    // not left for a trip back at the end.
-    with_margin_ = plan;
-    want_tight_ = true;
-    last_request_utime_ = -1;
-    return;
+  if (!plan.best_candidate() && !tight && options_.tight_fallback &&
+      options_.planner.cspace.clearance_margin_m > 0.0) {
+    if (margin_may_block(plan)) {
+      // Plan once more without the margin, right away, on the same map.
+      want_tight_ = true;
+      last_request_utime_ = -1;
+      return;
+    }
   }
   want_tight_ = false;
-  if (tight && with_margin_ && with_margin_->best_candidate() &&
-      !prefer_tight_goal(*with_margin_, plan, options_.goal_match_radius_m)) {
-    const Plan with_margin = std::move(*with_margin_);
-    with_margin_.reset();
-    list_frontiers(with_margin);
-    select(with_margin, now_utime);
-    return;
-  }
-  with_margin_.reset();
   select(plan, now_utime);
   if (tight && phase_ == Phase::kMoving) {
     goal_tight_ = true;
@@ -616,7 +603,7 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
     if (goal_tight_) {
       last_request_utime_ = -1;  // select on a plan with the full clearance first
     } else {
-      on_select_plan(plan, false, now_utime);
+      select(plan, now_utime);
     }
     return;
   }

@@ -122,11 +122,9 @@ struct MissionOptions {
   double look_tolerance_rad = 0.5;
   // Pose jumps longer than this (a SLAM correction) do not count as travel.
   double max_travel_step_m = 1.0;
-  // When some candidates have no path or no C-space point near them, plan
-  // once more without planner.cspace.clearance_margin_m, and go to that
-  // plan's goal when the plan with the margin does not reach it
-  // (prefer_tight_goal): a door that looks narrower on a newer map may still
-  // let the robot through, and a goal behind it is best taken while near.
+  // When no candidate is reachable but some have no path or no C-space point
+  // near them, plan once more without planner.cspace.clearance_margin_m: a
+  // door that looks narrower on a newer map may still let the robot through.
   bool tight_fallback = true;
   // Before it ends DONE_WITH_UNREACHABLE the robot turns once on the spot,
   // planning as it turns (the explorer unites the newest scan into each plan:
@@ -303,7 +301,6 @@ class Mission {
   std::int64_t outstanding_utime_ = 0;
   std::optional<PlanRequest> pending_request_;  // made, not yet handed out
   bool want_tight_ = false;                     // the next select plan goes without the margin
-  std::optional<Plan> with_margin_;             // the select plan whose twin without the margin is awaited
   bool given_up_retried_ = false;               // this leg's goals given up had their second try
   // The look around before DONE_WITH_UNREACHABLE (MissionOptions::look_around).
   bool looking_around_ = false;

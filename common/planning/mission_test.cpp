@@ -804,55 +804,6 @@ TEST(Mission, StopEndsTheMissionAndFreezesItsClock) {
   EXPECT_NEAR(out.mission_time_s, 2.0, 1e-9);
 }
 
-// The corridor with its right end open and, above it, a 3 x 3 m room behind
-// a 0.7 m door at x 6..6.7 (a 0.5 m neck), the room's far side frontier. With
-// a 0.3 m robot and a 0.1 m margin the door is too narrow (0.78 m needed);
-// without the margin it is not (0.58 m).
-mapping::TypedMultiPolygon corridor_with_a_narrow_door() {
-  return {typed_polygon(testing::RingSpec{
-      {Point(0, 0), Point(20, 0), Point(20, 3), Point(6.7, 3), Point(6.7, 3.5), Point(8, 3.5), Point(8, 6.5),
-       Point(5, 6.5), Point(5, 3.5), Point(6, 3.5), Point(6, 3), Point(0, 3)},
-      {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier,
-       E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}})};
-}
-
-MissionOptions narrow_door_options() {
-  MissionOptions o = test_options();
-  o.planner.cspace.clearance_margin_m = 0.1;
-  o.planner.approach_range_m = 0.0;  // no look at the room from the corridor: only the door leads there
-  return o;
-}
-
-TEST(Mission, TakesAGoalOnlyTheWayWithoutTheMarginReachesWhileItIsTheNearest) {
-  // From (5, 1.5) the room is 4 m away through the door, the corridor's end
-  // 15 m: the room first, without the margin, not after the corridor (the
-  // trip back at the end that this saves).
-  Mission m(narrow_door_options());
-  m.on_map(corridor_with_a_narrow_door(), 0);
-  m.on_pose(Pose2{5, 1.5, 0}, 0);
-  const auto out = step_with_inline_planning(m, 0);
-  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
-  ASSERT_TRUE(out.goal.has_value());
-  EXPECT_GT(out.goal->y(), 3.5);
-  EXPECT_LT(out.goal->x(), 8.0);
-  EXPECT_NE(out.status.find("without clearance margin"), std::string::npos) << out.status;
-  EXPECT_EQ(out.plans, 2);  // with the margin, then without
-}
-
-TEST(Mission, AGoalBothWaysReachIsDrivenToWithTheMargin) {
-  // From (18, 1.5) the corridor's end is the nearest goal, and the plan with
-  // the margin reaches it: it is taken from that plan, the room left for later.
-  Mission m(narrow_door_options());
-  m.on_map(corridor_with_a_narrow_door(), 0);
-  m.on_pose(Pose2{18, 1.5, 0}, 0);
-  const auto out = step_with_inline_planning(m, 0);
-  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
-  ASSERT_TRUE(out.goal.has_value());
-  EXPECT_GT(out.goal->x(), 19.0);
-  EXPECT_EQ(out.status.find("without clearance margin"), std::string::npos) << out.status;
-  EXPECT_EQ(out.plans, 2);
-}
-
 // The corridor and, above it, a 3 x 3 m nook through a door at x 6..7: 1 m
 // wide in the first map, with the nook's far side frontier and the corridor
 // closed; 0.4 m wide in the second (its frame seen from inside), with the
