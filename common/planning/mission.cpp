@@ -262,6 +262,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
         want_tight_ = false;
         trail_.clear();
         backing_out_ = backed_out_ = false;
+        backed_out_from_.reset();
         enter(Phase::kIdle, "started");
         return {};
       }
@@ -512,12 +513,14 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       return;
     }
     if (empty_plans_ >= options_.done_confirmations && !nothing_left && options_.back_out_m > 0.0 && !backing_out_ &&
-        !backed_out_ && plan.stats.robot_in_a_lesser_piece) {
+        !backed_out_ && plan.stats.robot_in_a_lesser_piece &&
+        (!backed_out_from_ || distance(here, *backed_out_from_) > kBackOutAgainM)) {
       // Then back the way it came, planning on the way (MissionOptions::back_out_m).
       auto way = way_back(trail_, options_.back_out_m);
       if (way.size() >= 2) {
         follower_.set_path(std::move(way));
         backing_out_ = true;
+        backed_out_from_ = here;
         empty_plans_ = 0;
         ++backs_out_;
         status_ = "backing out the way it came before finishing (" + why + ")";

@@ -140,7 +140,8 @@ struct MissionOptions {
   // narrow on the map made from inside (its frame seen from there), and
   // shut it in with the rest of the building unexplored
   // (pex-bench-strategies, tour: intel and fr079 ended at coverage 0.49-0.58
-  // in a nook). The way it drove is the way it fits. 0: off.
+  // in a nook). The way it drove is the way it fits. Not again within 2 m of
+  // where the last way back began. 0: off.
   double back_out_m = 20.0;
 };
 
@@ -313,6 +314,11 @@ class Mission {
   std::vector<Point> trail_;  // where the robot has been, oldest first (a SLAM jump starts it anew)
   bool backing_out_ = false;
   bool backed_out_ = false;   // since the last goal
+  // Where the last way back began: not again within kBackOutAgainM of it
+  // (intel, tour: backed out, took a goal beside the nook without the
+  // margin, was shut in again, twelve times over).
+  std::optional<Point> backed_out_from_;
+  static constexpr double kBackOutAgainM = 2.0;
   std::int64_t backs_out_ = 0;
   std::int64_t last_request_utime_ = -1;
   std::int64_t last_request_map_utime_ = -1;
