@@ -19,7 +19,10 @@
 //                  stood at their goal facing them: driving cannot show more);
 //                  confirmed on done_confirmations maps
 //   DONE_WITH_UNREACHABLE  frontiers are left that the robot could not get to
-//                  (no path, too narrow, given up); each listed with why
+//                  (no path, too narrow, given up); each listed with why. Before
+//                  it, still SELECTING: a turn on the spot (look_around) and, if
+//                  the robot is in a lesser piece of the C-space, a way back
+//                  along where it came from (back_out_m), planning all along
 //   FAILED         max_consecutive_failures goals given up for want of progress
 //                  (the robot could not get closer: stuck) or plans failed in a
 //                  row; goals blocked by a newer map are given up and
