@@ -805,23 +805,23 @@ TEST(Mission, StopEndsTheMissionAndFreezesItsClock) {
 }
 
 // The corridor and, above it, a 3 x 3 m nook through a door at x 6..7: 1 m
-// wide in the first map, with the nook's far side frontier and the corridor
-// closed; 0.4 m wide in the second (its frame seen from inside), with the
-// nook mapped and the corridor's right end frontier.
-mapping::TypedMultiPolygon corridor_with_a_nook(bool door_open) {
+// wide when open, 0.4 m when shut (its frame seen from inside). Not yet
+// mapped, the nook's far side is frontier and the corridor closed; mapped,
+// the nook is closed and the corridor's right end frontier.
+mapping::TypedMultiPolygon corridor_with_a_nook(bool door_open, bool nook_mapped) {
   const double x0 = door_open ? 6.0 : 6.3, x1 = door_open ? 7.0 : 6.7;
   return {typed_polygon(testing::RingSpec{
       {Point(0, 0), Point(20, 0), Point(20, 3), Point(x1, 3), Point(x1, 3.5), Point(8, 3.5), Point(8, 6.5),
        Point(5, 6.5), Point(5, 3.5), Point(x0, 3.5), Point(x0, 3), Point(0, 3)},
-      {E::kObstacle, door_open ? E::kObstacle : E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
-       E::kObstacle, door_open ? E::kFrontier : E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle,
+      {E::kObstacle, nook_mapped ? E::kFrontier : E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle,
+       E::kObstacle, nook_mapped ? E::kObstacle : E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
        E::kObstacle, E::kObstacle}})};
 }
 
 // Into the nook (door open), to its goal; then the map shuts the door. The
 // mission is left at the goal (in `at`), the new map in, at `t`.
 void shut_in_the_nook(Mission& m, std::int64_t& t, Pose2& at) {
-  m.on_map(corridor_with_a_nook(true), 0);
+  m.on_map(corridor_with_a_nook(true, false), 0);
   m.on_pose(Pose2{6.5, 1.5, std::numbers::pi / 2}, 0);
   auto out = step_with_inline_planning(m, 0);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
@@ -834,7 +834,7 @@ void shut_in_the_nook(Mission& m, std::int64_t& t, Pose2& at) {
     out = step_with_inline_planning(m, t);
   }
   ASSERT_EQ(out.phase, Phase::kSelecting) << out.status;
-  m.on_map(corridor_with_a_nook(false), t);
+  m.on_map(corridor_with_a_nook(false, true), t);
 }
 
 TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
@@ -847,7 +847,7 @@ TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   // No goal from the nook: after the confirmations it backs out, driving.
   MissionOutput out;
   for (int k = 0; k < 5 && out.backs_out == 0; ++k, t += kSecond) {
-    m.on_map(corridor_with_a_nook(false), t);
+    m.on_map(corridor_with_a_nook(false, true), t);
     m.on_pose(at, t);
     out = step_with_inline_planning(m, t);
     ASSERT_FALSE(is_finished(out.phase)) << out.status;
@@ -859,7 +859,7 @@ TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   // in the corridor the right end is a goal again.
   double fastest = 0.0;
   for (double y = at.y_m; y > 1.0 && out.phase != Phase::kMoving; y -= 0.1, t += 100'000) {
-    if (t % kSecond == 0) m.on_map(corridor_with_a_nook(false), t);
+    if (t % kSecond == 0) m.on_map(corridor_with_a_nook(false, true), t);
     m.on_pose(Pose2{6.5, y, -std::numbers::pi / 2}, t);
     out = step_with_inline_planning(m, t);
     ASSERT_FALSE(is_finished(out.phase)) << out.status;
@@ -874,12 +874,43 @@ TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   Mission shut(o);
   shut_in_the_nook(shut, t, at);
   for (int k = 0; k < 5 && !is_finished(out.phase); ++k, t += kSecond) {
-    shut.on_map(corridor_with_a_nook(false), t);
+    shut.on_map(corridor_with_a_nook(false, true), t);
     shut.on_pose(at, t);
     out = step_with_inline_planning(shut, t);
   }
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
   EXPECT_EQ(out.backs_out, 0);
+}
+
+TEST(Mission, BacksOutOnceFromOnePlace) {
+  MissionOptions o = test_options();
+  o.look_around = false;
+  Mission m(o);
+  std::int64_t t = 0;
+  Pose2 at;
+  shut_in_the_nook(m, t, at);
+  MissionOutput out;
+  for (int k = 0; k < 5 && out.backs_out == 0; ++k, t += kSecond) {
+    m.on_map(corridor_with_a_nook(false, true), t);
+    m.on_pose(at, t);
+    out = step_with_inline_planning(m, t);
+  }
+  ASSERT_EQ(out.backs_out, 1) << out.status;
+  // Before the robot has moved, the door opens on a newer map: a goal.
+  m.on_map(corridor_with_a_nook(true, true), t);
+  m.on_pose(at, t);
+  out = step_with_inline_planning(m, t);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  // It shuts again: the goal is blocked, and from the place it backed out
+  // from the robot does not back out again; the mission ends.
+  for (int k = 0; k < 15 && !is_finished(out.phase); ++k) {
+    t += kSecond;
+    m.on_map(corridor_with_a_nook(false, true), t);
+    m.on_pose(at, t);
+    out = step_with_inline_planning(m, t);
+  }
+  EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
+  EXPECT_EQ(out.backs_out, 1);
 }
 
 TEST(Mission, AnswersToOldPlanRequestsAreIgnored) {
