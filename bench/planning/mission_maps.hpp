@@ -136,10 +136,9 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
     if (!next_plan) ++out.plans;
     next_plan.reset();
     const planning::GoalCandidate* goal = p.best_candidate();
-    const bool unreachable_left = std::any_of(p.candidates.begin(), p.candidates.end(), [](const auto& c) {
-      return !c.reachable && !c.blacklisted;
-    }) || p.stats.candidates_not_in_cspace > 0;
-    if (!goal && unreachable_left && p.stats.robot_in_a_lesser_piece && options.back_out_m > 0.0 && !backed_out) {
+    // Frontiers left without a path or too narrow: margin_may_block's test.
+    if (!goal && planning::margin_may_block(p) && p.stats.robot_in_a_lesser_piece && options.back_out_m > 0.0 &&
+        !backed_out) {
       // Back the way it came, planning on the way; the first plan with a goal is followed.
       backed_out = true;
       ++out.backs_out;

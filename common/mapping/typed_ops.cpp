@@ -233,11 +233,9 @@ void keep_holes_near_overlaid_rings(const TypedPolygon& polygon, std::vector<cha
       add_ring(holes[k]);
       continue;
     }
-    near_box[k] = bg::return_envelope<Box>(holes[k]);
-    near_box[k].min_corner().x(near_box[k].min_corner().x() - clearance_m);
-    near_box[k].min_corner().y(near_box[k].min_corner().y() - clearance_m);
-    near_box[k].max_corner().x(near_box[k].max_corner().x() + clearance_m);
-    near_box[k].max_corner().y(near_box[k].max_corner().y() + clearance_m);
+    const Box box = bg::return_envelope<Box>(holes[k]);
+    near_box[k] = Box(Point(box.min_corner().x() - clearance_m, box.min_corner().y() - clearance_m),
+                      Point(box.max_corner().x() + clearance_m, box.max_corner().y() + clearance_m));
   }
   using EdgeSegment = bg::model::segment<Point>;
   auto near = [&](const Ring& hole, const Box& hole_near_box, const Edge& e) {

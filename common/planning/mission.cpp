@@ -495,6 +495,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       return;
     }
     const Point here(pose_->x_m, pose_->y_m);
+    const std::string before_finishing = " before finishing (" + why + ")";
     if (empty_plans_ >= options_.done_confirmations && !nothing_left && options_.look_around && !looking_around_ &&
         (!looked_around_at_ || distance(here, *looked_around_at_) > 1.0)) {
       // Before it calls the rest unreachable: one turn on the spot, planning
@@ -505,11 +506,11 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       look_until_utime_ = now_utime + options_.look_around_max_us;
       empty_plans_ = 0;
       ++looks_around_;
-      status_ = "looking around before finishing (" + why + ")";
+      status_ = "looking around" + before_finishing;
       return;
     }
     if (looking_around_) {
-      status_ = "looking around before finishing (" + why + ")";
+      status_ = "looking around" + before_finishing;
       return;
     }
     if (empty_plans_ >= options_.done_confirmations && !nothing_left && options_.back_out_m > 0.0 && !backing_out_ &&
@@ -523,12 +524,12 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
         backed_out_from_ = here;
         empty_plans_ = 0;
         ++backs_out_;
-        status_ = "backing out the way it came before finishing (" + why + ")";
+        status_ = "backing out the way it came" + before_finishing;
         return;
       }
     }
     if (backing_out_) {
-      status_ = "backing out the way it came before finishing (" + why + ")";
+      status_ = "backing out the way it came" + before_finishing;
       return;
     }
     if (empty_plans_ >= options_.done_confirmations) {

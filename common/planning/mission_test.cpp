@@ -837,6 +837,20 @@ void shut_in_the_nook(Mission& m, std::int64_t& t, Pose2& at) {
   m.on_map(corridor_with_a_nook(false, true), t);
 }
 
+// The robot standing at `at` in the shut nook, a newer map each second,
+// until `until` holds of the output or `seconds` have passed.
+template <class Until>
+MissionOutput stand_in_the_shut_nook(Mission& m, std::int64_t& t, const Pose2& at, int seconds, Until&& until) {
+  MissionOutput out;
+  for (int k = 0; k < seconds && !until(out); ++k) {
+    t += kSecond;
+    m.on_map(corridor_with_a_nook(false, true), t);
+    m.on_pose(at, t);
+    out = step_with_inline_planning(m, t);
+  }
+  return out;
+}
+
 TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   MissionOptions o = test_options();
   o.look_around = false;  // the way back alone
@@ -845,15 +859,10 @@ TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   Pose2 at;
   shut_in_the_nook(m, t, at);
   // No goal from the nook: after the confirmations it backs out, driving.
-  MissionOutput out;
-  for (int k = 0; k < 5 && out.backs_out == 0; ++k, t += kSecond) {
-    m.on_map(corridor_with_a_nook(false, true), t);
-    m.on_pose(at, t);
-    out = step_with_inline_planning(m, t);
-    ASSERT_FALSE(is_finished(out.phase)) << out.status;
-  }
+  auto backing_out = [](const MissionOutput& o) { return o.backs_out > 0 || is_finished(o.phase); };
+  MissionOutput out = stand_in_the_shut_nook(m, t, at, 5, backing_out);
   ASSERT_EQ(out.backs_out, 1) << out.status;
-  EXPECT_EQ(out.phase, Phase::kSelecting);
+  ASSERT_EQ(out.phase, Phase::kSelecting) << out.status;
   EXPECT_NE(out.status.find("backing out"), std::string::npos) << out.status;
   // Down the way it came (the robot put where the commands take it, roughly):
   // in the corridor the right end is a goal again.
@@ -873,11 +882,8 @@ TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   o.back_out_m = 0.0;
   Mission shut(o);
   shut_in_the_nook(shut, t, at);
-  for (int k = 0; k < 5 && !is_finished(out.phase); ++k, t += kSecond) {
-    shut.on_map(corridor_with_a_nook(false, true), t);
-    shut.on_pose(at, t);
-    out = step_with_inline_planning(shut, t);
-  }
+  auto finished = [](const MissionOutput& o) { return is_finished(o.phase); };
+  out = stand_in_the_shut_nook(shut, t, at, 5, finished);
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
   EXPECT_EQ(out.backs_out, 0);
 }
@@ -889,12 +895,7 @@ TEST(Mission, BacksOutOnceFromOnePlace) {
   std::int64_t t = 0;
   Pose2 at;
   shut_in_the_nook(m, t, at);
-  MissionOutput out;
-  for (int k = 0; k < 5 && out.backs_out == 0; ++k, t += kSecond) {
-    m.on_map(corridor_with_a_nook(false, true), t);
-    m.on_pose(at, t);
-    out = step_with_inline_planning(m, t);
-  }
+  MissionOutput out = stand_in_the_shut_nook(m, t, at, 5, [](const MissionOutput& o) { return o.backs_out > 0; });
   ASSERT_EQ(out.backs_out, 1) << out.status;
   // Before the robot has moved, the door opens on a newer map: a goal.
   m.on_map(corridor_with_a_nook(true, true), t);
@@ -903,12 +904,7 @@ TEST(Mission, BacksOutOnceFromOnePlace) {
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   // It shuts again: the goal is blocked, and from the place it backed out
   // from the robot does not back out again; the mission ends.
-  for (int k = 0; k < 15 && !is_finished(out.phase); ++k) {
-    t += kSecond;
-    m.on_map(corridor_with_a_nook(false, true), t);
-    m.on_pose(at, t);
-    out = step_with_inline_planning(m, t);
-  }
+  out = stand_in_the_shut_nook(m, t, at, 15, [](const MissionOutput& o) { return is_finished(o.phase); });
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
   EXPECT_EQ(out.backs_out, 1);
 }
