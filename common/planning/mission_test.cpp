@@ -898,6 +898,7 @@ TEST(Mission, BacksOutOnceFromOnePlace) {
   MissionOutput out = stand_in_the_shut_nook(m, t, at, 5, [](const MissionOutput& o) { return o.backs_out > 0; });
   ASSERT_EQ(out.backs_out, 1) << out.status;
   // Before the robot has moved, the door opens on a newer map: a goal.
+  t += kSecond;
   m.on_map(corridor_with_a_nook(true, true), t);
   m.on_pose(at, t);
   out = step_with_inline_planning(m, t);
