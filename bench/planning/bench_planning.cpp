@@ -398,20 +398,32 @@ double percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1)];
 }
 
+// The strategy of BM_Plan's and BM_PlanMission's second argument: 0 greedy,
+// 1 the tour over every candidate, 2 the tour over the 10 nearest
+// (TourOptions::horizon_candidates), each with the shipped first-leg bound.
+PlannerOptions strategy_options(std::int64_t strategy) {
+  auto o = planner_options(strategy == 0 ? GoalStrategy::kGreedy : GoalStrategy::kTour);
+  if (strategy == 2) o.tour.horizon_candidates = 10;
+  return o;
+}
+std::string strategy_label(std::int64_t strategy) {
+  return strategy == 0 ? " greedy" : strategy == 1 ? " tour" : " tour, horizon 10";
+}
+
 // One whole plan_exploration call (what the explorer's worker runs every
 // replan period) on the largest map of the mission.
 void BM_Plan(benchmark::State& state) {
   MissionScene* scene = mission_scene_or_skip(state);
   if (!scene) return;
   MissionScene& s = *scene;
-  const auto options = planner_options(state.range(1) == 0 ? GoalStrategy::kGreedy : GoalStrategy::kTour);
+  const auto options = strategy_options(state.range(1));
   const auto& snap = s.maps.snapshots[s.largest];
   Plan plan;
   for (auto _ : state) {
     plan = plan_exploration(snap.map, snap.pose, snap.blacklist, options);
     benchmark::DoNotOptimize(plan);
   }
-  state.SetLabel(s.name + (state.range(1) == 0 ? " greedy" : " tour"));
+  state.SetLabel(s.name + strategy_label(state.range(1)));
   state.counters["map_vertices"] = static_cast<double>(pex::mapping::vertex_count(snap.map));
   state.counters["reflex"] = plan.stats.reflex_nodes;
   state.counters["candidates"] = static_cast<double>(plan.candidates.size());
@@ -452,7 +464,7 @@ void BM_PlanMission(benchmark::State& state) {
   MissionScene* scene = mission_scene_or_skip(state);
   if (!scene) return;
   MissionScene& s = *scene;
-  const auto options = planner_options(state.range(1) == 0 ? GoalStrategy::kGreedy : GoalStrategy::kTour);
+  const auto options = strategy_options(state.range(1));
   std::vector<double> ms;
   for (auto _ : state) {
     ms.clear();
@@ -463,7 +475,7 @@ void BM_PlanMission(benchmark::State& state) {
       ms.push_back(thread_cpu_ms() - t0);
     }
   }
-  state.SetLabel(s.name + (state.range(1) == 0 ? " greedy" : " tour"));
+  state.SetLabel(s.name + strategy_label(state.range(1)));
   state.counters["plans"] = static_cast<double>(ms.size());
   state.counters["p50_ms"] = percentile(ms, 0.5);
   state.counters["p99_ms"] = percentile(ms, 0.99);
@@ -471,9 +483,9 @@ void BM_PlanMission(benchmark::State& state) {
 }
 
 void missions(benchmark::internal::Benchmark* b) {
-  b->ArgNames({"world", "tour"});
+  b->ArgNames({"world", "strategy"});
   for (const int w : {0, 1})
-    for (const int t : {0, 1}) b->Args({w, t});
+    for (const int t : {0, 1, 2}) b->Args({w, t});
 }
 
 void maps(benchmark::internal::Benchmark* b) { b->ArgNames({"map"})->Arg(0)->Arg(1); }
@@ -524,9 +536,9 @@ int main(int argc, char** argv) {
     }
     std::printf(",\"%s_cspace_ms\":%.3f", name, get("BM_CSpace/map:" + std::to_string(map)));
     // Whole plans on the emulated mission's maps (the target: p99).
-    for (const int tour : {0, 1}) {
-      const std::string args = "world:" + std::to_string(map) + "/tour:" + std::to_string(tour);
-      const char* strategy = tour == 0 ? "greedy" : "tour";
+    for (const int tour : {0, 1, 2}) {
+      const std::string args = "world:" + std::to_string(map) + "/strategy:" + std::to_string(tour);
+      const char* strategy = tour == 0 ? "greedy" : tour == 1 ? "tour" : "tour_h10";
       const auto counter = [&](const std::string& key) {
         const auto it = reporter.median_counter.find("BM_PlanMission/" + args + "/" + key);
         return it == reporter.median_counter.end() ? -1.0 : it->second;

@@ -22,8 +22,10 @@
 
 #include "evaluation/exploration_metrics.hpp"
 #include "explorer_options.hpp"
+#include "latency_stats.hpp"
 #include "mapper.hpp"
 #include "mission_maps.hpp"
+#include "plan_worker.hpp"
 #include "runtime/config.hpp"
 
 namespace {
@@ -105,13 +107,25 @@ int main(int argc, char** argv) {
       mission.scan = mapper.scan;
       mission.map = mapper.map;
       const bool fallback = explorer.mission.tight_fallback;
+      // Each plan's CPU time, with the offset tiles kept from plan to plan as
+      // the explorer's planning thread keeps them (one cache per margin).
+      pex::explorer::LatencyStats plan_cpu_ms;
+      pex::planning::OffsetTileCache offsets, tight_offsets;
+      auto timed_plan = [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose,
+                            const std::vector<Point>& blacklist, const PlannerOptions& o,
+                            pex::planning::OffsetTileCache& cache) {
+        const double started = pex::explorer::thread_cpu_ms();
+        Plan plan = pex::planning::plan_exploration(map, pose, blacklist, o, nullptr, nullptr, &cache);
+        plan_cpu_ms.add(pex::explorer::thread_cpu_ms() - started);
+        return plan;
+      };
       const auto maps = pex::bench::emulate_mission(
           *sim_world, mission, [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
-            Plan plan = pex::planning::plan_exploration(map, pose, blacklist, options);
+            Plan plan = timed_plan(map, pose, blacklist, options, offsets);
             // As the mission does (Mission::on_plan, on_select_plan): without the
             // margin only when nothing is reachable and the margin may be why.
             if (plan.best_candidate() || !fallback || !pex::planning::margin_may_block(plan)) return plan;
-            return pex::planning::plan_exploration(map, pose, blacklist, tight);
+            return timed_plan(map, pose, blacklist, tight, tight_offsets);
           });
       if (!maps.error.empty()) {
         std::fprintf(stderr, "pex-bench-strategies: %s: %s\n", name.c_str(), maps.error.c_str());
@@ -123,9 +137,10 @@ int main(int argc, char** argv) {
                                                     walls, kWallToleranceM);
       std::printf(
           "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"backs_out\":%d,"
-          "\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f}\n",
+          "\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f,\"plan_cpu_ms_p50\":%.3f,\"plan_cpu_ms_p99\":%.3f}\n",
           name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
-          maps.goals_seen, maps.backs_out, maps.plans, score.coverage, score.iou);
+          maps.goals_seen, maps.backs_out, maps.plans, score.coverage, score.iou, plan_cpu_ms.quantile(0.5),
+          plan_cpu_ms.quantile(0.99));
       std::fflush(stdout);
     }
   }

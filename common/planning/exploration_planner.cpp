@@ -333,8 +333,20 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     if (distance(a, b) > 1e-9) turn = std::abs(geometry::wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta_rad));
     return length_from_start_m + lead_m + options.turn_cost_m_per_rad * turn;
   };
+  std::vector<char> required;  // the followed goal: its path is wanted whatever the strategy
+  if (focus) {
+    required.resize(plan.candidates.size());
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i) required[i] = focus->matches(plan.candidates[i]);
+  }
   PathMatrix matrix;
-  if (options.strategy == GoalStrategy::kTour) {
+  if (options.strategy == GoalStrategy::kTour && options.tour.horizon_candidates > 0) {
+    NearestTargetsQuery query;
+    query.count = static_cast<std::size_t>(options.tour.horizon_candidates);
+    query.choice.resize(plan.candidates.size());
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.choice[i] = !plan.candidates[i].blacklisted;
+    query.required = required;
+    matrix = shortest_paths_among_nearest(cspace, *start, targets, query);
+  } else if (options.strategy == GoalStrategy::kTour) {
     matrix = shortest_path_matrix(cspace, *start, targets);
   } else {
     CheapestTargetQuery query;
@@ -343,10 +355,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     };
     query.choice.resize(plan.candidates.size());
     for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.choice[i] = !plan.candidates[i].blacklisted;
-    if (focus) {
-      query.required.resize(plan.candidates.size());
-      for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.required[i] = focus->matches(plan.candidates[i]);
-    }
+    query.required = required;
     matrix = shortest_paths_to_cheapest(cspace, *start, targets, query);
   }
   plan.stats.segment_tests = matrix.segment_tests;
@@ -372,15 +381,11 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     for (std::size_t i = 0; i < plan.candidates.size(); ++i)
       if (plan.candidates[i].reachable && !plan.candidates[i].blacklisted) first_leg[i] = plan.candidates[i].cost;
     if (options.tour.horizon_candidates > 0) {
-      // Only the nearest horizon_candidates (ties by index) take part.
-      std::vector<std::size_t> order;
-      for (std::size_t i = 0; i < first_leg.size(); ++i)
-        if (std::isfinite(first_leg[i])) order.push_back(i);
-      const auto keep = static_cast<std::size_t>(options.tour.horizon_candidates);
-      if (order.size() > keep) {
-        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return first_leg[a] < first_leg[b]; });
-        for (std::size_t k = keep; k < order.size(); ++k) first_leg[order[k]] = std::numeric_limits<double>::infinity();
-      }
+      // Only the nearest horizon_candidates by path length take part: the
+      // candidates the matrix holds.
+      std::vector<double> nearest_only(first_leg.size(), std::numeric_limits<double>::infinity());
+      for (const int i : matrix.nearest) nearest_only[static_cast<std::size_t>(i)] = first_leg[static_cast<std::size_t>(i)];
+      first_leg = std::move(nearest_only);
     }
     std::vector<double>& between = matrix.between_m;
     const std::size_t n = plan.candidates.size();

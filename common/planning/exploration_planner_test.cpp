@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "planning/test_maps.hpp"
@@ -272,6 +274,65 @@ TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
   ASSERT_NE(without.best_candidate(), nullptr);
   EXPECT_EQ(without.tour.size(), 2u);
   EXPECT_NEAR(without.best_candidate()->frontier_point.x(), 11.0, 0.01);
+}
+
+// A corridor 40 x 3 m with 1 m windows of frontier in its top wall every 4 m.
+mapping::TypedMultiPolygon corridor_with_many_windows() {
+  std::vector<Point> pts = {Point(0, 0), Point(40, 0), Point(40, 3)};
+  std::vector<E> types = {E::kObstacle, E::kObstacle, E::kObstacle};
+  for (double x = 38.0; x > 1.0; x -= 4.0) {
+    pts.push_back(Point(x + 0.5, 3));
+    types.push_back(E::kFrontier);
+    pts.push_back(Point(x - 0.5, 3));
+    types.push_back(E::kObstacle);
+  }
+  pts.push_back(Point(0, 3));
+  types.push_back(E::kObstacle);
+  return {typed_polygon(testing::RingSpec{pts, types})};
+}
+
+// With a horizon the tour runs over the nearest candidates only, with the
+// lengths the whole matrix gives them; the others are reachable without a
+// path, except the goal being followed.
+TEST(PlanExploration, TourWithAHorizonOrdersTheNearestCandidatesOnly) {
+  PlannerOptions o = options();
+  o.strategy = GoalStrategy::kTour;
+  const Pose2 robot{13, 1.5, 0};
+  const auto map = corridor_with_many_windows();
+  const Plan all = plan_exploration(map, robot, {}, o);
+  ASSERT_TRUE(all.ok) << all.error;
+  ASSERT_EQ(all.tour.size(), 10u);
+  o.tour.horizon_candidates = 3;
+  const Plan near = plan_exploration(map, robot, {}, o);
+  ASSERT_TRUE(near.ok) << near.error;
+  ASSERT_EQ(near.tour.size(), 3u);
+  ASSERT_NE(near.best_candidate(), nullptr);
+  // The three nearest by path: the windows at x = 14, 10 and 18.
+  std::vector<double> xs;
+  for (const int i : near.tour) xs.push_back(near.candidates[static_cast<std::size_t>(i)].frontier_point.x());
+  std::sort(xs.begin(), xs.end());
+  ASSERT_EQ(xs.size(), 3u);
+  EXPECT_NEAR(xs[0], 10.0, 0.01);
+  EXPECT_NEAR(xs[1], 14.0, 0.01);
+  EXPECT_NEAR(xs[2], 18.0, 0.01);
+  int without_path = 0;
+  for (std::size_t i = 0; i < near.candidates.size(); ++i) {
+    EXPECT_TRUE(near.candidates[i].reachable);
+    if (near.candidates[i].path.empty()) {
+      ++without_path;
+      continue;
+    }
+    EXPECT_NEAR(near.candidates[i].path_length_m, all.candidates[i].path_length_m, 1e-6);
+  }
+  EXPECT_GE(without_path, 7);
+  // The goal being followed, the window at x = 38, gets its path too.
+  std::size_t far = 0;
+  for (std::size_t i = 0; i < all.candidates.size(); ++i)
+    if (all.candidates[i].frontier_point.x() > all.candidates[far].frontier_point.x()) far = i;
+  const GoalFocus focus{all.candidates[far].position, all.candidates[far].frontier_point, 0.3};
+  const Plan followed = plan_exploration(map, robot, {}, o, nullptr, &focus);
+  EXPECT_EQ(followed.tour, near.tour);
+  EXPECT_NEAR(followed.candidates[far].path_length_m, all.candidates[far].path_length_m, 1e-6);
 }
 
 TEST(PlanPathTo, FindsThePathHomeOrSaysItIsUnreachable) {

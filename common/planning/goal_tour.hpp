@@ -35,7 +35,9 @@ struct TourOptions {
   // the way before they are reached, and far candidates are gone or elsewhere
   // by the time the robot gets near, so the order among them is guesswork that
   // still pulls the first goal. A receding horizon plans the order where it
-  // will hold.
+  // will hold. With a horizon the plan also needs the paths among those
+  // candidates only (shortest_paths_among_nearest), not the whole matrix:
+  // plan time then no longer grows with the square of the map's corners.
   int horizon_candidates = 0;
   // The tour's first candidate is the goal only when its path costs at most
   // max_first_leg_ratio times the nearest candidate's plus first_leg_slack_m;

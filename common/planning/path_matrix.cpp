@@ -263,6 +263,224 @@ std::vector<Point> graph_nodes(const ConfigurationSpace& cspace, const Point& st
   return nodes;
 }
 
+// Length of the part two paths from the same start share (the same nodes,
+// the same order).
+double shared_length(const std::vector<Point>& a, const std::vector<Point>& b) {
+  double length = 0.0;
+  for (std::size_t k = 1; k < std::min(a.size(), b.size()); ++k) {
+    if (a[k].x() != b[k].x() || a[k].y() != b[k].y()) break;
+    length += distance(a[k - 1], a[k]);
+  }
+  return length;
+}
+
+// The first `count` of the graph's nodes in square cells, for the nodes
+// within a distance of a point without a loop over all of them (about four
+// nodes a cell).
+class NodeGrid {
+ public:
+  NodeGrid(const std::vector<Point>& all_nodes, std::size_t count)
+      : nodes_(all_nodes.begin(), all_nodes.begin() + static_cast<std::ptrdiff_t>(count)) {
+    const std::vector<Point>& nodes = nodes_;
+    if (nodes.empty()) return;
+    double max_x = nodes[0].x(), max_y = nodes[0].y();
+    min_x_ = max_x, min_y_ = max_y;
+    for (const Point& p : nodes) {
+      min_x_ = std::min(min_x_, p.x()), min_y_ = std::min(min_y_, p.y());
+      max_x = std::max(max_x, p.x()), max_y = std::max(max_y, p.y());
+    }
+    const double w = max_x - min_x_, h = max_y - min_y_;
+    cell_m_ = std::max(std::sqrt(std::max(w * h, 1e-6) * 4.0 / static_cast<double>(nodes.size())), 1e-3);
+    cols_ = static_cast<std::int64_t>(w / cell_m_) + 1;
+    rows_ = static_cast<std::int64_t>(h / cell_m_) + 1;
+    // Cells do not outnumber the nodes by much even for a thin spread of nodes.
+    while (cols_ * rows_ > 4 * static_cast<std::int64_t>(nodes.size()) + 16) {
+      cell_m_ *= 2.0;
+      cols_ = static_cast<std::int64_t>(w / cell_m_) + 1;
+      rows_ = static_cast<std::int64_t>(h / cell_m_) + 1;
+    }
+    first_.assign(static_cast<std::size_t>(cols_ * rows_) + 1, 0);
+    for (const Point& p : nodes) ++first_[cell_of(p) + 1];
+    for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
+    ids_.resize(nodes.size());
+    std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
+    for (std::uint32_t v = 0; v < nodes.size(); ++v) ids_[fill[cell_of(nodes[v])]++] = v;
+  }
+
+  // f(v) for every node v within `radius` of p, and maybe a few beyond.
+  template <class F>
+  void for_each_within(const Point& p, double radius, F&& f) const {
+    if (!(radius >= 0.0)) return;
+    const auto clamp_col = [&](double x) {
+      return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((x - min_x_) / cell_m_)), 0, cols_ - 1);
+    };
+    const auto clamp_row = [&](double y) {
+      return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((y - min_y_) / cell_m_)), 0, rows_ - 1);
+    };
+    if (ids_.empty() || p.x() + radius < min_x_ || p.y() + radius < min_y_) return;
+    const std::int64_t c0 = clamp_col(p.x() - radius), c1 = clamp_col(p.x() + radius);
+    const std::int64_t r0 = clamp_row(p.y() - radius), r1 = clamp_row(p.y() + radius);
+    const double r2 = radius * radius;
+    for (std::int64_t row = r0; row <= r1; ++row) {
+      const auto begin = first_[static_cast<std::size_t>(row * cols_ + c0)];
+      const auto end = first_[static_cast<std::size_t>(row * cols_ + c1) + 1];
+      for (auto k = begin; k < end; ++k) {
+        const std::uint32_t v = ids_[k];
+        const double dx = nodes_[v].x() - p.x(), dy = nodes_[v].y() - p.y();
+        if (dx * dx + dy * dy <= r2) f(v);
+      }
+    }
+  }
+
+ private:
+  std::size_t cell_of(const Point& p) const {
+    const auto c = std::min(static_cast<std::int64_t>((p.x() - min_x_) / cell_m_), cols_ - 1);
+    const auto r = std::min(static_cast<std::int64_t>((p.y() - min_y_) / cell_m_), rows_ - 1);
+    return static_cast<std::size_t>(r * cols_ + c);
+  }
+
+  const std::vector<Point> nodes_;
+  double min_x_ = 0.0, min_y_ = 0.0, cell_m_ = 1.0;
+  std::int64_t cols_ = 1, rows_ = 1;
+  std::vector<std::uint32_t> first_;  // cell c's nodes: ids_[first_[c], first_[c + 1])
+  std::vector<std::uint32_t> ids_;
+};
+
+// The graph of shortest_path_matrix (same pruning, same lengths) searched
+// lazily: a node's edges are tested when it is settled, and only those that
+// would improve a tentative distance. A*, with the straight-line distance to
+// the nearest of the aims as the lower bound: consistent (edges are
+// straight), so a node's distance is final when it is popped, as in
+// Dijkstra, and the aims are popped in the order of their distances. Nodes
+// from r on (the start, the targets) are path ends: settled, never relaxed
+// from, except the source.
+class LazySearch {
+ public:
+  LazySearch(const ConfigurationSpace& cspace, std::vector<Point> nodes, std::uint32_t reflex)
+      : cspace_(cspace),
+        nodes_(std::move(nodes)),
+        r_(reflex),
+        corners_(cspace, nodes_),
+        dist_(nodes_.size(), kInf),
+        key_(nodes_.size(), kInf),
+        aim_distance_(nodes_.size(), -1.0),
+        parent_(nodes_.size(), -1),
+        settled_(nodes_.size(), 0),
+        heap_(nodes_.size()),
+        reflex_grid_(nodes_, r_) {}
+
+  // From `source`: before a node is settled, stop(its key) true ends the
+  // search; after a path end u is settled, settled_end(u, its distance)
+  // false ends it. True when nothing was left to search. Distances and
+  // paths of the settled nodes hold until the next run.
+  //
+  // improved_end(u, d), called when a path end's tentative distance falls
+  // to d, returns a bound on what is left worth searching: an edge to a
+  // node v is not tested when d(v) + the lower bound at v exceeds it. It
+  // must bound the key of every node on a path still wanted (a tentative
+  // distance of the farthest path end wanted: a tentative distance is at
+  // least the true one), and +inf until it can. On open ground most of a
+  // search's segment tests go to nodes the wanted paths never pass.
+  template <class Stop, class SettledEnd, class ImprovedEnd>
+  bool run(std::uint32_t source, const std::vector<Point>& aims, Stop stop, SettledEnd settled_end,
+           ImprovedEnd improved_end, double initial_bound = kInf) {
+    for (const auto v : touched_) {
+      dist_[v] = key_[v] = kInf;
+      parent_[v] = -1;
+      settled_[v] = 0;
+    }
+    for (const auto v : aimed_) aim_distance_[v] = -1.0;
+    touched_.clear();
+    aimed_.clear();
+    aims_ = &aims;
+    double bound = initial_bound;
+    dist_[source] = 0.0;
+    key_[source] = lower_bound_left(source);
+    touched_.push_back(source);
+    heap_.push_or_decrease(source, key_);
+    const auto total = static_cast<std::uint32_t>(nodes_.size());
+    while (!heap_.empty()) {
+      const std::uint32_t u = heap_.pop(key_);
+      if (stop(key_[u])) return give_up();
+      settled_[u] = 1;
+      if (u >= r_ && u != source) {
+        if (!settled_end(u, dist_[u])) return give_up();
+        continue;
+      }
+      const double d = dist_[u];
+      auto relax = [&](std::uint32_t v) {
+        if (settled_[v] || v == u) return;
+        const double ux = nodes_[v].x() - nodes_[u].x(), uy = nodes_[v].y() - nodes_[u].y();
+        const double candidate = d + std::sqrt(ux * ux + uy * uy);
+        if (!(candidate < dist_[v])) return;
+        // (The slack: the bound and the key sum the same lengths in other orders.)
+        if (bound < kInf && candidate + lower_bound_left(v) > bound + 1e-9) return;
+        if (u < r_ && corners_.drops(u, ux, uy)) return;
+        if (v < r_ && corners_.drops(v, -ux, -uy)) return;
+        if (!cspace_.segment_free(nodes_[u], nodes_[v])) return;
+        if (dist_[v] == kInf) touched_.push_back(v);
+        dist_[v] = candidate;
+        key_[v] = candidate + lower_bound_left(v);
+        parent_[v] = static_cast<std::int32_t>(u);
+        heap_.push_or_decrease(v, key_);
+        if (v >= r_) bound = improved_end(v, candidate);
+      };
+      // The order of the relaxations from one node changes no distance
+      // (each improves one node's), so the path ends come first: they may
+      // set the bound. With a bound, only reflex nodes within bound - d of
+      // u can be worth an edge, and the grid lists them.
+      for (std::uint32_t v = r_; v < total; ++v) relax(v);
+      if (bound < kInf) {
+        reflex_grid_.for_each_within(nodes_[u], bound - d + 1e-9, relax);
+      } else {
+        for (std::uint32_t v = 0; v < r_; ++v) relax(v);
+      }
+    }
+    return true;
+  }
+  template <class Stop, class SettledEnd>
+  bool run(std::uint32_t source, const std::vector<Point>& aims, Stop stop, SettledEnd settled_end) {
+    return run(source, aims, stop, settled_end, [](std::uint32_t, double) { return kInf; });
+  }
+
+  bool give_up() {
+    while (!heap_.empty()) heap_.pop(key_);
+    return false;
+  }
+
+  // The path from the last run's source to settled node v, source first.
+  std::vector<Point> path_to(std::uint32_t v) const {
+    std::vector<Point> path;
+    for (auto w = static_cast<std::int32_t>(v); w >= 0; w = parent_[static_cast<std::size_t>(w)])
+      path.push_back(nodes_[static_cast<std::size_t>(w)]);
+    std::reverse(path.begin(), path.end());
+    return path;
+  }
+
+ private:
+  double lower_bound_left(std::uint32_t v) {
+    if (aim_distance_[v] < 0.0) {
+      aimed_.push_back(v);
+      double least = aims_->empty() ? 0.0 : kInf;
+      for (const Point& a : *aims_) least = std::min(least, distance(nodes_[v], a));
+      aim_distance_[v] = least;
+    }
+    return aim_distance_[v];
+  }
+
+  const ConfigurationSpace& cspace_;
+  const std::vector<Point> nodes_;
+  const std::uint32_t r_;
+  const Corners corners_;
+  std::vector<double> dist_, key_, aim_distance_;
+  std::vector<std::int32_t> parent_;
+  std::vector<char> settled_;
+  std::vector<std::uint32_t> touched_, aimed_;  // what the next run resets
+  NodeHeap heap_;
+  NodeGrid reflex_grid_;  // nodes 0..r-1
+  const std::vector<Point>* aims_ = nullptr;
+};
+
 }  // namespace
 
 PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
@@ -369,80 +587,146 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   const std::int64_t tests_before = cspace.segment_tests();
   const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
   const std::size_t n = targets.size();
-  const std::vector<Point> nodes = graph_nodes(cspace, start, targets);
+  LazySearch search(cspace, graph_nodes(cspace, start, targets), r);
   const std::uint32_t source = r;
-  const auto total = static_cast<std::uint32_t>(nodes.size());
-  const Corners corners(cspace, nodes);
 
   PathMatrix out;
   out.from_start_m.assign(n, kInf);
   out.path_from_start.resize(n);
   out.reflex_nodes = r;
-  std::vector<double> dist(total, kInf);
-  std::vector<std::int32_t> parent(total, -1);
-  std::vector<char> settled(total, 0);
   std::size_t required_left = 0;
   for (const char q : query.required) required_left += q != 0;
-  // A*: the heap's key is dist + the straight-line distance to the nearest
-  // target that may be chosen or is required, a lower bound on what is left
-  // of any path to such a target, and consistent (edges are straight), so a
-  // node's distance is final when it is popped, as in Dijkstra. A far goal
-  // is searched along the way to it, not in a disc around the robot.
+  // A far goal is searched along the way to it, not in a disc around the robot.
   std::vector<Point> aims;
   for (std::size_t t = 0; t < n; ++t) {
     const bool required = t < query.required.size() && query.required[t];
     const bool choice = query.choice.empty() || (t < query.choice.size() && query.choice[t]);
     if (required || choice) aims.push_back(targets[t]);
   }
-  std::vector<double> key(total, kInf), aim_distance(total, -1.0);
-  auto lower_bound_left = [&](std::uint32_t v) {
-    if (aim_distance[v] < 0.0) {
-      double least = aims.empty() ? 0.0 : kInf;
-      for (const Point& a : aims) least = std::min(least, distance(nodes[v], a));
-      aim_distance[v] = least;
-    }
-    return aim_distance[v];
-  };
   double best_cost = kInf;
-  NodeHeap heap(total);
-  dist[source] = 0.0;
-  key[source] = lower_bound_left(source);
-  heap.push_or_decrease(source, key);
-  while (!heap.empty()) {
-    const std::uint32_t u = heap.pop(key);
-    const double d = dist[u];
-    // Every path to a target through what is left costs at least key[u].
-    if (required_left == 0 && key[u] > best_cost) {
-      out.all_searched = false;
-      break;
+  out.all_searched = search.run(
+      source, aims,
+      // Every path to a target through what is left costs at least `key`.
+      [&](double key) { return required_left == 0 && key > best_cost; },
+      [&](std::uint32_t u, double d) {
+        const std::size_t t = u - source - 1;
+        out.path_from_start[t] = search.path_to(u);
+        out.from_start_m[t] = d;
+        if (t < query.required.size() && query.required[t]) --required_left;
+        best_cost = std::min(best_cost, query.cost(t, d, out.path_from_start[t]));
+        return true;
+      });
+  out.segment_tests = cspace.segment_tests() - tests_before;
+  return out;
+}
+
+PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const Point& start,
+                                        const std::vector<Point>& targets, const NearestTargetsQuery& query) {
+  const std::int64_t tests_before = cspace.segment_tests();
+  const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
+  const std::size_t n = targets.size();
+  const std::vector<Point> nodes = graph_nodes(cspace, start, targets);
+  LazySearch search(cspace, nodes, r);
+  const std::uint32_t source = r;
+  auto is_choice = [&](std::size_t t) { return query.choice.empty() || (t < query.choice.size() && query.choice[t]); };
+  auto is_required = [&](std::size_t t) { return t < query.required.size() && query.required[t] != 0; };
+
+  PathMatrix out;
+  out.from_start_m.assign(n, kInf);
+  out.path_from_start.resize(n);
+  out.between_m.assign(n * n, kInf);
+  for (std::size_t i = 0; i < n; ++i) out.between_m[i * n + i] = 0.0;
+  out.reflex_nodes = r;
+
+  // 1. From the start until `count` choice targets and every required one
+  // are settled. Targets are settled in the order of their path lengths
+  // (their lower bound is 0), so the first `count` choice targets settled
+  // are the nearest.
+  std::size_t required_left = 0;
+  std::vector<Point> aims;
+  for (std::size_t t = 0; t < n; ++t) {
+    required_left += is_required(t);
+    if (is_required(t) || is_choice(t)) aims.push_back(targets[t]);
+  }
+  // What is worth searching: up to the count-th least tentative distance of
+  // a choice target, and the greatest of a required one.
+  std::size_t choices = 0;
+  for (std::size_t t = 0; t < n; ++t) choices += is_choice(t);
+  const std::size_t need = std::min(query.count, choices);
+  if (need == 0 && required_left == 0) {  // nothing wanted: nothing searched
+    out.all_searched = false;
+    out.segment_tests = 0;
+    return out;
+  }
+  std::vector<double> tentative(n, kInf), least;
+  auto start_bound = [&](std::uint32_t u, double d) {
+    tentative[u - source - 1] = d;
+    least.clear();
+    double bound = 0.0;
+    for (std::size_t t = 0; t < n; ++t) {
+      if (is_required(t)) bound = std::max(bound, tentative[t]);
+      if (is_choice(t) && tentative[t] < kInf) least.push_back(tentative[t]);
     }
-    settled[u] = 1;
-    if (u > source) {  // a target: a path end
-      const std::size_t t = u - source - 1;
-      std::vector<Point>& path = out.path_from_start[t];
-      for (std::int32_t v = static_cast<std::int32_t>(u); v >= 0; v = parent[static_cast<std::size_t>(v)])
-        path.push_back(nodes[static_cast<std::size_t>(v)]);
-      std::reverse(path.begin(), path.end());
-      out.from_start_m[t] = d;
-      if (t < query.required.size() && query.required[t]) --required_left;
-      best_cost = std::min(best_cost, query.cost(t, d, path));
-      continue;
+    if (need == 0) return bound;  // the required only
+    if (least.size() < need) return kInf;
+    std::nth_element(least.begin(), least.begin() + static_cast<std::ptrdiff_t>(need - 1), least.end());
+    return std::max(bound, least[need - 1]);
+  };
+  out.all_searched = search.run(
+      source, aims, [](double) { return false; },
+      [&](std::uint32_t u, double d) {
+        const std::size_t t = u - source - 1;
+        out.path_from_start[t] = search.path_to(u);
+        out.from_start_m[t] = d;
+        required_left -= is_required(t);
+        if (is_choice(t) && out.nearest.size() < query.count) out.nearest.push_back(static_cast<int>(t));
+        return required_left > 0 || out.nearest.size() < query.count;
+      },
+      start_bound);
+
+  // 2. Between the nearest: the straight segment where it is free, else one
+  // search from each for the later ones it does not see.
+  for (std::size_t a = 0; a < out.nearest.size(); ++a) {
+    const auto ta = static_cast<std::size_t>(out.nearest[a]);
+    const Point& pa = targets[ta];
+    std::vector<Point> unseen;
+    std::vector<char> wanted(n, 0);
+    for (std::size_t b = a + 1; b < out.nearest.size(); ++b) {
+      const auto tb = static_cast<std::size_t>(out.nearest[b]);
+      if (cspace.segment_free(pa, targets[tb])) {
+        out.between_m[ta * n + tb] = out.between_m[tb * n + ta] = distance(pa, targets[tb]);
+      } else {
+        wanted[tb] = 1;
+        unseen.push_back(targets[tb]);
+      }
     }
-    // The edges shortest_path_matrix would keep: reflex-reflex pruned at both
-    // ends, start-reflex and reflex-target at the reflex end, start-target straight.
-    for (std::uint32_t v = 0; v < total; ++v) {
-      if (settled[v] || v == u) continue;
-      const double ux = nodes[v].x() - nodes[u].x(), uy = nodes[v].y() - nodes[u].y();
-      const double candidate = d + std::sqrt(ux * ux + uy * uy);
-      if (!(candidate < dist[v])) continue;
-      if (u < r && corners.drops(u, ux, uy)) continue;
-      if (v < r && corners.drops(v, -ux, -uy)) continue;
-      if (!cspace.segment_free(nodes[u], nodes[v])) continue;
-      dist[v] = candidate;
-      key[v] = candidate + lower_bound_left(v);
-      parent[v] = static_cast<std::int32_t>(u);
-      heap.push_or_decrease(v, key);
-    }
+    if (unseen.empty()) continue;
+    std::size_t left = unseen.size();
+    std::fill(tentative.begin(), tentative.end(), kInf);
+    // Back along the path from the start to where the two paths part, and
+    // on along the other: an upper bound on every length wanted, from the outset.
+    double via_start = 0.0;
+    for (std::size_t t = 0; t < n; ++t)
+      if (wanted[t])
+        via_start = std::max(via_start, out.from_start_m[ta] + out.from_start_m[t] -
+                                            2.0 * shared_length(out.path_from_start[ta], out.path_from_start[t]));
+    search.run(
+        source + 1 + static_cast<std::uint32_t>(ta), unseen, [](double) { return false; },
+        [&](std::uint32_t u, double d) {
+          if (u == source) return true;  // the start: a path end here, not wanted
+          const std::size_t t = u - source - 1;
+          if (!wanted[t]) return true;
+          out.between_m[ta * n + t] = out.between_m[t * n + ta] = d;
+          return --left > 0;
+        },
+        [&](std::uint32_t u, double d) {  // worth searching: up to the farthest wanted
+          if (u != source) tentative[u - source - 1] = d;  // (the start: not wanted here)
+          double bound = 0.0;
+          for (std::size_t t = 0; t < n; ++t)
+            if (wanted[t]) bound = std::max(bound, tentative[t]);
+          return std::min(bound, via_start);
+        },
+        via_start);
   }
   out.segment_tests = cspace.segment_tests() - tests_before;
   return out;

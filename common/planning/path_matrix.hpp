@@ -54,6 +54,8 @@ struct PathMatrix {
   // false: shortest_paths_to_cheapest stopped before it settled every
   // target; a +inf in from_start_m may then be a target it did not search.
   bool all_searched = true;
+  // shortest_paths_among_nearest: the targets between_m holds, nearest first.
+  std::vector<int> nearest;
 
   std::size_t size() const { return from_start_m.size(); }
   double between(std::size_t i, std::size_t j) const { return between_m[i * size() + j]; }
@@ -94,5 +96,27 @@ struct CheapestTargetQuery {
 // cheapest target (docs/exploration.md, "Planning time"). Pure and deterministic.
 PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Point& start,
                                       const std::vector<Point>& targets, const CheapestTargetQuery& query);
+
+struct NearestTargetsQuery {
+  std::size_t count = 10;  // how many of the `choice` targets, nearest by path length
+  // Per target: may it be one of them? Empty: every target.
+  std::vector<char> choice;
+  // Per target: its path from the start is wanted, nearest or not.
+  std::vector<char> required;
+};
+
+// What a tour over the nearest candidates needs, searched lazily as
+// shortest_paths_to_cheapest searches: from the start until the `count`
+// nearest choice targets (ties: the lower node index; `nearest`, in order)
+// and every required one are settled, then between those nearest only (the
+// straight segment where it is free, else a lazy search from each for the
+// later ones it does not see). Lengths as shortest_path_matrix's. Settled
+// targets have from_start_m and path_from_start, the others +inf and no
+// path (not searched unless all_searched); between_m is n x n, +inf except
+// between two of `nearest` and on the diagonal. The cost grows with `count`,
+// not with the number of targets, where shortest_path_matrix's graph grows
+// with the square of the map's reflex vertices. Pure and deterministic.
+PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const Point& start,
+                                        const std::vector<Point>& targets, const NearestTargetsQuery& query);
 
 }  // namespace pex::planning

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -301,6 +302,75 @@ TEST(CheapestTarget, WithoutAChoiceItSearchesEveryTarget) {
   const auto m = shortest_path_matrix(cs, points[0], targets, PathMatrixOptions{.between_targets = false});
   EXPECT_TRUE(lazy.all_searched);
   for (std::size_t i = 0; i < targets.size(); ++i) EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9);
+}
+
+// The lazy search over the nearest targets against the whole matrix on
+// random maps: it holds the `count` nearest choice targets (by the matrix's
+// lengths), the lengths between them are the matrix's, the required target
+// has its path wherever it is, and it tests fewer segments.
+TEST(NearestTargets, HoldTheMatrixLengthsAmongTheNearest) {
+  std::mt19937_64 rng(20261127);
+  std::int64_t lazy_tests = 0, matrix_tests = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const auto map = random_map(rng, 4 + trial);
+    CSpaceOptions o;
+    o.robot_radius_m = 0.1 + 0.05 * (trial % 4);
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, o).ok);
+    const auto points = random_points(rng, cs, 31);
+    const Point start = points[0];
+    const std::vector<Point> targets(points.begin() + 1, points.end());
+    const auto m = shortest_path_matrix(cs, start, targets);
+    NearestTargetsQuery query;
+    query.count = 4 + static_cast<std::size_t>(trial % 3) * 3;
+    for (std::size_t i = 0; i < targets.size(); ++i) query.choice.push_back(i % 4 != 3);
+    // The farthest reachable target is required.
+    std::size_t farthest = 0;
+    for (std::size_t i = 0; i < targets.size(); ++i)
+      if (std::isfinite(m.from_start_m[i]) && m.from_start_m[i] > m.from_start_m[farthest]) farthest = i;
+    query.required.assign(targets.size(), 0);
+    query.required[farthest] = 1;
+    const auto lazy = shortest_paths_among_nearest(cs, start, targets, query);
+
+    // The nearest, by the matrix: choice targets sorted by length.
+    std::vector<std::size_t> by_length;
+    for (std::size_t i = 0; i < targets.size(); ++i)
+      if (query.choice[i] && std::isfinite(m.from_start_m[i])) by_length.push_back(i);
+    std::stable_sort(by_length.begin(), by_length.end(),
+                     [&](std::size_t a, std::size_t b) { return m.from_start_m[a] < m.from_start_m[b]; });
+    ASSERT_EQ(lazy.nearest.size(), std::min(query.count, by_length.size())) << trial;
+    for (std::size_t k = 0; k < lazy.nearest.size(); ++k) {
+      const auto i = static_cast<std::size_t>(lazy.nearest[k]);
+      EXPECT_TRUE(query.choice[i]);
+      // The k-th nearest (a tie may swap two of equal length).
+      EXPECT_NEAR(m.from_start_m[i], m.from_start_m[by_length[k]], 1e-9) << trial << " " << k;
+      EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9);
+      for (const int j : lazy.nearest)
+        EXPECT_NEAR(lazy.between(i, static_cast<std::size_t>(j)), m.between(i, static_cast<std::size_t>(j)), 1e-9)
+            << trial << " " << i << " " << j;
+    }
+    EXPECT_NEAR(lazy.from_start_m[farthest], m.from_start_m[farthest], 1e-9) << trial;
+    // Settled targets have their path; between_m holds nothing else.
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      const bool among = std::find(lazy.nearest.begin(), lazy.nearest.end(), static_cast<int>(i)) != lazy.nearest.end();
+      for (std::size_t j = 0; j < targets.size(); ++j) {
+        const bool both = among && std::find(lazy.nearest.begin(), lazy.nearest.end(), static_cast<int>(j)) !=
+                                       lazy.nearest.end();
+        if (i != j && !both) {
+          EXPECT_FALSE(std::isfinite(lazy.between(i, j)));
+        }
+      }
+      if (!std::isfinite(lazy.from_start_m[i])) continue;
+      EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9);
+      const auto& path = lazy.path_from_start[i];
+      ASSERT_GE(path.size(), 2u);
+      EXPECT_NEAR(polyline_length(path), lazy.from_start_m[i], 1e-9);
+      for (std::size_t k = 1; k < path.size(); ++k) EXPECT_TRUE(cs.segment_free(path[k - 1], path[k]));
+    }
+    lazy_tests += lazy.segment_tests;
+    matrix_tests += m.segment_tests;
+  }
+  EXPECT_LT(lazy_tests, matrix_tests) << lazy_tests << " against " << matrix_tests;
 }
 
 TEST(PathMatrix, Deterministic) {
