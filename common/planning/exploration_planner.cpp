@@ -342,8 +342,11 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   if (options.strategy == GoalStrategy::kTour && options.tour.horizon_candidates > 0) {
     NearestTargetsQuery query;
     query.count = static_cast<std::size_t>(options.tour.horizon_candidates);
+    // Only candidates in the robot's piece of the C-space: one the search
+    // cannot reach would keep it from ever bounding itself.
     query.choice.resize(plan.candidates.size());
-    for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.choice[i] = !plan.candidates[i].blacklisted;
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i)
+      query.choice[i] = !plan.candidates[i].blacklisted && (own_piece < 0 || pieces[i] == own_piece);
     query.required = required;
     matrix = shortest_paths_among_nearest(cspace, *start, targets, query);
   } else if (options.strategy == GoalStrategy::kTour) {

@@ -392,6 +392,7 @@ class LazySearch {
     for (const auto v : aimed_) aim_distance_[v] = -1.0;
     touched_.clear();
     aimed_.clear();
+    settled_count_ = 0;
     aims_ = &aims;
     double bound = initial_bound;
     dist_[source] = 0.0;
@@ -403,6 +404,7 @@ class LazySearch {
       const std::uint32_t u = heap_.pop(key_);
       if (stop(key_[u])) return give_up();
       settled_[u] = 1;
+      ++settled_count_;
       if (u >= r_ && u != source) {
         if (!settled_end(u, dist_[u])) return give_up();
         continue;
@@ -443,6 +445,9 @@ class LazySearch {
     return run(source, aims, stop, settled_end, [](std::uint32_t, double) { return kInf; });
   }
 
+  // Nodes settled by the last run.
+  std::size_t settled_count() const { return settled_count_; }
+
   bool give_up() {
     while (!heap_.empty()) heap_.pop(key_);
     return false;
@@ -479,6 +484,7 @@ class LazySearch {
   NodeHeap heap_;
   NodeGrid reflex_grid_;  // nodes 0..r-1
   const std::vector<Point>* aims_ = nullptr;
+  std::size_t settled_count_ = 0;
 };
 
 }  // namespace
@@ -684,8 +690,23 @@ PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const 
       },
       start_bound);
 
-  // 2. Between the nearest: the straight segment where it is free, else one
-  // search from each for the later ones it does not see.
+  // 2. Between the nearest. Where the search from the start had to settle
+  // so much of the map that a search from each of them would test more
+  // pairs of nodes than the whole pruned graph has (a ragged map, the
+  // nearest far apart), the graph over the reflex nodes and those targets
+  // (shortest_path_matrix), else: the straight segment where it is free,
+  // else one search from each for the later ones it does not see.
+  if (search.settled_count() * out.nearest.size() > r) {
+    std::vector<Point> nearest_points;
+    for (const int t : out.nearest) nearest_points.push_back(targets[static_cast<std::size_t>(t)]);
+    const PathMatrix among = shortest_path_matrix(cspace, start, nearest_points);
+    for (std::size_t a = 0; a < out.nearest.size(); ++a)
+      for (std::size_t b = 0; b < out.nearest.size(); ++b)
+        out.between_m[static_cast<std::size_t>(out.nearest[a]) * n + static_cast<std::size_t>(out.nearest[b])] =
+            among.between(a, b);
+    out.segment_tests = cspace.segment_tests() - tests_before;
+    return out;
+  }
   for (std::size_t a = 0; a < out.nearest.size(); ++a) {
     const auto ta = static_cast<std::size_t>(out.nearest[a]);
     const Point& pa = targets[ta];

@@ -115,7 +115,11 @@ struct NearestTargetsQuery {
 // path (not searched unless all_searched); between_m is n x n, +inf except
 // between two of `nearest` and on the diagonal. The cost grows with `count`,
 // not with the number of targets, where shortest_path_matrix's graph grows
-// with the square of the map's reflex vertices. Pure and deterministic.
+// with the square of the map's reflex vertices, as long as `count` choice
+// targets (or all of them) are reachable: a choice or required target the
+// start cannot reach makes it search the start's whole piece of the C-space
+// with a loop over every node per node (leave out targets in other pieces,
+// ConfigurationSpace::piece_of). Pure and deterministic.
 PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const Point& start,
                                         const std::vector<Point>& targets, const NearestTargetsQuery& query);
 
