@@ -125,10 +125,11 @@ TEST(PlanExploration, AFrontierBehindAWallIsOutOfViewNotAGoal) {
 // A corridor 30 x 3 m whose top wall has 1 m windows of frontier at x = 8,
 // 11 and 15. From x = 10 the nearest is 11; but 8, 11, 15 in that order is
 // the shorter way through all three (9 m against 11 m for 11, 8, 15).
-mapping::TypedMultiPolygon corridor_with_windows() {
-  std::vector<Point> pts = {Point(0, 0), Point(30, 0), Point(30, 3)};
+mapping::TypedMultiPolygon corridor_with_windows(double length_m = 30.0,
+                                                 const std::vector<double>& windows_x = {15.0, 11.0, 8.0}) {
+  std::vector<Point> pts = {Point(0, 0), Point(length_m, 0), Point(length_m, 3)};
   std::vector<E> types = {E::kObstacle, E::kObstacle, E::kObstacle};
-  for (double x : {15.0, 11.0, 8.0}) {
+  for (double x : windows_x) {  // right to left, as the ring goes
     pts.push_back(Point(x + 0.5, 3));
     types.push_back(E::kFrontier);
     pts.push_back(Point(x - 0.5, 3));
@@ -278,17 +279,7 @@ TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
 
 // A corridor 40 x 3 m with 1 m windows of frontier in its top wall every 4 m.
 mapping::TypedMultiPolygon corridor_with_many_windows() {
-  std::vector<Point> pts = {Point(0, 0), Point(40, 0), Point(40, 3)};
-  std::vector<E> types = {E::kObstacle, E::kObstacle, E::kObstacle};
-  for (double x = 38.0; x > 1.0; x -= 4.0) {
-    pts.push_back(Point(x + 0.5, 3));
-    types.push_back(E::kFrontier);
-    pts.push_back(Point(x - 0.5, 3));
-    types.push_back(E::kObstacle);
-  }
-  pts.push_back(Point(0, 3));
-  types.push_back(E::kObstacle);
-  return {typed_polygon(testing::RingSpec{pts, types})};
+  return corridor_with_windows(40.0, {38.0, 34.0, 30.0, 26.0, 22.0, 18.0, 14.0, 10.0, 6.0, 2.0});
 }
 
 // With a horizon the tour runs over the nearest candidates only, with the

@@ -72,6 +72,24 @@ std::vector<Point> random_points(std::mt19937_64& rng, const ConfigurationSpace&
   return points;
 }
 
+// A random scene of trial `trial`: random_map with 4 + trial obstacles,
+// robot radius 0.1-0.25 m, and `count` random interior points, the first of
+// them the start.
+struct RandomScene {
+  ConfigurationSpace cs;
+  Point start;
+  std::vector<Point> targets;
+};
+void build_random_scene(std::mt19937_64& rng, int trial, std::size_t count, RandomScene& scene) {
+  const auto map = random_map(rng, 4 + trial);
+  CSpaceOptions o;
+  o.robot_radius_m = 0.1 + 0.05 * (trial % 4);
+  ASSERT_TRUE(scene.cs.build(map, o).ok);
+  const auto points = random_points(rng, scene.cs, count);
+  scene.start = points[0];
+  scene.targets.assign(points.begin() + 1, points.end());
+}
+
 void expect_consistent(const PathMatrix& m, const ConfigurationSpace& cs, const Point& start) {
   const std::size_t n = m.size();
   ASSERT_EQ(m.between_m.size(), n * n);
@@ -234,14 +252,11 @@ TEST(CheapestTarget, FindsTheMatrixCheapestAndTheRequiredTargets) {
   std::int64_t lazy_tests = 0, matrix_tests = 0;
   int stopped_early = 0;
   for (int trial = 0; trial < 12; ++trial) {
-    const auto map = random_map(rng, 4 + trial);
-    CSpaceOptions o;
-    o.robot_radius_m = 0.1 + 0.05 * (trial % 4);
-    ConfigurationSpace cs;
-    ASSERT_TRUE(cs.build(map, o).ok);
-    const auto points = random_points(rng, cs, 25);
-    const Point start = points[0];
-    const std::vector<Point> targets(points.begin() + 1, points.end());
+    RandomScene scene;
+    ASSERT_NO_FATAL_FAILURE(build_random_scene(rng, trial, 25, scene));
+    const ConfigurationSpace& cs = scene.cs;
+    const Point& start = scene.start;
+    const std::vector<Point>& targets = scene.targets;
     const auto m = shortest_path_matrix(cs, start, targets, PathMatrixOptions{.between_targets = false});
     // A cost that is not the length alone (at least the length, as the
     // contract asks); every third target no choice; the farthest required.
@@ -312,14 +327,11 @@ TEST(NearestTargets, HoldTheMatrixLengthsAmongTheNearest) {
   std::mt19937_64 rng(20261127);
   std::int64_t lazy_tests = 0, matrix_tests = 0;
   for (int trial = 0; trial < 12; ++trial) {
-    const auto map = random_map(rng, 4 + trial);
-    CSpaceOptions o;
-    o.robot_radius_m = 0.1 + 0.05 * (trial % 4);
-    ConfigurationSpace cs;
-    ASSERT_TRUE(cs.build(map, o).ok);
-    const auto points = random_points(rng, cs, 31);
-    const Point start = points[0];
-    const std::vector<Point> targets(points.begin() + 1, points.end());
+    RandomScene scene;
+    ASSERT_NO_FATAL_FAILURE(build_random_scene(rng, trial, 31, scene));
+    const ConfigurationSpace& cs = scene.cs;
+    const Point& start = scene.start;
+    const std::vector<Point>& targets = scene.targets;
     const auto m = shortest_path_matrix(cs, start, targets);
     NearestTargetsQuery query;
     query.count = 4 + static_cast<std::size_t>(trial % 3) * 3;
