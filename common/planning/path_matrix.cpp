@@ -404,7 +404,7 @@ class LazySearch {
       const std::uint32_t u = heap_.pop(key_);
       if (stop(key_[u])) return give_up();
       settled_[u] = 1;
-      ++settled_count_;
+      settled_count_ += u < r_;
       if (u >= r_ && u != source) {
         if (!settled_end(u, dist_[u])) return give_up();
         continue;
@@ -445,7 +445,7 @@ class LazySearch {
     return run(source, aims, stop, settled_end, [](std::uint32_t, double) { return kInf; });
   }
 
-  // Nodes settled by the last run.
+  // Reflex nodes settled by the last run.
   std::size_t settled_count() const { return settled_count_; }
 
   bool give_up() {
@@ -678,8 +678,14 @@ PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const 
     std::nth_element(least.begin(), least.begin() + static_cast<std::ptrdiff_t>(need - 1), least.end());
     return std::max(bound, least[need - 1]);
   };
+  // A search that settles a tenth of the reflex nodes is on its way to
+  // testing as many pairs as the whole pruned graph, one by one where the
+  // graph scores them in blocks (a ragged map: thousands of reflex nodes
+  // along walls a scan at a time drew): then the whole matrix instead.
+  const std::size_t settle_budget = r / 10 + 64;
+  bool over_budget = false;
   out.all_searched = search.run(
-      source, aims, [](double) { return false; },
+      source, aims, [&](double) { return over_budget = search.settled_count() > settle_budget; },
       [&](std::uint32_t u, double d) {
         const std::size_t t = u - source - 1;
         out.path_from_start[t] = search.path_to(u);
@@ -689,6 +695,25 @@ PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const 
         return required_left > 0 || out.nearest.size() < query.count;
       },
       start_bound);
+  if (over_budget) {
+    PathMatrix whole = shortest_path_matrix(cspace, start, targets);
+    std::vector<int> by_length;
+    for (std::size_t t = 0; t < n; ++t)
+      if (is_choice(t) && whole.from_start_m[t] < kInf) by_length.push_back(static_cast<int>(t));
+    // Ties as the search breaks them: the lower index first.
+    std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
+      return whole.from_start_m[static_cast<std::size_t>(a)] < whole.from_start_m[static_cast<std::size_t>(b)];
+    });
+    if (by_length.size() > query.count) by_length.resize(query.count);
+    std::vector<char> among(n, 0);
+    for (const int t : by_length) among[static_cast<std::size_t>(t)] = 1;
+    for (std::size_t a = 0; a < n; ++a)
+      for (std::size_t b = 0; b < n; ++b)
+        if (a != b && !(among[a] && among[b])) whole.between_m[a * n + b] = kInf;
+    whole.nearest = std::move(by_length);
+    whole.segment_tests = cspace.segment_tests() - tests_before;
+    return whole;
+  }
 
   // 2. Between the nearest. Where the search from the start had to settle
   // so much of the map that a search from each of them would test more

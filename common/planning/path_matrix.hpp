@@ -110,7 +110,11 @@ struct NearestTargetsQuery {
 // nearest choice targets (ties: the lower node index; `nearest`, in order)
 // and every required one are settled, then between those nearest only (the
 // straight segment where it is free, else a lazy search from each for the
-// later ones it does not see). Lengths as shortest_path_matrix's. Settled
+// later ones it does not see); where that would cost more than the whole
+// matrix (the search from the start settles a tenth of the reflex nodes,
+// or the searches between would test more pairs than the pruned graph has),
+// from shortest_path_matrix instead, with every target's length from the
+// start (all_searched). Lengths as shortest_path_matrix's. Settled
 // targets have from_start_m and path_from_start, the others +inf and no
 // path (not searched unless all_searched); between_m is n x n, +inf except
 // between two of `nearest` and on the diagonal. The cost grows with `count`,
