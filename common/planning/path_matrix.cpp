@@ -626,16 +626,164 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   return out;
 }
 
+namespace {
+
+// shortest_paths_among_nearest's steps. The targets are nodes r + 1 + t of
+// the search's graph (graph_nodes), the start node r.
+struct NearestTargetsSearch {
+  const ConfigurationSpace& cspace;
+  const Point& start;
+  const std::vector<Point>& targets;
+  const NearestTargetsQuery& query;
+  LazySearch& search;
+  std::uint32_t r;
+
+  std::size_t n() const { return targets.size(); }
+  bool is_choice(std::size_t t) const {
+    return query.choice.empty() || (t < query.choice.size() && query.choice[t]);
+  }
+  bool is_required(std::size_t t) const { return t < query.required.size() && query.required[t] != 0; }
+
+  // 1. From the start until `count` choice targets and every required one
+  // are settled: targets are settled in the order of their lengths (their
+  // lower bound is 0), so the first `count` choice targets settled are the
+  // nearest. False when the search gave up (see below).
+  bool search_from_start(PathMatrix& out) const {
+    std::size_t required_left = 0, choices = 0;
+    std::vector<Point> aims;
+    for (std::size_t t = 0; t < n(); ++t) {
+      required_left += is_required(t);
+      choices += is_choice(t);
+      if (is_required(t) || is_choice(t)) aims.push_back(targets[t]);
+    }
+    const std::size_t need = std::min(query.count, choices);
+    if (need == 0 && required_left == 0) {  // nothing wanted: nothing searched
+      out.all_searched = false;
+      return true;
+    }
+    // What is worth searching: up to the need-th least tentative length of
+    // a choice target, and the greatest of a required one.
+    std::vector<double> tentative(n(), kInf), least;
+    auto bound_after = [&](std::uint32_t u, double d) {
+      tentative[u - r - 1] = d;
+      least.clear();
+      double bound = 0.0;
+      for (std::size_t t = 0; t < n(); ++t) {
+        if (is_required(t)) bound = std::max(bound, tentative[t]);
+        if (is_choice(t) && tentative[t] < kInf) least.push_back(tentative[t]);
+      }
+      if (need == 0) return bound;  // the required only
+      if (least.size() < need) return kInf;
+      std::nth_element(least.begin(), least.begin() + static_cast<std::ptrdiff_t>(need - 1), least.end());
+      return std::max(bound, least[need - 1]);
+    };
+    // A search that settles a tenth of the reflex nodes is on its way to
+    // testing as many pairs as the whole pruned graph, one by one where the
+    // graph scores them in blocks (a ragged map: thousands of reflex nodes
+    // along walls a scan at a time drew): it gives up for the whole matrix.
+    const std::size_t settle_budget = r / 10 + 64;
+    bool over_budget = false;
+    out.all_searched = search.run(
+        r, aims, [&](double) { return over_budget = search.settled_count() > settle_budget; },
+        [&](std::uint32_t u, double d) {
+          const std::size_t t = u - r - 1;
+          out.path_from_start[t] = search.path_to(u);
+          out.from_start_m[t] = d;
+          required_left -= is_required(t);
+          if (is_choice(t) && out.nearest.size() < query.count) out.nearest.push_back(static_cast<int>(t));
+          return required_left > 0 || out.nearest.size() < query.count;
+        },
+        bound_after);
+    return !over_budget;
+  }
+
+  // The whole matrix, kept between the `count` nearest choice targets only.
+  PathMatrix whole_matrix() const {
+    PathMatrix whole = shortest_path_matrix(cspace, start, targets);
+    std::vector<int> by_length;
+    for (std::size_t t = 0; t < n(); ++t)
+      if (is_choice(t) && whole.from_start_m[t] < kInf) by_length.push_back(static_cast<int>(t));
+    // Ties as the search breaks them: the lower index first.
+    std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
+      return whole.from_start_m[static_cast<std::size_t>(a)] < whole.from_start_m[static_cast<std::size_t>(b)];
+    });
+    if (by_length.size() > query.count) by_length.resize(query.count);
+    std::vector<char> among(n(), 0);
+    for (const int t : by_length) among[static_cast<std::size_t>(t)] = 1;
+    for (std::size_t a = 0; a < n(); ++a)
+      for (std::size_t b = 0; b < n(); ++b)
+        if (a != b && !(among[a] && among[b])) whole.between_m[a * n() + b] = kInf;
+    whole.nearest = std::move(by_length);
+    return whole;
+  }
+
+  // 2a. Between the nearest over the pruned graph of the reflex nodes and
+  // those targets only.
+  void between_over_the_graph(PathMatrix& out) const {
+    std::vector<Point> nearest_points;
+    for (const int t : out.nearest) nearest_points.push_back(targets[static_cast<std::size_t>(t)]);
+    const PathMatrix among = shortest_path_matrix(cspace, start, nearest_points);
+    for (std::size_t a = 0; a < out.nearest.size(); ++a)
+      for (std::size_t b = 0; b < out.nearest.size(); ++b)
+        out.between_m[static_cast<std::size_t>(out.nearest[a]) * n() + static_cast<std::size_t>(out.nearest[b])] =
+            among.between(a, b);
+  }
+
+  // 2b. Between nearest target a and the later ones: the straight segment
+  // where it is free, else one lazy search for those it does not see.
+  void between_from(std::size_t a, PathMatrix& out) const {
+    const auto ta = static_cast<std::size_t>(out.nearest[a]);
+    const Point& pa = targets[ta];
+    std::vector<Point> unseen;
+    std::vector<char> wanted(n(), 0);
+    for (std::size_t b = a + 1; b < out.nearest.size(); ++b) {
+      const auto tb = static_cast<std::size_t>(out.nearest[b]);
+      if (cspace.segment_free(pa, targets[tb])) {
+        out.between_m[ta * n() + tb] = out.between_m[tb * n() + ta] = distance(pa, targets[tb]);
+      } else {
+        wanted[tb] = 1;
+        unseen.push_back(targets[tb]);
+      }
+    }
+    if (unseen.empty()) return;
+    // Back along the path from the start to where the two paths part, and
+    // on along the other: an upper bound on every length wanted, from the outset.
+    double via_start = 0.0;
+    for (std::size_t t = 0; t < n(); ++t)
+      if (wanted[t])
+        via_start = std::max(via_start, out.from_start_m[ta] + out.from_start_m[t] -
+                                            2.0 * shared_length(out.path_from_start[ta], out.path_from_start[t]));
+    std::size_t left = unseen.size();
+    std::vector<double> tentative(n(), kInf);
+    search.run(
+        r + 1 + static_cast<std::uint32_t>(ta), unseen, [](double) { return false; },
+        [&](std::uint32_t u, double d) {
+          if (u == r) return true;  // the start: a path end here, not wanted
+          const std::size_t t = u - r - 1;
+          if (!wanted[t]) return true;
+          out.between_m[ta * n() + t] = out.between_m[t * n() + ta] = d;
+          return --left > 0;
+        },
+        [&](std::uint32_t u, double d) {  // worth searching: up to the farthest wanted
+          if (u != r) tentative[u - r - 1] = d;
+          double bound = 0.0;
+          for (std::size_t t = 0; t < n(); ++t)
+            if (wanted[t]) bound = std::max(bound, tentative[t]);
+          return std::min(bound, via_start);
+        },
+        via_start);
+  }
+};
+
+}  // namespace
+
 PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const Point& start,
                                         const std::vector<Point>& targets, const NearestTargetsQuery& query) {
   const std::int64_t tests_before = cspace.segment_tests();
   const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
   const std::size_t n = targets.size();
-  const std::vector<Point> nodes = graph_nodes(cspace, start, targets);
-  LazySearch search(cspace, nodes, r);
-  const std::uint32_t source = r;
-  auto is_choice = [&](std::size_t t) { return query.choice.empty() || (t < query.choice.size() && query.choice[t]); };
-  auto is_required = [&](std::size_t t) { return t < query.required.size() && query.required[t] != 0; };
+  LazySearch search(cspace, graph_nodes(cspace, start, targets), r);
+  const NearestTargetsSearch steps{cspace, start, targets, query, search, r};
 
   PathMatrix out;
   out.from_start_m.assign(n, kInf);
@@ -643,136 +791,15 @@ PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const 
   out.between_m.assign(n * n, kInf);
   for (std::size_t i = 0; i < n; ++i) out.between_m[i * n + i] = 0.0;
   out.reflex_nodes = r;
-
-  // 1. From the start until `count` choice targets and every required one
-  // are settled. Targets are settled in the order of their path lengths
-  // (their lower bound is 0), so the first `count` choice targets settled
-  // are the nearest.
-  std::size_t required_left = 0;
-  std::vector<Point> aims;
-  for (std::size_t t = 0; t < n; ++t) {
-    required_left += is_required(t);
-    if (is_required(t) || is_choice(t)) aims.push_back(targets[t]);
-  }
-  // What is worth searching: up to the count-th least tentative distance of
-  // a choice target, and the greatest of a required one.
-  std::size_t choices = 0;
-  for (std::size_t t = 0; t < n; ++t) choices += is_choice(t);
-  const std::size_t need = std::min(query.count, choices);
-  if (need == 0 && required_left == 0) {  // nothing wanted: nothing searched
-    out.all_searched = false;
-    out.segment_tests = 0;
-    return out;
-  }
-  std::vector<double> tentative(n, kInf), least;
-  auto start_bound = [&](std::uint32_t u, double d) {
-    tentative[u - source - 1] = d;
-    least.clear();
-    double bound = 0.0;
-    for (std::size_t t = 0; t < n; ++t) {
-      if (is_required(t)) bound = std::max(bound, tentative[t]);
-      if (is_choice(t) && tentative[t] < kInf) least.push_back(tentative[t]);
-    }
-    if (need == 0) return bound;  // the required only
-    if (least.size() < need) return kInf;
-    std::nth_element(least.begin(), least.begin() + static_cast<std::ptrdiff_t>(need - 1), least.end());
-    return std::max(bound, least[need - 1]);
-  };
-  // A search that settles a tenth of the reflex nodes is on its way to
-  // testing as many pairs as the whole pruned graph, one by one where the
-  // graph scores them in blocks (a ragged map: thousands of reflex nodes
-  // along walls a scan at a time drew): then the whole matrix instead.
-  const std::size_t settle_budget = r / 10 + 64;
-  bool over_budget = false;
-  out.all_searched = search.run(
-      source, aims, [&](double) { return over_budget = search.settled_count() > settle_budget; },
-      [&](std::uint32_t u, double d) {
-        const std::size_t t = u - source - 1;
-        out.path_from_start[t] = search.path_to(u);
-        out.from_start_m[t] = d;
-        required_left -= is_required(t);
-        if (is_choice(t) && out.nearest.size() < query.count) out.nearest.push_back(static_cast<int>(t));
-        return required_left > 0 || out.nearest.size() < query.count;
-      },
-      start_bound);
-  if (over_budget) {
-    PathMatrix whole = shortest_path_matrix(cspace, start, targets);
-    std::vector<int> by_length;
-    for (std::size_t t = 0; t < n; ++t)
-      if (is_choice(t) && whole.from_start_m[t] < kInf) by_length.push_back(static_cast<int>(t));
-    // Ties as the search breaks them: the lower index first.
-    std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
-      return whole.from_start_m[static_cast<std::size_t>(a)] < whole.from_start_m[static_cast<std::size_t>(b)];
-    });
-    if (by_length.size() > query.count) by_length.resize(query.count);
-    std::vector<char> among(n, 0);
-    for (const int t : by_length) among[static_cast<std::size_t>(t)] = 1;
-    for (std::size_t a = 0; a < n; ++a)
-      for (std::size_t b = 0; b < n; ++b)
-        if (a != b && !(among[a] && among[b])) whole.between_m[a * n + b] = kInf;
-    whole.nearest = std::move(by_length);
-    whole.segment_tests = cspace.segment_tests() - tests_before;
-    return whole;
-  }
-
-  // 2. Between the nearest. Where the search from the start had to settle
-  // so much of the map that a search from each of them would test more
-  // pairs of nodes than the whole pruned graph has (a ragged map, the
-  // nearest far apart), the graph over the reflex nodes and those targets
-  // (shortest_path_matrix), else: the straight segment where it is free,
-  // else one search from each for the later ones it does not see.
-  if (search.settled_count() * out.nearest.size() > r) {
-    std::vector<Point> nearest_points;
-    for (const int t : out.nearest) nearest_points.push_back(targets[static_cast<std::size_t>(t)]);
-    const PathMatrix among = shortest_path_matrix(cspace, start, nearest_points);
-    for (std::size_t a = 0; a < out.nearest.size(); ++a)
-      for (std::size_t b = 0; b < out.nearest.size(); ++b)
-        out.between_m[static_cast<std::size_t>(out.nearest[a]) * n + static_cast<std::size_t>(out.nearest[b])] =
-            among.between(a, b);
-    out.segment_tests = cspace.segment_tests() - tests_before;
-    return out;
-  }
-  for (std::size_t a = 0; a < out.nearest.size(); ++a) {
-    const auto ta = static_cast<std::size_t>(out.nearest[a]);
-    const Point& pa = targets[ta];
-    std::vector<Point> unseen;
-    std::vector<char> wanted(n, 0);
-    for (std::size_t b = a + 1; b < out.nearest.size(); ++b) {
-      const auto tb = static_cast<std::size_t>(out.nearest[b]);
-      if (cspace.segment_free(pa, targets[tb])) {
-        out.between_m[ta * n + tb] = out.between_m[tb * n + ta] = distance(pa, targets[tb]);
-      } else {
-        wanted[tb] = 1;
-        unseen.push_back(targets[tb]);
-      }
-    }
-    if (unseen.empty()) continue;
-    std::size_t left = unseen.size();
-    std::fill(tentative.begin(), tentative.end(), kInf);
-    // Back along the path from the start to where the two paths part, and
-    // on along the other: an upper bound on every length wanted, from the outset.
-    double via_start = 0.0;
-    for (std::size_t t = 0; t < n; ++t)
-      if (wanted[t])
-        via_start = std::max(via_start, out.from_start_m[ta] + out.from_start_m[t] -
-                                            2.0 * shared_length(out.path_from_start[ta], out.path_from_start[t]));
-    search.run(
-        source + 1 + static_cast<std::uint32_t>(ta), unseen, [](double) { return false; },
-        [&](std::uint32_t u, double d) {
-          if (u == source) return true;  // the start: a path end here, not wanted
-          const std::size_t t = u - source - 1;
-          if (!wanted[t]) return true;
-          out.between_m[ta * n + t] = out.between_m[t * n + ta] = d;
-          return --left > 0;
-        },
-        [&](std::uint32_t u, double d) {  // worth searching: up to the farthest wanted
-          if (u != source) tentative[u - source - 1] = d;  // (the start: not wanted here)
-          double bound = 0.0;
-          for (std::size_t t = 0; t < n; ++t)
-            if (wanted[t]) bound = std::max(bound, tentative[t]);
-          return std::min(bound, via_start);
-        },
-        via_start);
+  if (!steps.search_from_start(out)) {
+    out = steps.whole_matrix();
+  } else if (search.settled_count() * out.nearest.size() > r) {
+    // A search from each of the nearest would test more pairs of nodes than
+    // the pruned graph has (the start's search had to settle much of the
+    // map: a ragged one, or the nearest far apart).
+    steps.between_over_the_graph(out);
+  } else {
+    for (std::size_t a = 0; a < out.nearest.size(); ++a) steps.between_from(a, out);
   }
   out.segment_tests = cspace.segment_tests() - tests_before;
   return out;
