@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <utility>
@@ -389,6 +390,18 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       std::vector<double> nearest_only(first_leg.size(), std::numeric_limits<double>::infinity());
       for (const int i : matrix.nearest) nearest_only[static_cast<std::size_t>(i)] = first_leg[static_cast<std::size_t>(i)];
       first_leg = std::move(nearest_only);
+    }
+    if (options.tour.one_per_chain) {
+      // The cheapest candidate of each chain stands for it (ties: the lower index).
+      std::map<int, std::size_t> cheapest_of_chain;
+      for (std::size_t i = 0; i < first_leg.size(); ++i) {
+        if (!std::isfinite(first_leg[i])) continue;
+        const auto [it, fresh] = cheapest_of_chain.try_emplace(plan.candidates[i].chain, i);
+        if (!fresh && first_leg[i] < first_leg[it->second]) it->second = i;
+      }
+      for (std::size_t i = 0; i < first_leg.size(); ++i)
+        if (std::isfinite(first_leg[i]) && cheapest_of_chain[plan.candidates[i].chain] != i)
+          first_leg[i] = std::numeric_limits<double>::infinity();
     }
     std::vector<double>& between = matrix.between_m;
     const std::size_t n = plan.candidates.size();

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include <cmath>
+#include <map>
 
 #include "planning/test_maps.hpp"
 
@@ -324,6 +325,41 @@ TEST(PlanExploration, TourWithAHorizonOrdersTheNearestCandidatesOnly) {
   const Plan followed = plan_exploration(map, robot, {}, o, nullptr, &focus);
   EXPECT_EQ(followed.tour, near.tour);
   EXPECT_NEAR(followed.candidates[far].path_length_m, all.candidates[far].path_length_m, 1e-6);
+}
+
+// One stop per frontier chain: a 12 m frontier in the corridor's top wall
+// has several candidates, of which the tour keeps the cheapest only.
+TEST(PlanExploration, TourOnePerChainStopsOnceAtEachFrontier) {
+  std::vector<Point> pts = {Point(0, 0), Point(30, 0), Point(30, 3), Point(20.5, 3), Point(19.5, 3),
+                            Point(14, 3), Point(2, 3), Point(0, 3)};
+  std::vector<E> types = {E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier,
+                          E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle};
+  const mapping::TypedMultiPolygon map{typed_polygon(testing::RingSpec{pts, types})};
+  PlannerOptions o = options();
+  o.strategy = GoalStrategy::kTour;
+  const Pose2 robot{16, 1.5, 0};
+  const Plan every = plan_exploration(map, robot, {}, o);
+  ASSERT_TRUE(every.ok) << every.error;
+  std::map<int, int> per_chain;
+  for (const int i : every.tour) ++per_chain[every.candidates[static_cast<std::size_t>(i)].chain];
+  ASSERT_EQ(per_chain.size(), 2u);
+  ASSERT_GT(every.tour.size(), 2u);  // the long frontier has more than one candidate
+
+  o.tour.one_per_chain = true;
+  const Plan once = plan_exploration(map, robot, {}, o);
+  ASSERT_TRUE(once.ok) << once.error;
+  ASSERT_EQ(once.tour.size(), 2u);
+  EXPECT_NE(once.candidates[static_cast<std::size_t>(once.tour[0])].chain,
+            once.candidates[static_cast<std::size_t>(once.tour[1])].chain);
+  // Each chain's stop is its cheapest candidate.
+  for (const int i : once.tour) {
+    const auto& stop = once.candidates[static_cast<std::size_t>(i)];
+    for (const auto& c : once.candidates) {
+      if (c.chain == stop.chain && c.reachable) {
+        EXPECT_LE(stop.cost, c.cost);
+      }
+    }
+  }
 }
 
 TEST(PlanPathTo, FindsThePathHomeOrSaysItIsUnreachable) {

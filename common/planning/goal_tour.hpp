@@ -50,6 +50,11 @@ struct TourOptions {
   // Figures: docs/exploration.md, "The bounded tour".
   double max_first_leg_ratio = 1.5;
   double first_leg_slack_m = 2.0;
+  // The tour visits one candidate per frontier chain (the cheapest to reach
+  // from the robot), as a generalised TSP visits one goal per frontier
+  // cluster (Kulich, Kubalík, Přeučil 2019): seeing a chain from one of its
+  // candidates sees the rest of it, so the others are no stops of their own.
+  bool one_per_chain = false;
 };
 
 struct OpenTour {

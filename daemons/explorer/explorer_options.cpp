@@ -92,6 +92,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       "goal_strategy", planning::to_string(planner.strategy), runtime::one_of({"greedy", "tour"})));
   planner.tour.horizon_candidates =
       config.get<int>("tour_horizon_candidates", planner.tour.horizon_candidates, runtime::in_range(0, 1000));
+  planner.tour.one_per_chain = config.get<bool>("tour_one_per_chain", planner.tour.one_per_chain);
   planner.tour.max_first_leg_ratio = config.get<double>("tour_max_first_leg_ratio", planner.tour.max_first_leg_ratio,
                                                         runtime::in_range(0.0, 1000.0));
   planner.tour.first_leg_slack_m =
