@@ -228,6 +228,53 @@ double GoalFocus::distance_to(const GoalCandidate& c) const {
   return std::min(distance(c.position, goal), distance(c.frontier_point, frontier));
 }
 
+namespace {
+
+// Step 4 of plan_exploration for the tour: the tour's stops and their first
+// legs (each candidate's cost from the robot), the shortest open tour through
+// them, and its first stop as the goal unless the first-leg bound says the
+// nearest. `matrix` is the plan's; its between_m is overwritten.
+void choose_by_tour(PathMatrix& matrix, const TourOptions& options, Plan& plan) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const std::size_t n = plan.candidates.size();
+  std::vector<double> first_leg(n, kInf);
+  for (std::size_t i = 0; i < n; ++i)
+    if (plan.candidates[i].reachable && !plan.candidates[i].blacklisted) first_leg[i] = plan.candidates[i].cost;
+  if (options.horizon_candidates > 0) {
+    // Only the nearest horizon_candidates by path length: the candidates the matrix holds.
+    std::vector<double> nearest_only(n, kInf);
+    for (const int i : matrix.nearest) nearest_only[static_cast<std::size_t>(i)] = first_leg[static_cast<std::size_t>(i)];
+    first_leg = std::move(nearest_only);
+  }
+  if (options.one_per_chain) {
+    // The cheapest candidate of each chain stands for it (ties: the lower index).
+    std::map<int, std::size_t> cheapest_of_chain;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(first_leg[i])) continue;
+      const auto [it, fresh] = cheapest_of_chain.try_emplace(plan.candidates[i].chain, i);
+      if (!fresh && first_leg[i] < first_leg[it->second]) it->second = i;
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (std::isfinite(first_leg[i]) && cheapest_of_chain[plan.candidates[i].chain] != i) first_leg[i] = kInf;
+  }
+  std::vector<double>& between = matrix.between_m;
+  for (std::size_t i = 0; i < n; ++i)  // keep the matrix finite where the solver needs it (the stops' rows)
+    for (std::size_t j = 0; j < n; ++j)
+      if (!std::isfinite(first_leg[i]) || !std::isfinite(first_leg[j])) between[i * n + j] = 0.0;
+  const OpenTour tour = solve_open_tour(first_leg, between, options);
+  plan.tour = tour.order;
+  if (!tour.order.empty()) plan.best = tour.order.front();
+  if (plan.best >= 0 && options.max_first_leg_ratio > 0.0) {
+    const auto nearest =
+        static_cast<std::size_t>(std::min_element(first_leg.begin(), first_leg.end()) - first_leg.begin());
+    const auto first = static_cast<std::size_t>(plan.best);
+    if (first_leg[first] > options.max_first_leg_ratio * first_leg[nearest] + options.first_leg_slack_m)
+      plan.best = static_cast<int>(nearest);
+  }
+}
+
+}  // namespace
+
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable, const GoalFocus* focus,
                       OffsetTileCache* offsets) {
@@ -381,43 +428,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   // shortest open tour from the robot through every candidate (tour).
   // Blacklisted candidates are never goals and not part of the tour.
   if (options.strategy == GoalStrategy::kTour) {
-    std::vector<double> first_leg(plan.candidates.size(), std::numeric_limits<double>::infinity());
-    for (std::size_t i = 0; i < plan.candidates.size(); ++i)
-      if (plan.candidates[i].reachable && !plan.candidates[i].blacklisted) first_leg[i] = plan.candidates[i].cost;
-    if (options.tour.horizon_candidates > 0) {
-      // Only the nearest horizon_candidates by path length take part: the
-      // candidates the matrix holds.
-      std::vector<double> nearest_only(first_leg.size(), std::numeric_limits<double>::infinity());
-      for (const int i : matrix.nearest) nearest_only[static_cast<std::size_t>(i)] = first_leg[static_cast<std::size_t>(i)];
-      first_leg = std::move(nearest_only);
-    }
-    if (options.tour.one_per_chain) {
-      // The cheapest candidate of each chain stands for it (ties: the lower index).
-      std::map<int, std::size_t> cheapest_of_chain;
-      for (std::size_t i = 0; i < first_leg.size(); ++i) {
-        if (!std::isfinite(first_leg[i])) continue;
-        const auto [it, fresh] = cheapest_of_chain.try_emplace(plan.candidates[i].chain, i);
-        if (!fresh && first_leg[i] < first_leg[it->second]) it->second = i;
-      }
-      for (std::size_t i = 0; i < first_leg.size(); ++i)
-        if (std::isfinite(first_leg[i]) && cheapest_of_chain[plan.candidates[i].chain] != i)
-          first_leg[i] = std::numeric_limits<double>::infinity();
-    }
-    std::vector<double>& between = matrix.between_m;
-    const std::size_t n = plan.candidates.size();
-    for (std::size_t i = 0; i < n; ++i)  // keep the matrix finite where the solver needs it (reachable rows)
-      for (std::size_t j = 0; j < n; ++j)
-        if (!std::isfinite(first_leg[i]) || !std::isfinite(first_leg[j])) between[i * n + j] = 0.0;
-    const OpenTour tour = solve_open_tour(first_leg, between, options.tour);
-    plan.tour = tour.order;
-    if (!tour.order.empty()) plan.best = tour.order.front();
-    if (plan.best >= 0 && options.tour.max_first_leg_ratio > 0.0) {
-      const auto nearest = static_cast<std::size_t>(
-          std::min_element(first_leg.begin(), first_leg.end()) - first_leg.begin());
-      const auto first = static_cast<std::size_t>(plan.best);
-      if (first_leg[first] > options.tour.max_first_leg_ratio * first_leg[nearest] + options.tour.first_leg_slack_m)
-        plan.best = static_cast<int>(nearest);
-    }
+    choose_by_tour(matrix, options.tour, plan);
   } else {
     for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
       const auto& c = plan.candidates[i];
