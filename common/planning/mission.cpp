@@ -280,6 +280,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
       if (phase_ != Phase::kPaused) return phase_ == Phase::kWaitingStart ? "not started: send start" : "";
       enter(paused_from_, "resumed");
       goal_deadline_utime_ += now_utime - pause_utime_;  // the pause was not the goal's fault
+      back_out_deadline_utime_ += now_utime - pause_utime_;
       progress_utime_ = now_utime;
       last_request_utime_ = -1;     // the world may have changed: plan again now
       return {};
@@ -519,6 +520,8 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       // Then back the way it came, planning on the way (MissionOptions::back_out_m).
       auto way = way_back(trail_, options_.back_out_m);
       if (way.size() >= 2) {
+        back_out_deadline_utime_ = now_utime + options_.progress_timeout_us +
+                                   static_cast<std::int64_t>(4e6 * polyline_length(way) / options_.follower.max_speed_mps);
         follower_.set_path(std::move(way));
         backing_out_ = true;
         backed_out_from_ = here;
@@ -729,12 +732,14 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       }
     }
     if (backing_out_) {
-      if (follower_.goal_reached()) {
-        // Back as far as it goes: the plans made there decide.
+      if (follower_.goal_reached() || now_utime > back_out_deadline_utime_) {
+        // Back as far as it goes, or as far as it got in the time: the plans
+        // made there decide (a way back never ends the mission by itself).
+        status_ = follower_.goal_reached() ? "backed out; confirming on a newer map"
+                                           : "the way back took too long; confirming on a newer map";
         backing_out_ = false;
         backed_out_ = true;
         follower_.clear();
-        status_ = "backed out; confirming on a newer map";
       } else {
         MissionOutput out = output();
         out.command = follower_.update(*pose_, dt_s);

@@ -321,6 +321,9 @@ class Mission {
   // (intel, tour: backed out, took a goal beside the nook without the
   // margin, was shut in again, twelve times over).
   std::optional<Point> backed_out_from_;
+  // A way back that has not got to its end by then is over (the robot held
+  // by something the mission does not see): as long as a goal of its length.
+  std::int64_t back_out_deadline_utime_ = 0;
   static constexpr double kBackOutAgainM = 2.0;
   std::int64_t backs_out_ = 0;
   std::int64_t last_request_utime_ = -1;

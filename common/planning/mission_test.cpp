@@ -910,6 +910,28 @@ TEST(Mission, BacksOutOnceFromOnePlace) {
   EXPECT_EQ(out.backs_out, 1);
 }
 
+// The robot does not move on its way back (held by what the mission does
+// not see: a drive, the scan guard): the way back ends at its deadline and
+// the mission with it, rather than backing out for ever (intel, daemons,
+// 2026-11-27: 6000 s in SELECTING "backing out", the robot standing still).
+TEST(Mission, AWayBackThatGetsNowhereEndsTheMission) {
+  MissionOptions o = test_options();
+  o.look_around = false;
+  Mission m(o);
+  std::int64_t t = 0;
+  Pose2 at;
+  shut_in_the_nook(m, t, at);
+  MissionOutput out = stand_in_the_shut_nook(m, t, at, 5, [](const MissionOutput& o) { return o.backs_out > 0; });
+  ASSERT_EQ(out.backs_out, 1) << out.status;
+  const std::int64_t began = t;
+  out = stand_in_the_shut_nook(m, t, at, 600, [](const MissionOutput& o) { return is_finished(o.phase); });
+  EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
+  EXPECT_EQ(out.backs_out, 1);
+  // Its deadline: the progress timeout and four times the way at full speed
+  // (the way back here is the 3 m it came in by).
+  EXPECT_LT(t - began, o.progress_timeout_us + static_cast<std::int64_t>(4e6 * 20.0 / o.follower.max_speed_mps));
+}
+
 TEST(Mission, AnswersToOldPlanRequestsAreIgnored) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);
