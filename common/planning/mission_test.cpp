@@ -851,6 +851,13 @@ MissionOutput stand_in_the_shut_nook(Mission& m, std::int64_t& t, const Pose2& a
   return out;
 }
 
+// Shut in the nook and standing there until the way back begins.
+void start_backing_out_of_the_shut_nook(Mission& m, std::int64_t& t, Pose2& at, MissionOutput& out) {
+  shut_in_the_nook(m, t, at);
+  out = stand_in_the_shut_nook(m, t, at, 5, [](const MissionOutput& o) { return o.backs_out > 0; });
+  ASSERT_EQ(out.backs_out, 1) << out.status;
+}
+
 TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   MissionOptions o = test_options();
   o.look_around = false;  // the way back alone
@@ -894,9 +901,8 @@ TEST(Mission, BacksOutOnceFromOnePlace) {
   Mission m(o);
   std::int64_t t = 0;
   Pose2 at;
-  shut_in_the_nook(m, t, at);
-  MissionOutput out = stand_in_the_shut_nook(m, t, at, 5, [](const MissionOutput& o) { return o.backs_out > 0; });
-  ASSERT_EQ(out.backs_out, 1) << out.status;
+  MissionOutput out;
+  ASSERT_NO_FATAL_FAILURE(start_backing_out_of_the_shut_nook(m, t, at, out));
   // Before the robot has moved, the door opens on a newer map: a goal.
   t += kSecond;
   m.on_map(corridor_with_a_nook(true, true), t);
@@ -920,9 +926,8 @@ TEST(Mission, AWayBackThatGetsNowhereEndsTheMission) {
   Mission m(o);
   std::int64_t t = 0;
   Pose2 at;
-  shut_in_the_nook(m, t, at);
-  MissionOutput out = stand_in_the_shut_nook(m, t, at, 5, [](const MissionOutput& o) { return o.backs_out > 0; });
-  ASSERT_EQ(out.backs_out, 1) << out.status;
+  MissionOutput out;
+  ASSERT_NO_FATAL_FAILURE(start_backing_out_of_the_shut_nook(m, t, at, out));
   const std::int64_t began = t;
   out = stand_in_the_shut_nook(m, t, at, 600, [](const MissionOutput& o) { return is_finished(o.phase); });
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
