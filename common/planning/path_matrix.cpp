@@ -263,6 +263,23 @@ std::vector<Point> graph_nodes(const ConfigurationSpace& cspace, const Point& st
   return nodes;
 }
 
+// The lazy queries' per-target marks (CheapestTargetQuery,
+// NearestTargetsQuery): `choice` empty means every target; `required` empty
+// none. The aims of their A*: the targets that are either.
+bool is_choice(const std::vector<char>& choice, std::size_t t) {
+  return choice.empty() || (t < choice.size() && choice[t]);
+}
+bool is_required(const std::vector<char>& required, std::size_t t) {
+  return t < required.size() && required[t] != 0;
+}
+std::vector<Point> search_aims(const std::vector<Point>& targets, const std::vector<char>& choice,
+                               const std::vector<char>& required) {
+  std::vector<Point> aims;
+  for (std::size_t t = 0; t < targets.size(); ++t)
+    if (is_required(required, t) || is_choice(choice, t)) aims.push_back(targets[t]);
+  return aims;
+}
+
 // Length of the part two paths from the same start share (the same nodes,
 // the same order).
 double shared_length(const std::vector<Point>& a, const std::vector<Point>& b) {
@@ -448,11 +465,6 @@ class LazySearch {
   // Reflex nodes settled by the last run.
   std::size_t settled_count() const { return settled_count_; }
 
-  bool give_up() {
-    while (!heap_.empty()) heap_.pop(key_);
-    return false;
-  }
-
   // The path from the last run's source to settled node v, source first.
   std::vector<Point> path_to(std::uint32_t v) const {
     std::vector<Point> path;
@@ -463,6 +475,11 @@ class LazySearch {
   }
 
  private:
+  bool give_up() {
+    while (!heap_.empty()) heap_.pop(key_);
+    return false;
+  }
+
   double lower_bound_left(std::uint32_t v) {
     if (aim_distance_[v] < 0.0) {
       aimed_.push_back(v);
@@ -601,24 +618,18 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   out.path_from_start.resize(n);
   out.reflex_nodes = r;
   std::size_t required_left = 0;
-  for (const char q : query.required) required_left += q != 0;
-  // A far goal is searched along the way to it, not in a disc around the robot.
-  std::vector<Point> aims;
-  for (std::size_t t = 0; t < n; ++t) {
-    const bool required = t < query.required.size() && query.required[t];
-    const bool choice = query.choice.empty() || (t < query.choice.size() && query.choice[t]);
-    if (required || choice) aims.push_back(targets[t]);
-  }
+  for (std::size_t t = 0; t < n; ++t) required_left += is_required(query.required, t);
   double best_cost = kInf;
+  // A far goal is searched along the way to it, not in a disc around the robot.
   out.all_searched = search.run(
-      source, aims,
+      source, search_aims(targets, query.choice, query.required),
       // Every path to a target through what is left costs at least `key`.
       [&](double key) { return required_left == 0 && key > best_cost; },
       [&](std::uint32_t u, double d) {
         const std::size_t t = u - source - 1;
         out.path_from_start[t] = search.path_to(u);
         out.from_start_m[t] = d;
-        if (t < query.required.size() && query.required[t]) --required_left;
+        required_left -= is_required(query.required, t);
         best_cost = std::min(best_cost, query.cost(t, d, out.path_from_start[t]));
         return true;
       });
@@ -639,10 +650,8 @@ struct NearestTargetsSearch {
   std::uint32_t r;
 
   std::size_t n() const { return targets.size(); }
-  bool is_choice(std::size_t t) const {
-    return query.choice.empty() || (t < query.choice.size() && query.choice[t]);
-  }
-  bool is_required(std::size_t t) const { return t < query.required.size() && query.required[t] != 0; }
+  bool is_choice(std::size_t t) const { return planning::is_choice(query.choice, t); }
+  bool is_required(std::size_t t) const { return planning::is_required(query.required, t); }
 
   // 1. From the start until `count` choice targets and every required one
   // are settled: targets are settled in the order of their lengths (their
@@ -650,12 +659,11 @@ struct NearestTargetsSearch {
   // nearest. False when the search gave up (see below).
   bool search_from_start(PathMatrix& out) const {
     std::size_t required_left = 0, choices = 0;
-    std::vector<Point> aims;
     for (std::size_t t = 0; t < n(); ++t) {
       required_left += is_required(t);
       choices += is_choice(t);
-      if (is_required(t) || is_choice(t)) aims.push_back(targets[t]);
     }
+    const std::vector<Point> aims = search_aims(targets, query.choice, query.required);
     const std::size_t need = std::min(query.count, choices);
     if (need == 0 && required_left == 0) {  // nothing wanted: nothing searched
       out.all_searched = false;

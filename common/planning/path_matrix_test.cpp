@@ -90,6 +90,14 @@ void build_random_scene(std::mt19937_64& rng, int trial, std::size_t count, Rand
   scene.targets.assign(points.begin() + 1, points.end());
 }
 
+// A path from the start as the matrix gives it: at least two points, of
+// `length_m`, every segment free.
+void expect_a_free_path(const std::vector<Point>& path, double length_m, const ConfigurationSpace& cs) {
+  ASSERT_GE(path.size(), 2u);
+  EXPECT_NEAR(polyline_length(path), length_m, 1e-9);
+  for (std::size_t k = 1; k < path.size(); ++k) EXPECT_TRUE(cs.segment_free(path[k - 1], path[k]));
+}
+
 void expect_consistent(const PathMatrix& m, const ConfigurationSpace& cs, const Point& start) {
   const std::size_t n = m.size();
   ASSERT_EQ(m.between_m.size(), n * n);
@@ -120,11 +128,9 @@ void expect_consistent(const PathMatrix& m, const ConfigurationSpace& cs, const 
       continue;
     }
     const auto& path = m.path_from_start[i];
-    ASSERT_GE(path.size(), 2u);
+    ASSERT_NO_FATAL_FAILURE(expect_a_free_path(path, m.from_start_m[i], cs));
     EXPECT_EQ(path.front().x(), start.x());
     EXPECT_EQ(path.front().y(), start.y());
-    EXPECT_NEAR(polyline_length(path), m.from_start_m[i], 1e-9);
-    for (std::size_t k = 1; k < path.size(); ++k) EXPECT_TRUE(cs.segment_free(path[k - 1], path[k]));
   }
 }
 
@@ -291,10 +297,7 @@ TEST(CheapestTarget, FindsTheMatrixCheapestAndTheRequiredTargets) {
         continue;
       }
       EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9) << trial << " " << i;
-      const auto& path = lazy.path_from_start[i];
-      ASSERT_GE(path.size(), 2u);
-      EXPECT_NEAR(polyline_length(path), lazy.from_start_m[i], 1e-9);
-      for (std::size_t k = 1; k < path.size(); ++k) EXPECT_TRUE(cs.segment_free(path[k - 1], path[k]));
+      ASSERT_NO_FATAL_FAILURE(expect_a_free_path(lazy.path_from_start[i], lazy.from_start_m[i], cs));
     }
     stopped_early += lazy.all_searched ? 0 : 1;
     lazy_tests += lazy.segment_tests;
@@ -375,10 +378,7 @@ TEST(NearestTargets, HoldTheMatrixLengthsAmongTheNearest) {
       }
       if (!std::isfinite(lazy.from_start_m[i])) continue;
       EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9);
-      const auto& path = lazy.path_from_start[i];
-      ASSERT_GE(path.size(), 2u);
-      EXPECT_NEAR(polyline_length(path), lazy.from_start_m[i], 1e-9);
-      for (std::size_t k = 1; k < path.size(); ++k) EXPECT_TRUE(cs.segment_free(path[k - 1], path[k]));
+      ASSERT_NO_FATAL_FAILURE(expect_a_free_path(lazy.path_from_start[i], lazy.from_start_m[i], cs));
     }
     // Stopped before it searched every target: the lazy search.
     (lazy.all_searched ? whole : stopped) += 1;
