@@ -233,6 +233,11 @@ void Mission::on_pose(const Pose2& pose, std::int64_t utime) {
   pose_utime_ = utime;
 }
 
+std::int64_t Mission::deadline_for(double path_length_m, std::int64_t now_utime) const {
+  return now_utime + options_.progress_timeout_us +
+         static_cast<std::int64_t>(4e6 * path_length_m / options_.follower.max_speed_mps);
+}
+
 void Mission::enter(Phase phase, std::string status) {
   phase_ = phase;
   status_ = std::move(status);
@@ -520,8 +525,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
       // Then back the way it came, planning on the way (MissionOptions::back_out_m).
       auto way = way_back(trail_, options_.back_out_m);
       if (way.size() >= 2) {
-        back_out_deadline_utime_ = now_utime + options_.progress_timeout_us +
-                                   static_cast<std::int64_t>(4e6 * polyline_length(way) / options_.follower.max_speed_mps);
+        back_out_deadline_utime_ = deadline_for(polyline_length(way), now_utime);
         follower_.set_path(std::move(way));
         backing_out_ = true;
         backed_out_from_ = here;
@@ -550,11 +554,9 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
   progress_goal_ = best->frontier_point;
   best_remaining_m_ = best->path_length_m;
   progress_utime_ = now_utime;
-  // However the goal seems to progress, it gets at most this long: four times
-  // its path at full speed plus the progress timeout (a goal that keeps
-  // "moving on" without ever being reached is what makes a robot wander).
-  goal_deadline_utime_ = now_utime + options_.progress_timeout_us +
-                         static_cast<std::int64_t>(4e6 * best->path_length_m / options_.follower.max_speed_mps);
+  // However the goal seems to progress, it gets at most this long (a goal
+  // that keeps "moving on" without ever being reached is what makes a robot wander).
+  goal_deadline_utime_ = deadline_for(best->path_length_m, now_utime);
   follower_.set_path(best->path);
   enter(Phase::kMoving, format("moving to goal (%.2f, %.2f), path %.1f m, %.0f candidates", best->position.x(),
                                best->position.y(), best->path_length_m, static_cast<double>(plan.candidates.size())));

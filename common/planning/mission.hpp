@@ -271,6 +271,9 @@ class Mission {
   enum class GiveUp { kBlocked, kNoProgress };
   void give_up_goal(GiveUp kind, const std::string& why);
   void count_plan_failure(const Plan& plan);
+  // When a drive along a path of this length is over, however it seems to
+  // progress: the progress timeout plus four times the path at full speed.
+  std::int64_t deadline_for(double path_length_m, std::int64_t now_utime) const;
   void enter(Phase phase, std::string status);
   void finish(Phase phase, std::string status, std::int64_t now_utime);
   void list_frontiers(const Plan& plan);
