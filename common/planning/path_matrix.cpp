@@ -114,8 +114,9 @@ struct Corners {
 
   // out[t] < 0: drops() at either end of the edge i-j, for j = first + t,
   // t < count. `out` should be a local array: then the compiler knows it
-  // does not alias the corners' arrays, and vectorises.
-  void scores(std::size_t i, std::size_t first, std::size_t count, double* out) const {
+  // does not alias the corners' arrays, and vectorises (inlined: out of line,
+  // `out` may alias them).
+  [[gnu::always_inline]] void scores(std::size_t i, std::size_t first, std::size_t count, double* out) const {
     const double xi = x[i], yi = y[i];
     for (std::size_t t = 0; t < count; ++t) {
       const std::size_t j = first + t;
@@ -278,6 +279,20 @@ std::vector<Point> search_aims(const std::vector<Point>& targets, const std::vec
   for (std::size_t t = 0; t < targets.size(); ++t)
     if (is_required(required, t) || is_choice(choice, t)) aims.push_back(targets[t]);
   return aims;
+}
+
+// The `count` choice targets nearest by length (finite only), nearest first;
+// ties as a search breaks them: the lower index first.
+std::vector<int> nearest_by_length(const std::vector<double>& length_m, const std::vector<char>& choice,
+                                   std::size_t count) {
+  std::vector<int> by_length;
+  for (std::size_t t = 0; t < length_m.size(); ++t)
+    if (is_choice(choice, t) && length_m[t] < kInf) by_length.push_back(static_cast<int>(t));
+  std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
+    return length_m[static_cast<std::size_t>(a)] < length_m[static_cast<std::size_t>(b)];
+  });
+  if (by_length.size() > count) by_length.resize(count);
+  return by_length;
 }
 
 // Length of the part two paths from the same start share (the same nodes,
@@ -504,24 +519,17 @@ class LazySearch {
   std::size_t settled_count_ = 0;
 };
 
-}  // namespace
-
-PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
-                                const std::vector<Point>& targets, const PathMatrixOptions& options) {
-  const std::int64_t tests_before = cspace.segment_tests();
-  const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
-  const std::size_t n = targets.size();
-  const std::vector<Point> nodes = graph_nodes(cspace, start, targets);
-  const std::uint32_t first_point = r;
-  const auto total = static_cast<std::uint32_t>(nodes.size());
-
+// The pruned graph's edges over `nodes` (reflex vertices 0..r-1, then the
+// points): reflex-reflex edges worth testing at both ends, then each point
+// to the reflex vertices it sees, worth testing at the reflex end. No
+// point-point edges: a path between points that bends, bends at reflex
+// vertices only. A function of its own so that its block loop vectorises
+// whatever its callers hold (inlined into shortest_path_matrix, GCC's
+// choice hung on unrelated code there: 30 % of the plan time on intel's maps).
+[[gnu::noinline]] EdgeList pruned_graph_edges(const ConfigurationSpace& cspace, const std::vector<Point>& nodes,
+                                              std::uint32_t r, bool prune) {
   const Corners corners(cspace, nodes);
-  const bool prune = options.tangent_pruning;
-
-  // 1. The graph: reflex-reflex edges worth testing at both ends, then each
-  // point to the reflex vertices it sees, worth testing at the reflex end.
-  // No point-point edges: a path between points that bends, bends at reflex
-  // vertices only.
+  const auto total = static_cast<std::uint32_t>(nodes.size());
   EdgeList edges;
   for (std::uint32_t i = 0; i < r; ++i) {
     // The cheap test for a block of j > i at once (both ends), then segment
@@ -539,12 +547,28 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
     }
   }
   for (std::uint32_t i = 0; i < r; ++i) {
-    for (std::uint32_t p = first_point; p < total; ++p) {
+    for (std::uint32_t p = r; p < total; ++p) {
       if (prune && corners.drops(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y())) continue;
       if (!cspace.segment_free(nodes[i], nodes[p])) continue;
       edges.add(i, p, distance(nodes[i], nodes[p]));
     }
   }
+  return edges;
+}
+
+}  // namespace
+
+PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
+                                const std::vector<Point>& targets, const PathMatrixOptions& options) {
+  const std::int64_t tests_before = cspace.segment_tests();
+  const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
+  const std::size_t n = targets.size();
+  const std::vector<Point> nodes = graph_nodes(cspace, start, targets);
+  const std::uint32_t first_point = r;
+  const auto total = static_cast<std::uint32_t>(nodes.size());
+
+  // 1. The graph (pruned_graph).
+  EdgeList edges = pruned_graph_edges(cspace, nodes, r, options.tangent_pruning);
   const Graph graph = compress(edges, total);
 
   // 2. From each point to the points after it: the straight segment where
@@ -562,16 +586,21 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
   std::vector<char> settled(total, 0), wanted(total, 0), straight(total, 0);
   std::vector<std::uint32_t> touched;
   NodeHeap heap(total);
+  // The points between_m holds rows for: every target, or (once the start's
+  // row is known) the nearest only.
+  std::vector<char> in_rows(total, 1);
   const std::uint32_t sources_end = options.between_targets ? total - 1 : std::min(total - 1, first_point + 1);
   for (std::uint32_t p = first_point; p < sources_end; ++p) {
+    if (!in_rows[p]) continue;
     std::uint32_t wanted_count = 0;
     for (std::uint32_t q = first_point; q < total; ++q) {
-      straight[q] = q > p && cspace.segment_free(nodes[p], nodes[q]);
-      wanted[q] = q > p && !straight[q];
+      straight[q] = q > p && in_rows[q] && cspace.segment_free(nodes[p], nodes[q]);
+      wanted[q] = q > p && in_rows[q] && !straight[q];
       wanted_count += wanted[q];
     }
     if (wanted_count > 0) dijkstra(graph, p, first_point, wanted, wanted_count, dist, parent, settled, touched, heap);
     for (std::uint32_t q = p + 1; q < total; ++q) {
+      if (!in_rows[q]) continue;
       const double d = straight[q] ? distance(nodes[p], nodes[q]) : dist[q];
       const std::size_t tq = q - first_point - 1;
       if (p == first_point) {
@@ -597,6 +626,11 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
       settled[v] = 0;
     }
     touched.clear();
+    if (p == first_point && options.between_nearest > 0) {
+      out.nearest = nearest_by_length(out.from_start_m, options.between_choice, options.between_nearest);
+      std::fill(in_rows.begin() + first_point + 1, in_rows.end(), 0);
+      for (const int t : out.nearest) in_rows[first_point + 1 + static_cast<std::uint32_t>(t)] = 1;
+    }
   }
 
   out.reflex_nodes = r;
@@ -705,23 +739,18 @@ struct NearestTargetsSearch {
     return !over_budget;
   }
 
-  // The whole matrix, kept between the `count` nearest choice targets only.
+  // The whole graph, with the start's row and the lengths between the
+  // `count` nearest choice targets only.
   PathMatrix whole_matrix() const {
-    PathMatrix whole = shortest_path_matrix(cspace, start, targets);
-    std::vector<int> by_length;
-    for (std::size_t t = 0; t < n(); ++t)
-      if (is_choice(t) && whole.from_start_m[t] < kInf) by_length.push_back(static_cast<int>(t));
-    // Ties as the search breaks them: the lower index first.
-    std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
-      return whole.from_start_m[static_cast<std::size_t>(a)] < whole.from_start_m[static_cast<std::size_t>(b)];
-    });
-    if (by_length.size() > query.count) by_length.resize(query.count);
-    std::vector<char> among(n(), 0);
-    for (const int t : by_length) among[static_cast<std::size_t>(t)] = 1;
-    for (std::size_t a = 0; a < n(); ++a)
-      for (std::size_t b = 0; b < n(); ++b)
-        if (a != b && !(among[a] && among[b])) whole.between_m[a * n() + b] = kInf;
-    whole.nearest = std::move(by_length);
+    PathMatrixOptions options;
+    options.between_targets = query.count > 0;
+    options.between_nearest = query.count;
+    options.between_choice = query.choice;
+    PathMatrix whole = shortest_path_matrix(cspace, start, targets, options);
+    if (!options.between_targets) {  // none nearest: none between, as the contract says
+      whole.between_m.assign(n() * n(), kInf);
+      for (std::size_t i = 0; i < n(); ++i) whole.between_m[i * n() + i] = 0.0;
+    }
     return whole;
   }
 

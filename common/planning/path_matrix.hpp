@@ -33,6 +33,12 @@ struct PathMatrixOptions {
   // false: only the lengths and paths from the start, between_m is left
   // empty (what the greedy strategy needs, over the same sparse graph).
   bool between_targets = true;
+  // > 0: between the this-many targets nearest the start by path only (ties:
+  // the lower index), of those `between_choice` marks (empty: every target),
+  // listed nearest first in PathMatrix::nearest; the other pairs stay +inf
+  // and cost no search. 0: between every pair.
+  std::size_t between_nearest = 0;
+  std::vector<char> between_choice{};
 };
 
 struct PathMatrix {
@@ -54,7 +60,8 @@ struct PathMatrix {
   // false: shortest_paths_to_cheapest stopped before it settled every
   // target; a +inf in from_start_m may then be a target it did not search.
   bool all_searched = true;
-  // shortest_paths_among_nearest: the targets between_m holds, nearest first.
+  // shortest_paths_among_nearest, or PathMatrixOptions::between_nearest: the
+  // targets between_m holds, nearest first.
   std::vector<int> nearest;
 
   std::size_t size() const { return from_start_m.size(); }

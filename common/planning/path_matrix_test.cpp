@@ -387,6 +387,40 @@ TEST(NearestTargets, HoldTheMatrixLengthsAmongTheNearest) {
   EXPECT_GT(stopped, 0);
 }
 
+TEST(PathMatrix, BetweenTheNearestOnlyHoldsTheWholeMatrixLengthsThere) {
+  std::mt19937_64 rng(20261128);
+  for (int trial = 0; trial < 6; ++trial) {
+    RandomScene scene;
+    ASSERT_NO_FATAL_FAILURE(build_random_scene(rng, trial, 31, scene));
+    const auto m = shortest_path_matrix(scene.cs, scene.start, scene.targets);
+    const std::size_t n = scene.targets.size();
+    PathMatrixOptions options;
+    options.between_nearest = 3 + static_cast<std::size_t>(trial);
+    for (std::size_t i = 0; i < n; ++i) options.between_choice.push_back(i % 3 != 1);
+    const auto some = shortest_path_matrix(scene.cs, scene.start, scene.targets, options);
+
+    std::vector<int> by_length;
+    for (std::size_t i = 0; i < n; ++i)
+      if (options.between_choice[i] && std::isfinite(m.from_start_m[i])) by_length.push_back(static_cast<int>(i));
+    std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
+      return m.from_start_m[static_cast<std::size_t>(a)] < m.from_start_m[static_cast<std::size_t>(b)];
+    });
+    if (by_length.size() > options.between_nearest) by_length.resize(options.between_nearest);
+    ASSERT_GE(by_length.size(), 3u) << trial;
+    EXPECT_EQ(some.nearest, by_length) << trial;
+    EXPECT_EQ(some.from_start_m, m.from_start_m) << trial;  // the start's row: every target
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < n; ++j) {
+        const bool both = std::count(by_length.begin(), by_length.end(), static_cast<int>(i)) > 0 &&
+                          std::count(by_length.begin(), by_length.end(), static_cast<int>(j)) > 0;
+        if (i == j || both)
+          EXPECT_EQ(some.between(i, j), m.between(i, j)) << trial << " " << i << " " << j;
+        else
+          EXPECT_FALSE(std::isfinite(some.between(i, j))) << trial << " " << i << " " << j;
+      }
+  }
+}
+
 TEST(PathMatrix, Deterministic) {
   std::mt19937_64 rng(7);
   const auto map = random_map(rng, 8);
