@@ -10,7 +10,10 @@
 #   STRATEGIES (default "greedy tour"), SPEED (default 10), MISSION_S (mission
 #   clock limit per run, default 8000: campus's greedy mission took 5907 s to
 #   its end on 2026-11-26, docs/exploration.md), OUT (default out/bench-explore),
-#   JOBS (runs side by side, default 1), TABLE_ONLY=1 (tabulate the runs in OUT)
+#   JOBS (runs side by side, default 1), TABLE_ONLY=1 (tabulate the runs in OUT),
+#   CONFIG (the daemons' config directory, default config: copied to
+#   OUT/snapshot/config once at the start, so that every run has the same,
+#   whatever changes in the work tree while the benchmark runs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 STRATEGIES=${STRATEGIES:-greedy tour}
@@ -26,12 +29,19 @@ if ((${#worlds[@]} == 0)); then
 fi
 mkdir -p "$OUT"
 results="$OUT/results.jsonl"
+if [ "${TABLE_ONLY:-0}" != 1 ]; then
+  # With the worlds beside it: sim.toml names its world relative to its folder.
+  rm -rf "$OUT/snapshot"
+  mkdir -p "$OUT/snapshot"
+  cp -r "${CONFIG:-config}" "$OUT/snapshot/config"
+  cp -r worlds "$OUT/snapshot/worlds"
+fi
 # One run (its own namespace, its own directory); the report is collected below.
 run_one() {
   local world=$1 strategy=$2 run="$OUT/$1-$2"
   echo "bench explore: $world with $strategy (speed x$SPEED, mission limit ${MISSION_S} s)" >&2
   rm -f "$run/report.json"
-  WORLD=$world STRATEGY=$strategy SPEED=$SPEED MISSION_S=$MISSION_S OUT=$run BIN=$BIN QUIET=1 \
+  WORLD=$world STRATEGY=$strategy SPEED=$SPEED MISSION_S=$MISSION_S CONFIG=$OUT/snapshot/config OUT=$run BIN=$BIN QUIET=1 \
     scripts/netns-run bash scripts/demo-run.sh >"$run.txt" 2>&1 || true
 }
 # JOBS runs side by side (default 1): each has its own namespace and bus, and

@@ -5,7 +5,8 @@
 #   WORLD (default two_rooms; any worlds/<name>.wkt), MISSION_S (mission-clock
 #   limit, default 300: simulated seconds, so the same at any SPEED),
 #   SPEED (simulator speed factor, default 1), STRATEGY (goal strategy,
-#   default: config/explorer.toml's), OUT (default out), QUIET=1 (no progress lines)
+#   default: the explorer config's), OUT (default out), QUIET=1 (no progress
+#   lines), CONFIG (the daemons' config directory, default config)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ "${PEX_IN_NETNS:-}" = "1" ] || { echo "demo-run.sh: run me through scripts/netns-run" >&2; exit 64; }
@@ -15,14 +16,15 @@ MISSION_S=${MISSION_S:-300}
 SPEED=${SPEED:-1}
 OUT=${OUT:-out}
 BIN=${BIN:-build/bin}
+CONFIG=${CONFIG:-config}
 [ -f "worlds/$WORLD.wkt" ] || { echo "demo: no world worlds/$WORLD.wkt" >&2; exit 64; }
 mkdir -p "$OUT"
 rm -f "$OUT/report.json"
 
-explorer_config=config/explorer.toml
+explorer_config=$CONFIG/explorer.toml
 if [ -n "${STRATEGY:-}" ]; then
   explorer_config="$OUT/explorer.toml"
-  sed "s/^goal_strategy *=.*/goal_strategy = \"$STRATEGY\"/" config/explorer.toml >"$explorer_config"
+  sed "s/^goal_strategy *=.*/goal_strategy = \"$STRATEGY\"/" "$CONFIG/explorer.toml" >"$explorer_config"
 fi
 
 pids=()
@@ -33,18 +35,26 @@ cleanup() {
 trap cleanup EXIT
 
 lcm-logger -f -q "$OUT/demo.lcm" & pids+=($!)
-"$BIN/pex-sim" --config config/sim.toml --world "worlds/$WORLD.wkt" --speed "$SPEED" 2>"$OUT/sim.log" & pids+=($!)
-# The base driver needs the simulated CAN bus up: wait for the sim's OK.
-for _ in $(seq 30); do "$BIN/pex-status" --seconds 0.5 --expect sim >/dev/null && break; done
+"$BIN/pex-sim" --config "$CONFIG/sim.toml" --world "worlds/$WORLD.wkt" --speed "$SPEED" 2>"$OUT/sim.log" & pids+=($!)
+# The base driver needs the simulated CAN bus up: wait for the sim's OK. A
+# simulator that never comes up (its config refused, say) ends the demo here:
+# without its clock the mission would stand still until pex-status's wall limit.
+sim_up=0
+for _ in $(seq 30); do "$BIN/pex-status" --seconds 0.5 --expect sim >/dev/null && { sim_up=1; break; }; done
+if [ "$sim_up" = 0 ]; then
+  echo "demo: the simulator did not come up: $(tail -n 1 "$OUT/sim.log" 2>/dev/null)" >&2
+  echo "demo: mission not done: no simulator (see $OUT/sim.log)"
+  exit 1
+fi
 for d in lidar_reader base_driver slam polygon_mapper; do
-  "$BIN/pex-${d//_/-}" --config "config/$d.toml" 2>"$OUT/$d.log" & pids+=($!)
+  "$BIN/pex-${d//_/-}" --config "$CONFIG/$d.toml" 2>"$OUT/$d.log" & pids+=($!)
 done
 "$BIN/pex-explorer" --config "$explorer_config" 2>"$OUT/explorer.log" & pids+=($!)
 # The live view: pex-viewer on this namespace's loopback, and its page handed
 # to demo.sh's relay on this computer's loopback through a Unix socket in $OUT
 # (a file, so it crosses the namespace; no network does).
-"$BIN/pex-viewer" --config config/viewer.toml 2>"$OUT/viewer.log" & pids+=($!)
-viewer_port=$(sed -n 's/^port *= *\([0-9]*\).*/\1/p' config/viewer.toml)
+"$BIN/pex-viewer" --config "$CONFIG/viewer.toml" 2>"$OUT/viewer.log" & pids+=($!)
+viewer_port=$(sed -n 's/^port *= *\([0-9]*\).*/\1/p' "$CONFIG/viewer.toml")
 if command -v socat >/dev/null; then
   socat "UNIX-LISTEN:$OUT/viewer.sock,fork,unlink-early" "TCP:127.0.0.1:${viewer_port:-8080}" 2>/dev/null & pids+=($!)
 fi
