@@ -42,6 +42,7 @@ lcm-logger -f -q "$OUT/demo.lcm" & pids+=($!)
 sim_up=0
 for _ in $(seq 30); do "$BIN/pex-status" --seconds 0.5 --expect sim >/dev/null && { sim_up=1; break; }; done
 if [ "$sim_up" = 0 ]; then
+  cleanup; pids=()
   echo "demo: the simulator did not come up: $(tail -n 1 "$OUT/sim.log" 2>/dev/null)" >&2
   echo "demo: mission not done: no simulator (see $OUT/sim.log)"
   exit 1
