@@ -525,7 +525,7 @@ class LazySearch {
 // point-point edges: a path between points that bends, bends at reflex
 // vertices only. A function of its own so that its block loop vectorises
 // whatever its callers hold (inlined into shortest_path_matrix, GCC's
-// choice hung on unrelated code there: 30 % of the plan time on intel's maps).
+// choice hung on unrelated code there: plans 30 % slower at p99 on intel's maps).
 [[gnu::noinline]] EdgeList pruned_graph_edges(const ConfigurationSpace& cspace, const std::vector<Point>& nodes,
                                               std::uint32_t r, bool prune) {
   const Corners corners(cspace, nodes);
@@ -567,7 +567,7 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
   const std::uint32_t first_point = r;
   const auto total = static_cast<std::uint32_t>(nodes.size());
 
-  // 1. The graph (pruned_graph).
+  // 1. The graph (pruned_graph_edges).
   EdgeList edges = pruned_graph_edges(cspace, nodes, r, options.tangent_pruning);
   const Graph graph = compress(edges, total);
 
