@@ -6,7 +6,9 @@
 #   limit, default 300: simulated seconds, so the same at any SPEED),
 #   SPEED (simulator speed factor, default 1), STRATEGY (goal strategy,
 #   default: the explorer config's), OUT (default out), QUIET=1 (no progress
-#   lines), CONFIG (the daemons' config directory, default config)
+#   lines), CONFIG (the daemons' config directory, default config),
+#   STATE_TIMEOUT_S (no EXPLORE_STATE this many wall seconds: the explorer is
+#   not running, the demo ends; default 30)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ "${PEX_IN_NETNS:-}" = "1" ] || { echo "demo-run.sh: run me through scripts/netns-run" >&2; exit 64; }
@@ -65,10 +67,10 @@ echo "demo: exploring worlds/$WORLD.wkt with the whole set (sim x$SPEED, lidar_r
 echo "      polygon_mapper, explorer) for at most ${MISSION_S} s of mission time; logs in $OUT/, record in $OUT/demo.lcm"
 result=0
 if [ "${QUIET:-0}" = 1 ]; then
-  "$BIN/pex-status" --follow-mission "$MISSION_S" >"$OUT/progress.txt" || result=$?
+  "$BIN/pex-status" --follow-mission "$MISSION_S" --state-timeout "${STATE_TIMEOUT_S:-30}" >"$OUT/progress.txt" || result=$?
   tail -n 1 "$OUT/progress.txt"
 else
-  "$BIN/pex-status" --follow-mission "$MISSION_S" || result=$?
+  "$BIN/pex-status" --follow-mission "$MISSION_S" --state-timeout "${STATE_TIMEOUT_S:-30}" || result=$?
 fi
 echo "demo: health of the set:"
 "$BIN/pex-status" --seconds 1.5 --counters >"$OUT/health.txt" || true
@@ -87,6 +89,7 @@ phase=$(field phase); coverage=$(field coverage); collisions=$(field collisions)
 facts="coverage ${coverage:-?} of the reachable floor, ${collisions:-?} collisions; report in $OUT/report.json"
 case "$result" in
   0) echo "demo: mission DONE: no frontier left; $facts" ;;
+  3) echo "demo: mission not done: the explorer's EXPLORE_STATE stopped (see $OUT/explorer.log); $facts" ;;
   2) echo "demo: mission DONE_WITH_UNREACHABLE: frontier goals are left that the robot cannot reach (the explorer's last status above says how many and why); $facts" ;;
   *) echo "demo: mission not done: ended ${phase:-without a state} within ${MISSION_S} s of mission time (MISSION_S sets the limit); $facts" ;;
 esac

@@ -29,9 +29,17 @@ void on_status(const lcm::ReceiveBuffer* rb, const std::string&,
     (*latest)[s.name] = s;
 }
 
-void on_explore(const lcm::ReceiveBuffer* rb, const std::string&, pex::explore_state_t* latest) {
+struct LatestState {
+  pex::explore_state_t state{};
+  std::chrono::steady_clock::time_point heard{};  // when `state` arrived
+};
+
+void on_explore(const lcm::ReceiveBuffer* rb, const std::string&, LatestState* latest) {
   pex::explore_state_t s{};
-  if (s.decode(rb->data, 0, static_cast<int>(rb->data_size)) == static_cast<int>(rb->data_size)) *latest = s;
+  if (s.decode(rb->data, 0, static_cast<int>(rb->data_size)) == static_cast<int>(rb->data_size)) {
+    latest->state = s;
+    latest->heard = std::chrono::steady_clock::now();
+  }
 }
 
 const char* phase_name(int8_t p) {
@@ -51,17 +59,29 @@ bool mission_over(int8_t p) {
 // own clock (the explorer's: simulated time with clock = "sim", so the limit
 // means the same at any simulator speed), printing progress every `every_s`
 // of wall time. `wall_limit_s` guards against a mission clock that stands
-// still. Exit 0 on DONE, 2 on DONE_WITH_UNREACHABLE, 1 otherwise.
-int follow_mission(lcm::LCM& lcm, double seconds, double every_s, double wall_limit_s) {
-  pex::explore_state_t latest{};
+// still; `state_timeout_s` against an explorer that is not there (never
+// started, refused its config, died): no EXPLORE_STATE for that long, from
+// the start or since the last one, ends the follow at once. Exit 0 on DONE,
+// 2 on DONE_WITH_UNREACHABLE, 3 when EXPLORE_STATE stopped, 1 otherwise.
+int follow_mission(lcm::LCM& lcm, double seconds, double every_s, double wall_limit_s, double state_timeout_s) {
+  LatestState heard;
+  pex::explore_state_t& latest = heard.state;
   latest.phase = -1;
-  lcm.subscribeFunction(std::string(pex::runtime::channels::kExploreState), &on_explore, &latest);
+  lcm.subscribeFunction(std::string(pex::runtime::channels::kExploreState), &on_explore, &heard);
   const auto start = std::chrono::steady_clock::now();
+  heard.heard = start;
   auto next_print = start;
   while (true) {
     lcm.handleTimeout(100);
     const auto now = std::chrono::steady_clock::now();
     const double wall = std::chrono::duration<double>(now - start).count();
+    const double silent = std::chrono::duration<double>(now - heard.heard).count();
+    if (silent >= state_timeout_s) {
+      std::printf("no EXPLORE_STATE for %.0f s (wall clock)%s: is the explorer running?\n", silent,
+                  latest.phase < 0 ? " since the start" : "");
+      std::fflush(stdout);
+      return 3;
+    }
     const double t = latest.phase < 0 ? 0.0 : latest.mission_time_s;
     const bool over = mission_over(latest.phase);
     const bool out_of_time = t >= seconds || wall >= wall_limit_s;
@@ -99,12 +119,17 @@ int main(int argc, char** argv) {
   double mission_s = 0.0;
   app.add_option("--follow-mission", mission_s,
                  "instead: follow EXPLORE_STATE until the mission is over or has run this many seconds of its "
-                 "own clock (exit 0 on DONE, 2 on DONE_WITH_UNREACHABLE, 1 otherwise)")
+                 "own clock (exit 0 on DONE, 2 on DONE_WITH_UNREACHABLE, 3 when EXPLORE_STATE stopped, 1 otherwise)")
       ->check(CLI::PositiveNumber);
   double wall_limit_s = 0.0;
   app.add_option("--wall-limit", wall_limit_s,
                  "with --follow-mission: give up after this many wall-clock seconds (default: 3 x the mission "
                  "limit + 120, for a mission clock that stands still)")
+      ->check(CLI::PositiveNumber);
+  double state_timeout_s = 30.0;
+  app.add_option("--state-timeout", state_timeout_s,
+                 "with --follow-mission: give up (exit 3) after this many wall-clock seconds without an "
+                 "EXPLORE_STATE, from the start or since the last one (the explorer is not running)")
       ->check(CLI::PositiveNumber);
   if (const auto code = pex::cli::parse_command_line(app, "pex-status", argc, argv)) return *code;
 
@@ -113,7 +138,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-status: cannot open LCM at '%s'\n", url.c_str());
     return EX_UNAVAILABLE;
   }
-  if (mission_s > 0) return follow_mission(lcm, mission_s, 5.0, wall_limit_s > 0 ? wall_limit_s : 3 * mission_s + 120);
+  if (mission_s > 0)
+    return follow_mission(lcm, mission_s, 5.0, wall_limit_s > 0 ? wall_limit_s : 3 * mission_s + 120,
+                          state_timeout_s);
   std::map<std::string, pex::daemon_status_t> latest;
   lcm.subscribeFunction(std::string(pex::runtime::channels::kDaemonStatus), &on_status, &latest);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
