@@ -77,7 +77,7 @@ int follow_mission(lcm::LCM& lcm, double seconds, double every_s, double wall_li
     const double wall = std::chrono::duration<double>(now - start).count();
     const double silent = std::chrono::duration<double>(now - heard.heard).count();
     if (silent >= state_timeout_s) {
-      std::printf("no EXPLORE_STATE for %.0f s (wall clock)%s: is the explorer running?\n", silent,
+      std::printf("no EXPLORE_STATE for %g s (wall clock)%s: is the explorer running?\n", state_timeout_s,
                   latest.phase < 0 ? " since the start" : "");
       std::fflush(stdout);
       return 3;
