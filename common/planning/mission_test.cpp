@@ -837,6 +837,8 @@ void shut_in_the_nook(Mission& m, std::int64_t& t, Pose2& at) {
   m.on_map(corridor_with_a_nook(false, true), t);
 }
 
+bool mission_finished(const MissionOutput& o) { return is_finished(o.phase); }
+
 // The robot standing at `at` in the shut nook, a newer map each second,
 // until `until` holds of the output or `seconds` have passed.
 template <class Until>
@@ -889,8 +891,7 @@ TEST(Mission, BacksOutOfANookTheMapShutBeforeCallingTheRestUnreachable) {
   o.back_out_m = 0.0;
   Mission shut(o);
   shut_in_the_nook(shut, t, at);
-  auto finished = [](const MissionOutput& o) { return is_finished(o.phase); };
-  out = stand_in_the_shut_nook(shut, t, at, 5, finished);
+  out = stand_in_the_shut_nook(shut, t, at, 5, mission_finished);
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
   EXPECT_EQ(out.backs_out, 0);
 }
@@ -911,7 +912,7 @@ TEST(Mission, BacksOutOnceFromOnePlace) {
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   // It shuts again: the goal is blocked, and from the place it backed out
   // from the robot does not back out again; the mission ends.
-  out = stand_in_the_shut_nook(m, t, at, 15, [](const MissionOutput& o) { return is_finished(o.phase); });
+  out = stand_in_the_shut_nook(m, t, at, 15, mission_finished);
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
   EXPECT_EQ(out.backs_out, 1);
 }
@@ -929,7 +930,7 @@ TEST(Mission, AWayBackThatGetsNowhereEndsTheMission) {
   MissionOutput out;
   ASSERT_NO_FATAL_FAILURE(start_backing_out_of_the_shut_nook(m, t, at, out));
   const std::int64_t began = t;
-  out = stand_in_the_shut_nook(m, t, at, 600, [](const MissionOutput& o) { return is_finished(o.phase); });
+  out = stand_in_the_shut_nook(m, t, at, 600, mission_finished);
   EXPECT_EQ(out.phase, Phase::kDoneWithUnreachable) << out.status;
   EXPECT_EQ(out.backs_out, 1);
   // Its deadline: the progress timeout and four times the way at full speed

@@ -92,6 +92,18 @@ void build_random_scene(std::mt19937_64& rng, int trial, std::size_t count, Rand
 
 // A path from the start as the matrix gives it: at least two points, of
 // `length_m`, every segment free.
+// The oracle of the nearest: the choice targets the matrix reaches, by its
+// lengths from the start (ties: the lower index first).
+std::vector<int> choice_targets_by_length(const PathMatrix& m, const std::vector<char>& choice) {
+  std::vector<int> by_length;
+  for (std::size_t i = 0; i < m.size(); ++i)
+    if (choice[i] && std::isfinite(m.from_start_m[i])) by_length.push_back(static_cast<int>(i));
+  std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
+    return m.from_start_m[static_cast<std::size_t>(a)] < m.from_start_m[static_cast<std::size_t>(b)];
+  });
+  return by_length;
+}
+
 void expect_a_free_path(const std::vector<Point>& path, double length_m, const ConfigurationSpace& cs) {
   ASSERT_GE(path.size(), 2u);
   EXPECT_NEAR(polyline_length(path), length_m, 1e-9);
@@ -349,17 +361,13 @@ TEST(NearestTargets, HoldTheMatrixLengthsAmongTheNearest) {
     const auto lazy = shortest_paths_among_nearest(cs, start, targets, query);
 
     // The nearest, by the matrix: choice targets sorted by length.
-    std::vector<std::size_t> by_length;
-    for (std::size_t i = 0; i < targets.size(); ++i)
-      if (query.choice[i] && std::isfinite(m.from_start_m[i])) by_length.push_back(i);
-    std::stable_sort(by_length.begin(), by_length.end(),
-                     [&](std::size_t a, std::size_t b) { return m.from_start_m[a] < m.from_start_m[b]; });
+    const std::vector<int> by_length = choice_targets_by_length(m, query.choice);
     ASSERT_EQ(lazy.nearest.size(), std::min(query.count, by_length.size())) << trial;
     for (std::size_t k = 0; k < lazy.nearest.size(); ++k) {
       const auto i = static_cast<std::size_t>(lazy.nearest[k]);
       EXPECT_TRUE(query.choice[i]);
       // The k-th nearest (a tie may swap two of equal length).
-      EXPECT_NEAR(m.from_start_m[i], m.from_start_m[by_length[k]], 1e-9) << trial << " " << k;
+      EXPECT_NEAR(m.from_start_m[i], m.from_start_m[static_cast<std::size_t>(by_length[k])], 1e-9) << trial << " " << k;
       EXPECT_NEAR(lazy.from_start_m[i], m.from_start_m[i], 1e-9);
       for (const int j : lazy.nearest)
         EXPECT_NEAR(lazy.between(i, static_cast<std::size_t>(j)), m.between(i, static_cast<std::size_t>(j)), 1e-9)
@@ -399,12 +407,7 @@ TEST(PathMatrix, BetweenTheNearestOnlyHoldsTheWholeMatrixLengthsThere) {
     for (std::size_t i = 0; i < n; ++i) options.between_choice.push_back(i % 3 != 1);
     const auto some = shortest_path_matrix(scene.cs, scene.start, scene.targets, options);
 
-    std::vector<int> by_length;
-    for (std::size_t i = 0; i < n; ++i)
-      if (options.between_choice[i] && std::isfinite(m.from_start_m[i])) by_length.push_back(static_cast<int>(i));
-    std::stable_sort(by_length.begin(), by_length.end(), [&](int a, int b) {
-      return m.from_start_m[static_cast<std::size_t>(a)] < m.from_start_m[static_cast<std::size_t>(b)];
-    });
+    std::vector<int> by_length = choice_targets_by_length(m, options.between_choice);
     if (by_length.size() > options.between_nearest) by_length.resize(options.between_nearest);
     ASSERT_GE(by_length.size(), 3u) << trial;
     EXPECT_EQ(some.nearest, by_length) << trial;
