@@ -468,10 +468,10 @@ void BM_PlanMission(benchmark::State& state) {
   std::vector<double> ms;
   for (auto _ : state) {
     ms.clear();
-    pex::planning::OffsetTileCache offsets;
+    pex::planning::PlanCache cache;
     for (const auto& snap : s.maps.snapshots) {
       const double t0 = thread_cpu_ms();
-      benchmark::DoNotOptimize(plan_exploration(snap.map, snap.pose, snap.blacklist, options, nullptr, nullptr, &offsets));
+      benchmark::DoNotOptimize(plan_exploration(snap.map, snap.pose, snap.blacklist, options, nullptr, nullptr, &cache));
       ms.push_back(thread_cpu_ms() - t0);
     }
   }

@@ -107,13 +107,13 @@ int main(int argc, char** argv) {
       mission.scan = mapper.scan;
       mission.map = mapper.map;
       const bool fallback = explorer.mission.tight_fallback;
-      // Each plan's CPU time, with the offset tiles kept from plan to plan as
-      // the explorer's planning thread keeps them (one cache per margin).
+      // Each plan's CPU time, with what the planner reuses kept from plan to
+      // plan as the explorer's planning thread keeps it (one cache per margin).
       pex::explorer::LatencyStats plan_cpu_ms;
-      pex::planning::OffsetTileCache offsets, tight_offsets;
+      pex::planning::PlanCache offsets, tight_offsets;
       auto timed_plan = [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose,
                             const std::vector<Point>& blacklist, const PlannerOptions& o,
-                            pex::planning::OffsetTileCache& cache) {
+                            pex::planning::PlanCache& cache) {
         const double started = pex::explorer::thread_cpu_ms();
         Plan plan = pex::planning::plan_exploration(map, pose, blacklist, o, nullptr, nullptr, &cache);
         plan_cpu_ms.add(pex::explorer::thread_cpu_ms() - started);

@@ -171,13 +171,13 @@ struct Setup {
   Point start;
 };
 std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, const PlannerOptions& options,
-                            OffsetTileCache* offsets, Plan& plan) {
+                            PlanCache* cache, Plan& plan) {
   if (!std::isfinite(robot.x_m) || !std::isfinite(robot.y_m) || !std::isfinite(robot.theta_rad)) {
     plan.error = "robot pose is not finite";
     return std::nullopt;
   }
   Setup s;
-  const auto built = s.cspace.build(map, options.cspace, offsets);
+  const auto built = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr);
   if (!built.ok) {
     plan.error = built.error;
     return std::nullopt;
@@ -197,6 +197,36 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
 }
 
 }  // namespace
+
+VisibilityCache& PlanCache::visibility(const CSpaceOptions& cspace) {
+  const double clearance_m = cspace.robot_radius_m + cspace.clearance_margin_m;
+  ++uses_;
+  for (Slot& slot : slots_)
+    if (slot.clearance_m == clearance_m) {
+      slot.last_use = uses_;
+      return *slot.cache;
+    }
+  constexpr std::size_t kClearances = 2;
+  if (slots_.size() >= kClearances) {
+    const auto oldest = std::min_element(slots_.begin(), slots_.end(),
+                                         [](const Slot& a, const Slot& b) { return a.last_use < b.last_use; });
+    const auto& c = oldest->cache->counters();
+    dropped_.builds += c.builds, dropped_.kept += c.kept, dropped_.retested += c.retested;
+    dropped_.new_pairs += c.new_pairs;
+    slots_.erase(oldest);
+  }
+  slots_.push_back({clearance_m, uses_, std::make_unique<VisibilityCache>()});
+  return *slots_.back().cache;
+}
+
+VisibilityCache::Counters PlanCache::visibility_counters() const {
+  VisibilityCache::Counters sum = dropped_;
+  for (const Slot& slot : slots_) {
+    const auto& c = slot.cache->counters();
+    sum.builds += c.builds, sum.kept += c.kept, sum.retested += c.retested, sum.new_pairs += c.new_pairs;
+  }
+  return sum;
+}
 
 const char* to_string(GoalStrategy strategy) {
   switch (strategy) {
@@ -277,11 +307,11 @@ void choose_by_tour(PathMatrix& matrix, const TourOptions& options, Plan& plan) 
 
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable, const GoalFocus* focus,
-                      OffsetTileCache* offsets) {
+                      PlanCache* cache) {
   Plan plan;
   // 1. The C-space, the robot's own node, and the C-space piece it is in: a
   // polygon of the C-space is one connected piece, so only its points are reachable.
-  auto setup = set_up(passable ? *passable : map, robot, options, offsets, plan);
+  auto setup = set_up(passable ? *passable : map, robot, options, cache, plan);
   if (!setup) return plan;
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;
@@ -387,6 +417,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     for (std::size_t i = 0; i < plan.candidates.size(); ++i) required[i] = focus->matches(plan.candidates[i]);
   }
   PathMatrix matrix;
+  VisibilityCache* visibility = cache ? &cache->visibility(options.cspace) : nullptr;
   if (options.strategy == GoalStrategy::kTour && options.tour.horizon_candidates > 0) {
     NearestTargetsQuery query;
     query.count = static_cast<std::size_t>(options.tour.horizon_candidates);
@@ -396,9 +427,9 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     for (std::size_t i = 0; i < plan.candidates.size(); ++i)
       query.choice[i] = !plan.candidates[i].blacklisted && (own_piece < 0 || pieces[i] == own_piece);
     query.required = required;
-    matrix = shortest_paths_among_nearest(cspace, *start, targets, query);
+    matrix = shortest_paths_among_nearest(cspace, *start, targets, query, visibility);
   } else if (options.strategy == GoalStrategy::kTour) {
-    matrix = shortest_path_matrix(cspace, *start, targets);
+    matrix = shortest_path_matrix(cspace, *start, targets, {}, visibility);
   } else {
     CheapestTargetQuery query;
     query.cost = [&](std::size_t i, double length_m, const std::vector<Point>& path) {
@@ -442,13 +473,13 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
 }
 
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
-                  const PlannerOptions& options, OffsetTileCache* offsets) {
+                  const PlannerOptions& options, PlanCache* cache) {
   Plan plan;
   if (!std::isfinite(target.x()) || !std::isfinite(target.y())) {
     plan.error = "target is not finite";
     return plan;
   }
-  auto setup = set_up(map, robot, options, offsets, plan);
+  auto setup = set_up(map, robot, options, cache, plan);
   if (!setup) return plan;
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;

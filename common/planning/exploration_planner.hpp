@@ -6,6 +6,7 @@
 // (the paper's cost), with a small tie-break for the turn it needs.
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -16,6 +17,7 @@
 #include "planning/cspace.hpp"
 #include "planning/frontier_goals.hpp"
 #include "planning/goal_tour.hpp"
+#include "planning/pruned_graph.hpp"
 #include "planning/visibility_graph.hpp"
 
 namespace pex::planning {
@@ -157,6 +159,28 @@ struct GoalFocus {
   bool matches(const GoalCandidate& c) const { return !c.blacklisted && distance_to(c) <= radius_m; }
 };
 
+// What a planning thread keeps from one plan to the next: plans do not depend
+// on it, only their time. One per planning thread (not thread-safe).
+class PlanCache {
+ public:
+  OffsetTileCache offsets;  // the C-space's offset tiles (inward_offset.hpp)
+  // The path graph's segment tests (pruned_graph.hpp), kept per clearance
+  // (the mission plans without the margin now and then, and back): the
+  // last two clearances asked for.
+  VisibilityCache& visibility(const CSpaceOptions& cspace);
+  VisibilityCache::Counters visibility_counters() const;  // summed over the clearances
+
+ private:
+  struct Slot {
+    double clearance_m;
+    std::int64_t last_use;
+    std::unique_ptr<VisibilityCache> cache;
+  };
+  std::vector<Slot> slots_;
+  std::int64_t uses_ = 0;
+  VisibilityCache::Counters dropped_;  // of the slots given up
+};
+
 // Plans on `map` (the planning map: free space whose edges are typed obstacle
 // or frontier) from `robot`. Candidates near a point of `blacklist` are kept
 // in the plan (so a caller can still recognise them) but never chosen.
@@ -167,16 +191,17 @@ struct GoalFocus {
 // no walls to see through). The greedy strategy searches paths only as far
 // as the cheapest candidate and those `focus` matches (shortest_paths_to_cheapest);
 // the tour needs them all. Deterministic: the plan is a function of the
-// arguments; `offsets` (may be null) keeps the C-space's offset tiles from
-// one plan to the next (inward_offset.hpp) and changes only the time taken.
+// arguments; `cache` (may be null) keeps the C-space's offset tiles and the
+// path graph's segment tests from one plan to the next and changes only the
+// time taken.
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable = nullptr,
-                      const GoalFocus* focus = nullptr, OffsetTileCache* offsets = nullptr);
+                      const GoalFocus* focus = nullptr, PlanCache* cache = nullptr);
 
 // A path from `robot` to `target` (e.g. the mission's start pose) in the
 // C-space of `map`: the plan's one candidate is `target` moved into the
 // C-space (at most candidate_snap_distance_m), best when it is reachable.
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
-                  const PlannerOptions& options, OffsetTileCache* offsets = nullptr);
+                  const PlannerOptions& options, PlanCache* cache = nullptr);
 
 }  // namespace pex::planning

@@ -373,5 +373,36 @@ TEST(PlanPathTo, FindsThePathHomeOrSaysItIsUnreachable) {
   EXPECT_EQ(room.best_candidate(), nullptr);  // behind the 0.5 m neck
 }
 
+// The plan cache keeps one visibility cache per clearance, the last two
+// asked for: the normal and the tight plans of a mission do not evict each
+// other's, a third clearance evicts the one used longest ago, and the
+// counters of an evicted one stay in the sum.
+TEST(PlanCache, OneVisibilityCachePerClearanceTheLastTwoKept) {
+  PlanCache cache;
+  PlannerOptions o = options();
+  o.strategy = GoalStrategy::kTour;
+  CSpaceOptions normal = o.cspace, tight = o.cspace, wide = o.cspace;
+  tight.clearance_margin_m = 0.0;
+  wide.clearance_margin_m = normal.clearance_margin_m + 0.3;
+  VisibilityCache* const first = &cache.visibility(normal);
+  EXPECT_NE(&cache.visibility(tight), first);
+  EXPECT_EQ(&cache.visibility(normal), first);
+  CSpaceOptions same_clearance = normal;
+  same_clearance.points_per_circle = 32;  // not what the slot is chosen by
+  EXPECT_EQ(&cache.visibility(same_clearance), first);
+
+  // Through the planner: the tour builds its graph through the cache.
+  const Plan plan = plan_exploration(corridor_with_windows(), Pose2{1, 1.5, 0}, {}, o, nullptr, nullptr, &cache);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  const auto builds = cache.visibility_counters().builds;
+  EXPECT_EQ(builds, 1);
+  // A third clearance evicts the tight one (used longest ago), not the
+  // normal one, which kept what it built.
+  EXPECT_NE(&cache.visibility(wide), first);
+  EXPECT_EQ(&cache.visibility(normal), first);
+  EXPECT_EQ(first->counters().builds, 1);
+  EXPECT_EQ(cache.visibility_counters().builds, builds);
+}
+
 }  // namespace
 }  // namespace pex::planning

@@ -53,7 +53,7 @@ const char* to_string(MissionCommand command) {
   return "?";
 }
 
-PlanResult compute_plan(const PlanRequest& request, OffsetTileCache* offsets) {
+PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   PlanResult result;
   result.id = request.id;
   if (!request.map) {
@@ -64,10 +64,10 @@ PlanResult compute_plan(const PlanRequest& request, OffsetTileCache* offsets) {
   const bool live = request.live_view && !request.live_view->empty();
   const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
   result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options,
-                                            offsets)
+                                            cache)
                              : plan_exploration(*request.map, request.pose, request.blacklist, request.options,
                                                 live ? &opened : nullptr, request.focus ? &*request.focus : nullptr,
-                                                offsets);
+                                                cache);
   return result;
 }
 

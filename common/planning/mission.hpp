@@ -181,9 +181,9 @@ struct PlanResult {
 };
 
 // Runs the request: plan_exploration(), or plan_path_to() for `home`. The
-// result is a function of the request; `offsets` (may be null: one per
-// planning thread) keeps the C-space's offset tiles between requests.
-PlanResult compute_plan(const PlanRequest& request, OffsetTileCache* offsets = nullptr);
+// result is a function of the request; `cache` (may be null: one per
+// planning thread) keeps what the planner can reuse between requests.
+PlanResult compute_plan(const PlanRequest& request, PlanCache* cache = nullptr);
 
 struct MissionOutput {
   Phase phase = Phase::kIdle;

@@ -4,143 +4,19 @@
 #include <cmath>
 #include <utility>
 
+#include "planning/pruned_graph.hpp"
+
 namespace pex::planning {
 
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// How far ConfigurationSpace moves a node off the vertex at which `edge`
-// ends (the miter of the two edges' parallels at interior_offset_m, capped as
-// inward() caps it at sharp corners), whether that vertex is reflex or not.
-double node_offset(const ConfigurationSpace& cspace, std::uint32_t edge) {
-  const auto& in = cspace.edges()[edge];
-  const auto& out = cspace.edges()[in.next];
-  const double lin = distance(in.a, in.b), lout = distance(out.a, out.b);
-  const double nx = -(in.b.y() - in.a.y()) / lin - (out.b.y() - out.a.y()) / lout;
-  const double ny = (in.b.x() - in.a.x()) / lin + (out.b.x() - out.a.x()) / lout;
-  return cspace.options().interior_offset_m / std::max(std::hypot(nx, ny) / 2.0, 0.1);
-}
-
-// The boundary at the reflex nodes, as arrays (the pair loop below runs
-// over all of them for each node): per node n its vertex v, the neighbours p
-// (before) and q (after), the edge vectors v - p ("in") and q - v ("out"),
-// and slack_p2 / slack_q2, the squares of how deep a line through the node
-// may pass beyond p or q and still be on a shortest path of the node graph
-// (see drops()). The node is v moved interior_offset_m inward with both
-// edges kept parallel, so the edge vectors are also the directions of the
-// boundary moved to the node.
-struct Corners {
-  std::vector<double> x, y;  // the node
-  std::vector<double> in_x, in_y, out_x, out_y;
-  std::vector<double> slack_p2, slack_q2;
-  // p - n, v - n, q - n; and orient(p, v, n), orient(v, q, n), both > 0
-  // (the node is on the free side, the left, of both edges).
-  std::vector<double> pn_x, pn_y, vn_x, vn_y, qn_x, qn_y, in_side, out_side;
-
-  Corners(const ConfigurationSpace& cspace, const std::vector<Point>& nodes) {
-    for (std::size_t k = 0; k < cspace.reflex_edges().size(); ++k) {
-      const std::uint32_t e = cspace.reflex_edges()[k];
-      const auto& in = cspace.edges()[e];
-      const auto& out = cspace.edges()[in.next];
-      const Point& n = nodes[k];
-      x.push_back(n.x());
-      y.push_back(n.y());
-      in_x.push_back(in.b.x() - in.a.x());
-      in_y.push_back(in.b.y() - in.a.y());
-      out_x.push_back(out.b.x() - out.a.x());
-      out_y.push_back(out.b.y() - out.a.y());
-      const double slack_p = 2.0 * node_offset(cspace, in.prev), slack_q = 2.0 * node_offset(cspace, in.next);
-      slack_p2.push_back(slack_p * slack_p);
-      slack_q2.push_back(slack_q * slack_q);
-      pn_x.push_back(in.a.x() - n.x());
-      pn_y.push_back(in.a.y() - n.y());
-      vn_x.push_back(in.b.x() - n.x());
-      vn_y.push_back(in.b.y() - n.y());
-      qn_x.push_back(out.b.x() - n.x());
-      qn_y.push_back(out.b.y() - n.y());
-      in_side.push_back(in_x.back() * -pn_y.back() + in_y.back() * pn_x.back());
-      out_side.push_back(out_x.back() * -vn_y.back() + out_y.back() * vn_x.back());
-    }
-  }
-
-  // Whether a graph edge from reflex node k to the point at k's node + u
-  // can be dropped before its segment test.
-  //
-  // The obstacle at the node is the wedge between the directions back along
-  // the incoming edge and on along the outgoing one (less than 180 degrees:
-  // the free space's corner is reflex).
-  // - behind: -u inside the wedge (the line runs on behind the node into the
-  //   obstacle). A path that bends at the node onto this edge keeps the
-  //   obstacle on the outside of the bend and is shortened by cutting the
-  //   bend, so the edge is never on a shortest path. This is the classic
-  //   rule that a shortest path bends only along lines tangent to the
-  //   boundary (both edges on one side of the line).
-  // - across: the edge properly crosses one of the node's own two boundary
-  //   edges, so the segment test would fail (strict orientation tests:
-  //   touching is left to the segment test).
-  // The nodes sit interior_offset_m off the vertices, so in the node graph
-  // that shortest_paths searches a path may cut a corner by about that
-  // much: pass a short boundary edge's far vertex without bending at its
-  // node, or bend at a node along a line that runs that little into the
-  // wedge behind it. So "inside the wedge" means deeper at a neighbouring
-  // vertex (the line's distance from it) than twice the offset of that
-  // vertex's own node. (With this slack the matrix equals the full graph's
-  // lengths on every random map tried; with none it was up to 3e-5 m
-  // longer.)
-  //
-  // a and b are |u| times how far p and q lie from the line, signed so that
-  // both are negative when the wedge lies behind the node. Each condition
-  // is written as "max of terms < 0" and the result is their min, so that
-  // the loop over all pairs of nodes has no branch, no square root, and
-  // vectorises (SSE2 has no conversion of a comparison to an integer).
-  double score(std::size_t k, double ux, double uy) const {
-    const double a = ux * in_y[k] - uy * in_x[k];
-    const double b = ux * out_y[k] - uy * out_x[k];
-    const double u2 = ux * ux + uy * uy;
-    // behind: a < 0, b < 0, a^2 > slack_p2 u2, b^2 > slack_q2 u2.
-    const double behind = std::max(std::max(a, b), std::max(slack_p2[k] * u2 - a * a, slack_q2[k] * u2 - b * b));
-    // across edge p-v: orient(n, n + u, p) and orient(n, n + u, v) differ
-    // in sign, and n + u is beyond the edge's line: orient(p, v, n + u) =
-    // in_side - a < 0. Likewise for edge v-q.
-    const double op = ux * pn_y[k] - uy * pn_x[k];
-    const double ov = ux * vn_y[k] - uy * vn_x[k];
-    const double oq = ux * qn_y[k] - uy * qn_x[k];
-    const double across_in = std::max(op * ov, in_side[k] - a);
-    const double across_out = std::max(ov * oq, out_side[k] - b);
-    return std::min(behind, std::min(across_in, across_out));
-  }
-  bool drops(std::size_t k, double ux, double uy) const { return score(k, ux, uy) < 0.0; }
-
-  // out[t] < 0: drops() at either end of the edge i-j, for j = first + t,
-  // t < count. `out` should be a local array: then the compiler knows it
-  // does not alias the corners' arrays, and vectorises (inlined: out of line,
-  // `out` may alias them).
-  [[gnu::always_inline]] void scores(std::size_t i, std::size_t first, std::size_t count, double* out) const {
-    const double xi = x[i], yi = y[i];
-    for (std::size_t t = 0; t < count; ++t) {
-      const std::size_t j = first + t;
-      const double ux = x[j] - xi, uy = y[j] - yi;
-      out[t] = std::min(score(i, ux, uy), score(j, -ux, -uy));
-    }
-  }
-};
-
 // Compressed adjacency lists of an undirected graph.
 struct Graph {
   std::vector<std::uint32_t> offset;  // node v's edges: [offset[v], offset[v + 1])
   std::vector<std::uint32_t> to;
   std::vector<double> length;
-};
-
-struct EdgeList {
-  std::vector<std::uint32_t> a, b;
-  std::vector<double> length;
-  void add(std::uint32_t u, std::uint32_t v, double l) {
-    a.push_back(u);
-    b.push_back(v);
-    length.push_back(l);
-  }
 };
 
 Graph compress(const EdgeList& edges, std::size_t nodes) {
@@ -451,7 +327,7 @@ class LazySearch {
         if (bound < kInf && candidate + lower_bound_left(v) > bound + 1e-9) return;
         if (u < r_ && corners_.drops(u, ux, uy)) return;
         if (v < r_ && corners_.drops(v, -ux, -uy)) return;
-        if (!cspace_.segment_free(nodes_[u], nodes_[v])) return;
+        if (!nodes_see_each_other(cspace_, nodes_[u], nodes_[v])) return;
         if (dist_[v] == kInf) touched_.push_back(v);
         dist_[v] = candidate;
         key_[v] = candidate + lower_bound_left(v);
@@ -519,47 +395,11 @@ class LazySearch {
   std::size_t settled_count_ = 0;
 };
 
-// The pruned graph's edges over `nodes` (reflex vertices 0..r-1, then the
-// points): reflex-reflex edges worth testing at both ends, then each point
-// to the reflex vertices it sees, worth testing at the reflex end. No
-// point-point edges: a path between points that bends, bends at reflex
-// vertices only. A function of its own so that its block loop vectorises
-// whatever its callers hold (inlined into shortest_path_matrix, GCC's
-// choice hung on unrelated code there: plans 30 % slower at p99 on intel's maps).
-[[gnu::noinline]] EdgeList pruned_graph_edges(const ConfigurationSpace& cspace, const std::vector<Point>& nodes,
-                                              std::uint32_t r, bool prune) {
-  const Corners corners(cspace, nodes);
-  const auto total = static_cast<std::uint32_t>(nodes.size());
-  EdgeList edges;
-  for (std::uint32_t i = 0; i < r; ++i) {
-    // The cheap test for a block of j > i at once (both ends), then segment
-    // tests for what it keeps.
-    constexpr std::uint32_t kBlock = 256;
-    double score[kBlock];
-    for (std::uint32_t first = i + 1; first < r; first += kBlock) {
-      const std::uint32_t count = std::min(kBlock, r - first);
-      if (prune) corners.scores(i, first, count, score);
-      for (std::uint32_t t = 0; t < count; ++t) {
-        const std::uint32_t j = first + t;
-        if ((prune && score[t] < 0.0) || !cspace.segment_free(nodes[i], nodes[j])) continue;
-        edges.add(i, j, distance(nodes[i], nodes[j]));
-      }
-    }
-  }
-  for (std::uint32_t i = 0; i < r; ++i) {
-    for (std::uint32_t p = r; p < total; ++p) {
-      if (prune && corners.drops(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y())) continue;
-      if (!cspace.segment_free(nodes[i], nodes[p])) continue;
-      edges.add(i, p, distance(nodes[i], nodes[p]));
-    }
-  }
-  return edges;
-}
-
 }  // namespace
 
 PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
-                                const std::vector<Point>& targets, const PathMatrixOptions& options) {
+                                const std::vector<Point>& targets, const PathMatrixOptions& options,
+                                VisibilityCache* cache) {
   const std::int64_t tests_before = cspace.segment_tests();
   const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
   const std::size_t n = targets.size();
@@ -568,7 +408,7 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
   const auto total = static_cast<std::uint32_t>(nodes.size());
 
   // 1. The graph (pruned_graph_edges).
-  EdgeList edges = pruned_graph_edges(cspace, nodes, r, options.tangent_pruning);
+  EdgeList edges = pruned_graph_edges(cspace, nodes, r, options.tangent_pruning, cache);
   const Graph graph = compress(edges, total);
 
   // 2. From each point to the points after it: the straight segment where
@@ -682,6 +522,7 @@ struct NearestTargetsSearch {
   const NearestTargetsQuery& query;
   LazySearch& search;
   std::uint32_t r;
+  VisibilityCache* cache;
 
   std::size_t n() const { return targets.size(); }
   bool is_choice(std::size_t t) const { return planning::is_choice(query.choice, t); }
@@ -746,7 +587,7 @@ struct NearestTargetsSearch {
     options.between_targets = query.count > 0;
     options.between_nearest = query.count;
     options.between_choice = query.choice;
-    PathMatrix whole = shortest_path_matrix(cspace, start, targets, options);
+    PathMatrix whole = shortest_path_matrix(cspace, start, targets, options, cache);
     if (!options.between_targets) {  // none nearest: none between, as the contract says
       whole.between_m.assign(n() * n(), kInf);
       for (std::size_t i = 0; i < n(); ++i) whole.between_m[i * n() + i] = 0.0;
@@ -759,7 +600,7 @@ struct NearestTargetsSearch {
   void between_over_the_graph(PathMatrix& out) const {
     std::vector<Point> nearest_points;
     for (const int t : out.nearest) nearest_points.push_back(targets[static_cast<std::size_t>(t)]);
-    const PathMatrix among = shortest_path_matrix(cspace, start, nearest_points);
+    const PathMatrix among = shortest_path_matrix(cspace, start, nearest_points, {}, cache);
     for (std::size_t a = 0; a < out.nearest.size(); ++a)
       for (std::size_t b = 0; b < out.nearest.size(); ++b)
         out.between_m[static_cast<std::size_t>(out.nearest[a]) * n() + static_cast<std::size_t>(out.nearest[b])] =
@@ -815,12 +656,13 @@ struct NearestTargetsSearch {
 }  // namespace
 
 PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const Point& start,
-                                        const std::vector<Point>& targets, const NearestTargetsQuery& query) {
+                                        const std::vector<Point>& targets, const NearestTargetsQuery& query,
+                                        VisibilityCache* cache) {
   const std::int64_t tests_before = cspace.segment_tests();
   const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
   const std::size_t n = targets.size();
   LazySearch search(cspace, graph_nodes(cspace, start, targets), r);
-  const NearestTargetsSearch steps{cspace, start, targets, query, search, r};
+  const NearestTargetsSearch steps{cspace, start, targets, query, search, r, cache};
 
   PathMatrix out;
   out.from_start_m.assign(n, kInf);

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "planning/cspace.hpp"
+#include "planning/pruned_graph.hpp"
 
 namespace pex::planning {
 
@@ -73,8 +74,11 @@ struct PathMatrix {
 // are path ends, never intermediate nodes. from_start_m agrees with
 // shortest_paths(cspace, start, targets).length_m (up to rounding of the sums).
 // Pure and deterministic: ties go to the lower node index.
+// `cache` (may be null) keeps the graph's segment tests for the next call
+// (VisibilityCache); the result does not depend on it.
 PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& start,
-                                const std::vector<Point>& targets, const PathMatrixOptions& options = {});
+                                const std::vector<Point>& targets, const PathMatrixOptions& options = {},
+                                VisibilityCache* cache = nullptr);
 
 // What a greedy choice needs of the start's row, without the whole graph.
 // `cost(i, length_m, path)` is target i's cost once its shortest path (start
@@ -131,7 +135,9 @@ struct NearestTargetsQuery {
 // start cannot reach makes it search the start's whole piece of the C-space
 // with a loop over every node per node (leave out targets in other pieces,
 // ConfigurationSpace::piece_of). Pure and deterministic.
+// `cache` as for shortest_path_matrix, which this calls for the whole graph.
 PathMatrix shortest_paths_among_nearest(const ConfigurationSpace& cspace, const Point& start,
-                                        const std::vector<Point>& targets, const NearestTargetsQuery& query);
+                                        const std::vector<Point>& targets, const NearestTargetsQuery& query,
+                                        VisibilityCache* cache = nullptr);
 
 }  // namespace pex::planning

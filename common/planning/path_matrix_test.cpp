@@ -442,5 +442,90 @@ TEST(PathMatrix, Deterministic) {
   }
 }
 
+// A map that changes in places, as the explorer's maps do from one plan to
+// the next: random_map's obstacles are placed in the same order whatever
+// their number, so step by step one obstacle comes (8 steps) and goes again
+// (7 steps). The points: half of the last step's that are still interior
+// (kept exactly), and new ones.
+struct ChangingScene {
+  ConfigurationSpace cs;
+  Point start;
+  std::vector<Point> targets;
+};
+std::vector<ChangingScene> changing_scenes(std::uint64_t seed) {
+  std::vector<ChangingScene> scenes(15);
+  std::mt19937_64 rng(seed);
+  std::vector<Point> last;
+  for (int step = 0; step < 15; ++step) {
+    std::mt19937_64 map_rng(seed);
+    const int holes = step < 8 ? 3 + step : 17 - step;
+    CSpaceOptions o;
+    o.robot_radius_m = 0.2;
+    ChangingScene& scene = scenes[static_cast<std::size_t>(step)];
+    EXPECT_TRUE(scene.cs.build(random_map(map_rng, holes), o).ok);
+    std::vector<Point> points = random_points(rng, scene.cs, 10);
+    for (std::size_t k = 0; k < last.size(); k += 2)
+      if (scene.cs.covers(last[k]) && scene.cs.distance_to_boundary(last[k]) > 0.01) points.push_back(last[k]);
+    scene.start = points[0];
+    scene.targets.assign(points.begin() + 1, points.end());
+    last = points;
+  }
+  return scenes;
+}
+
+// The graph through the cache is the graph built afresh, edge for edge,
+// while obstacles come and go (pairs that saw each other are cut, pairs cut
+// see each other again) and nodes are kept, moved and new.
+TEST(VisibilityCache, GraphIsTheOneBuiltAfreshWhileTheMapChanges) {
+  for (const std::uint64_t seed : {11u, 12u, 13u}) {
+    VisibilityCache cache;
+    for (const ChangingScene& scene : changing_scenes(seed)) {
+      std::vector<Point> nodes = scene.cs.reflex_nodes();
+      const auto r = static_cast<std::uint32_t>(nodes.size());
+      nodes.push_back(scene.start);
+      nodes.insert(nodes.end(), scene.targets.begin(), scene.targets.end());
+      const EdgeList fresh = pruned_graph_edges(scene.cs, nodes, r, true);
+      const EdgeList cached = pruned_graph_edges(scene.cs, nodes, r, true, &cache);
+      ASSERT_FALSE(fresh.a.empty());
+      EXPECT_EQ(cached.a, fresh.a) << "seed " << seed;
+      EXPECT_EQ(cached.b, fresh.b) << "seed " << seed;
+      EXPECT_EQ(cached.length, fresh.length) << "seed " << seed;
+    }
+    // Every way through the cache was taken.
+    const auto& c = cache.counters();
+    EXPECT_EQ(c.builds, 15);
+    EXPECT_GT(c.kept, 0);
+    EXPECT_GT(c.retested, 0);
+    EXPECT_GT(c.new_pairs, 0);
+  }
+}
+
+// What the planner asks of the matrix is the same with the cache.
+TEST(VisibilityCache, ChangesNoLengthNorPathOfTheMatrixOrTheNearest) {
+  VisibilityCache whole_cache, nearest_cache;
+  for (const ChangingScene& scene : changing_scenes(21)) {
+    const PathMatrix fresh = shortest_path_matrix(scene.cs, scene.start, scene.targets);
+    const PathMatrix cached = shortest_path_matrix(scene.cs, scene.start, scene.targets, {}, &whole_cache);
+    EXPECT_EQ(cached.from_start_m, fresh.from_start_m);
+    ASSERT_EQ(cached.path_from_start.size(), fresh.path_from_start.size());
+    for (std::size_t t = 0; t < fresh.path_from_start.size(); ++t) {
+      const auto &a = cached.path_from_start[t], &b = fresh.path_from_start[t];
+      ASSERT_EQ(a.size(), b.size());
+      for (std::size_t k = 0; k < a.size(); ++k) EXPECT_TRUE(a[k].x() == b[k].x() && a[k].y() == b[k].y());
+    }
+    EXPECT_EQ(cached.between_m, fresh.between_m);
+    EXPECT_EQ(cached.graph_edges, fresh.graph_edges);
+    NearestTargetsQuery query;
+    query.count = 4;
+    const PathMatrix nearest = shortest_paths_among_nearest(scene.cs, scene.start, scene.targets, query);
+    const PathMatrix nearest_cached =
+        shortest_paths_among_nearest(scene.cs, scene.start, scene.targets, query, &nearest_cache);
+    EXPECT_EQ(nearest_cached.nearest, nearest.nearest);
+    EXPECT_EQ(nearest_cached.from_start_m, nearest.from_start_m);
+    EXPECT_EQ(nearest_cached.between_m, nearest.between_m);
+  }
+  EXPECT_GT(whole_cache.counters().kept, 0);
+}
+
 }  // namespace
 }  // namespace pex::planning

@@ -84,6 +84,7 @@ void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
     plan_ms_.add(timed->compute_ms);
     plan_cpu_ms_.add(timed->compute_cpu_ms);
     offset_tiles_ = timed->offset_tiles;
+    graph_tests_ = timed->graph_tests;
     mission_.on_plan(timed->result, now_utime);
   }
 }
@@ -102,10 +103,11 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
       request.live_view = live_view_at(request.pose);
       const auto plan_started = std::chrono::steady_clock::now();
       const double cpu_started = thread_cpu_ms();
-      auto result = planning::compute_plan(request, &inline_offsets_);
+      auto result = planning::compute_plan(request, &inline_cache_);
       plan_ms_.add(ms_since(plan_started));
       plan_cpu_ms_.add(thread_cpu_ms() - cpu_started);
-      offset_tiles_ = inline_offsets_.counters();
+      offset_tiles_ = inline_cache_.offsets.counters();
+      graph_tests_ = inline_cache_.visibility_counters();
       return result;
     });
   }

@@ -111,6 +111,12 @@ class ExplorerNode {
     // planning thread's cache, and computed.
     v.total("offset_tiles_kept", offset_tiles_.hits);
     v.total("offset_tiles_computed", offset_tiles_.misses);
+    // The path graph's segment tests (planning/pruned_graph.hpp), the tour's:
+    // answered from the last graph, tested again near a change of the map,
+    // tested for pairs with a new node.
+    v.total("graph_tests_kept", graph_tests_.kept);
+    v.total("graph_tests_retested", graph_tests_.retested);
+    v.total("graph_tests_new", graph_tests_.new_pairs);
   }
 
  private:
@@ -121,8 +127,9 @@ class ExplorerNode {
   ExplorerOptions options_;
   planning::Mission mission_;
   std::unique_ptr<PlanWorker> worker_;
-  planning::OffsetTileCache inline_offsets_;  // inline planning only: the worker has its own
+  planning::PlanCache inline_cache_;  // inline planning only: the worker has its own
   planning::OffsetTileCache::Counters offset_tiles_;  // of the cache that ran the newest plan
+  planning::VisibilityCache::Counters graph_tests_;   // likewise
   planning::MissionOutput last_;
   ExplorerCounters counters_;
   LatencyStats plan_ms_;

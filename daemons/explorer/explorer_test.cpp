@@ -188,33 +188,59 @@ TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {
   EXPECT_EQ(node.counters().maps_accepted, 1);
 }
 
-// DAEMON_STATUS says how the C-space's offset was had: a replan on the map
-// it planned on before takes its polygon from the planning thread's cache.
-TEST(ExplorerNode, CountsOffsetTilesKeptAndComputed) {
-  struct Totals {
-    std::map<std::string, std::int64_t> values;
-    void total(const std::string& name, std::int64_t value) { values[name] = value; }
-  };
-  ExplorerOptions options;
+// The explorer's DAEMON_STATUS values after its first plan on `map` from
+// `pose` and after a replan on the same map from the same pose.
+struct StatusTotals {
+  std::map<std::string, std::int64_t> values;
+  void total(const std::string& name, std::int64_t value) { values[name] = value; }
+  std::int64_t at(const std::string& name) const { return values.at(name); }
+};
+std::pair<StatusTotals, StatusTotals> status_after_plan_and_replan(const ExplorerOptions& options,
+                                                                   const pex::polygon_map_t& map, double x, double y) {
   ExplorerNode node(options);
   pex::pose_t pose{};
-  pose.x = 10;
-  pose.y = 1.5;
-  node.on_map(corridor(), 0);
+  pose.x = x;
+  pose.y = y;
+  node.on_map(map, 0);
   node.on_pose(pose, 0);
   node.step(0);
-  Totals first;
+  StatusTotals first, second;
   node.visit_counters(first);
-  EXPECT_EQ(first.values.at("offset_tiles_kept"), 0);
-  EXPECT_GE(first.values.at("offset_tiles_computed"), 1);
   const std::int64_t replan_us = options.mission.replan_period_us + 100'000;
   node.on_pose(pose, replan_us);
   node.step(replan_us);
-  Totals second;
   node.visit_counters(second);
-  ASSERT_GT(second.values.at("plans"), first.values.at("plans"));
-  EXPECT_GE(second.values.at("offset_tiles_kept"), 1);
-  EXPECT_EQ(second.values.at("offset_tiles_computed"), first.values.at("offset_tiles_computed"));
+  return {first, second};
+}
+
+// DAEMON_STATUS says how the C-space's offset was had: a replan on the map
+// it planned on before takes its polygon from the planning thread's cache.
+TEST(ExplorerNode, CountsOffsetTilesKeptAndComputed) {
+  const auto [first, second] = status_after_plan_and_replan(ExplorerOptions{}, corridor(), 10, 1.5);
+  EXPECT_EQ(first.at("offset_tiles_kept"), 0);
+  EXPECT_GE(first.at("offset_tiles_computed"), 1);
+  ASSERT_GT(second.at("plans"), first.at("plans"));
+  EXPECT_GE(second.at("offset_tiles_kept"), 1);
+  EXPECT_EQ(second.at("offset_tiles_computed"), first.at("offset_tiles_computed"));
+}
+
+// DAEMON_STATUS says how the tour's path graph was had: a replan on the same
+// map from the same pose answers every segment test from the last graph.
+TEST(ExplorerNode, CountsPathGraphTestsKeptAndNew) {
+  ExplorerOptions options;
+  options.mission.planner.strategy = planning::GoalStrategy::kTour;
+  options.mission.planner.tour.horizon_candidates = 0;  // the whole matrix: the graph of every plan
+  // A room with a block in it (its corners are the graph's reflex nodes), open at the east end.
+  const auto room = map_of({ring(0, false, {{0, 0}, {20, 0}, {20, 10}, {0, 10}}, {0, 1, 0, 0}),
+                            ring(0, true, {{8, 3}, {8, 7}, {12, 7}, {12, 3}})});
+  const auto [first, second] = status_after_plan_and_replan(options, room, 2, 5);
+  ASSERT_GE(first.at("plans"), 1);
+  EXPECT_EQ(first.at("graph_tests_kept"), 0);
+  EXPECT_GE(first.at("graph_tests_new"), 1);
+  ASSERT_GT(second.at("plans"), first.at("plans"));
+  EXPECT_EQ(second.at("graph_tests_kept"), first.at("graph_tests_new"));
+  EXPECT_EQ(second.at("graph_tests_new"), first.at("graph_tests_new"));
+  EXPECT_EQ(second.at("graph_tests_retested"), 0);
 }
 
 // The laser's scans keep the mission going; a scan without ranges is refused

@@ -63,7 +63,7 @@ void PlanWorker::run() {
     const double cpu_started = thread_cpu_ms();
     TimedPlanResult timed;
     try {
-      timed.result = planning::compute_plan(request, &offsets_);
+      timed.result = planning::compute_plan(request, &cache_);
     } catch (const std::exception& e) {
       // The planner's geometry failing is a failed plan, not a dead daemon.
       timed.result = planning::PlanResult{request.id, planning::Plan{}};
@@ -71,7 +71,8 @@ void PlanWorker::run() {
     }
     timed.compute_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
     timed.compute_cpu_ms = thread_cpu_ms() - cpu_started;
-    timed.offset_tiles = offsets_.counters();
+    timed.offset_tiles = cache_.offsets.counters();
+    timed.graph_tests = cache_.visibility_counters();
     {
       std::lock_guard lock(mutex_);
       done_ = std::move(timed);

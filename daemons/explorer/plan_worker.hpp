@@ -19,6 +19,7 @@ struct TimedPlanResult {
   double compute_cpu_ms = 0.0;  // CPU time of the thread that ran it: the planner's own cost,
                                 // which a loaded machine does not inflate
   planning::OffsetTileCache::Counters offset_tiles;  // the worker's cache so far, this plan included
+  planning::VisibilityCache::Counters graph_tests;   // likewise
 };
 
 // CPU time consumed by the calling thread so far, in ms.
@@ -46,7 +47,7 @@ class PlanWorker {
   std::optional<TimedPlanResult> done_;
   bool stop_ = false;
   int event_fd_ = -1;
-  planning::OffsetTileCache offsets_;  // the worker thread's alone
+  planning::PlanCache cache_;  // the worker thread's alone
   std::thread thread_;
 };
 

@@ -54,9 +54,10 @@ namespace {
 // fallback is a second plan.
 int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::string& map_channel,
                    const std::string& pose_channel, const pex::explorer::ExplorerOptions& options,
-                   const pex::planning::PlannerOptions& planner, bool offset_cache) {
-  // As the explorer's worker keeps it: the C-space's offset tiles between plans.
-  pex::planning::OffsetTileCache offsets;
+                   const pex::planning::PlannerOptions& planner, bool use_cache) {
+  // As the explorer's worker keeps it: the C-space's offset tiles and the
+  // path graph's segment tests between plans.
+  pex::planning::PlanCache cache;
   std::optional<pex::pose_t> pose;
   std::optional<pex::laser_scan_t> scan;
   struct Timed {
@@ -113,7 +114,7 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
       request.focus = focus;
       // Timed as the explorer times its worker: the thread's CPU, live view union included.
       const double started = pex::explorer::thread_cpu_ms();
-      const auto result = pex::planning::compute_plan(request, offset_cache ? &offsets : nullptr);
+      const auto result = pex::planning::compute_plan(request, use_cache ? &cache : nullptr);
       const double cpu_ms = pex::explorer::thread_cpu_ms() - started;
       if (!result.plan.ok) ++failed;
       for (const auto& c : result.plan.candidates) {
@@ -157,8 +158,13 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   std::printf("plan CPU ms: p50 %.2f  p90 %.2f  p99 %.2f  max %.2f\n", quantile(0.5), quantile(0.9), quantile(0.99),
               ms.back());
   std::printf("offset tiles: %lld kept from an earlier plan, %lld computed%s\n",
-              static_cast<long long>(offsets.counters().hits), static_cast<long long>(offsets.counters().misses),
-              offset_cache ? "" : " (cache off: --no-offset-cache)");
+              static_cast<long long>(cache.offsets.counters().hits), static_cast<long long>(cache.offsets.counters().misses),
+              use_cache ? "" : " (cache off: --no-cache)");
+  const auto visibility = cache.visibility_counters();
+  std::printf("path graph segment tests (%lld graphs built): %lld kept from an earlier plan, %lld tested again near "
+              "a change, %lld of new pairs\n",
+              static_cast<long long>(visibility.builds), static_cast<long long>(visibility.kept),
+              static_cast<long long>(visibility.retested), static_cast<long long>(visibility.new_pairs));
   std::sort(timed.begin(), timed.end(), [](const Timed& a, const Timed& b) { return a.cpu_ms > b.cpu_ms; });
   std::printf("slowest (plan one with --utime):\n");
   for (std::size_t i = 0; i < std::min<std::size_t>(5, timed.size()); ++i)
@@ -173,7 +179,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Run the explorer's planner on a logged MAP and show why it chose what it chose"};
   std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path;
   std::int64_t at_utime = -1;
-  bool tight = false, every_map = false, no_offset_cache = false;
+  bool tight = false, every_map = false, no_cache = false;
   std::string strategy;
   app.add_option("--log", log_path, "LCM log with MAP and pose messages")->required();
   app.add_option("--config", config_path, "explorer config (planner options); default: the defaults in code");
@@ -183,8 +189,9 @@ int main(int argc, char** argv) {
   app.add_flag("--tight", tight, "plan without the clearance margin (the explorer's tight fallback)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
   app.add_flag("--every-map", every_map, "plan on every MAP of the log and print the plan CPU time percentiles");
-  app.add_flag("--no-offset-cache", no_offset_cache,
-               "with --every-map: compute every offset tile afresh (the plans must not change)");
+  app.add_flag("--no-cache,--no-offset-cache", no_cache,
+               "with --every-map: compute every offset tile and every segment test of the path graph afresh (the "
+               "plans must not change)");
   app.add_option("--strategy", strategy, "goal strategy (greedy | tour); default: the config's")
       ->check(CLI::IsMember({"greedy", "tour"}));
   if (const auto code = pex::cli::parse_command_line(app, "pex-plan", argc, argv)) return *code;
@@ -207,7 +214,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-plan: cannot read %s\n", log_path.c_str());
     return EX_NOINPUT;
   }
-  if (every_map) return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_offset_cache);
+  if (every_map) return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_cache);
   std::optional<pex::polygon_map_t> map;
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
