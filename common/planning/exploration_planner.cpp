@@ -210,9 +210,7 @@ VisibilityCache& PlanCache::visibility(const CSpaceOptions& cspace) {
   if (slots_.size() >= kClearances) {
     const auto oldest = std::min_element(slots_.begin(), slots_.end(),
                                          [](const Slot& a, const Slot& b) { return a.last_use < b.last_use; });
-    const auto& c = oldest->cache->counters();
-    dropped_.builds += c.builds, dropped_.kept += c.kept, dropped_.retested += c.retested;
-    dropped_.new_pairs += c.new_pairs;
+    dropped_ += oldest->cache->counters();
     slots_.erase(oldest);
   }
   slots_.push_back({clearance_m, uses_, std::make_unique<VisibilityCache>()});
@@ -221,10 +219,7 @@ VisibilityCache& PlanCache::visibility(const CSpaceOptions& cspace) {
 
 VisibilityCache::Counters PlanCache::visibility_counters() const {
   VisibilityCache::Counters sum = dropped_;
-  for (const Slot& slot : slots_) {
-    const auto& c = slot.cache->counters();
-    sum.builds += c.builds, sum.kept += c.kept, sum.retested += c.retested, sum.new_pairs += c.new_pairs;
-  }
+  for (const Slot& slot : slots_) sum += slot.cache->counters();
   return sum;
 }
 

@@ -500,6 +500,37 @@ TEST(VisibilityCache, GraphIsTheOneBuiltAfreshWhileTheMapChanges) {
   }
 }
 
+// A map moved as a whole (SLAM corrected the pose it was built from) shares
+// no boundary edge with the last: the graph is built afresh, and the one
+// after it, on the same map, answers every test from it.
+TEST(VisibilityCache, AMapMovedAsAWholeIsBuiltAfresh) {
+  VisibilityCache cache;
+  std::vector<EdgeList> fresh;
+  for (const double shift_m : {0.0, 0.37, 0.37}) {
+    std::mt19937_64 map_rng(5);
+    auto map = random_map(map_rng, 6);
+    boost::geometry::strategy::transform::translate_transformer<double, 2, 2> move(shift_m, 0.0);
+    mapping::TypedMultiPolygon moved = map;
+    boost::geometry::transform(map[0].geometry, moved[0].geometry, move);
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(moved, CSpaceOptions{}).ok);
+    std::vector<Point> nodes = cs.reflex_nodes();
+    const auto r = static_cast<std::uint32_t>(nodes.size());
+    nodes.push_back(Point(1 + shift_m, 1));
+    fresh.push_back(pruned_graph_edges(cs, nodes, r, true));
+    const EdgeList cached = pruned_graph_edges(cs, nodes, r, true, &cache);
+    EXPECT_EQ(cached.a, fresh.back().a);
+    EXPECT_EQ(cached.b, fresh.back().b);
+    EXPECT_EQ(cached.length, fresh.back().length);
+  }
+  ASSERT_FALSE(fresh[1].a.empty());
+  const auto& c = cache.counters();
+  EXPECT_EQ(c.rebuilt, 2);  // the first graph (nothing before it) and the moved one
+  EXPECT_EQ(c.retested, 0);
+  // The third graph: every pair from the second.
+  EXPECT_EQ(c.kept, c.new_pairs / 2);
+}
+
 // What the planner asks of the matrix is the same with the cache.
 TEST(VisibilityCache, ChangesNoLengthNorPathOfTheMatrixOrTheNearest) {
   VisibilityCache whole_cache, nearest_cache;

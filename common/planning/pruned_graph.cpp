@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <map>
 #include <tuple>
 
 namespace pex::planning {
@@ -29,26 +30,47 @@ std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
 // segment's normal). Conservative: a segment the segment test finds meeting
 // such an edge meets its box, and its grown box by more than the rounding
 // of the test; a segment near but not meeting is only tested once more.
+// The edges are grouped by the kClusterM square their first end lies in,
+// each group with the box of its edges, so that a segment far from a group
+// costs one box test (the changes of a replan lie in a few places).
 class BoundaryChanges {
  public:
   void add(const Point& a, const Point& b) {
     const Box box{std::min(a.x(), b.x()) - kGrowM, std::min(a.y(), b.y()) - kGrowM, std::max(a.x(), b.x()) + kGrowM,
                   std::max(a.y(), b.y()) + kGrowM};
-    all_ = boxes_.empty() ? box
-                          : Box{std::min(all_.x0, box.x0), std::min(all_.y0, box.y0), std::max(all_.x1, box.x1),
-                                std::max(all_.y1, box.y1)};
-    boxes_.push_back(box);
+    const std::array<std::int64_t, 2> cell{static_cast<std::int64_t>(std::floor(a.x() / kClusterM)),
+                                           static_cast<std::int64_t>(std::floor(a.y() / kClusterM))};
+    auto [it, added] = cluster_of_.try_emplace(cell, clusters_.size());
+    if (added) clusters_.push_back({box, {}});
+    Cluster& cluster = clusters_[it->second];
+    cluster.box = joined(cluster.box, box);
+    cluster.edges.push_back(box);
+    all_ = count_ == 0 ? box : joined(all_, box);
+    ++count_;
   }
+  std::size_t size() const { return count_; }
   bool near(const Point& a, const Point& b) const {
-    if (boxes_.empty() || !meets(a, b, all_)) return false;
-    return std::any_of(boxes_.begin(), boxes_.end(), [&](const Box& box) { return meets(a, b, box); });
+    if (count_ == 0 || !meets(a, b, all_)) return false;
+    for (const Cluster& cluster : clusters_)
+      if (meets(a, b, cluster.box) &&
+          std::any_of(cluster.edges.begin(), cluster.edges.end(), [&](const Box& box) { return meets(a, b, box); }))
+        return true;
+    return false;
   }
 
  private:
   static constexpr double kGrowM = 1e-6;
+  static constexpr double kClusterM = 4.0;
   struct Box {
     double x0, y0, x1, y1;
   };
+  struct Cluster {
+    Box box;
+    std::vector<Box> edges;
+  };
+  static Box joined(const Box& u, const Box& v) {
+    return {std::min(u.x0, v.x0), std::min(u.y0, v.y0), std::max(u.x1, v.x1), std::max(u.y1, v.y1)};
+  }
   static bool meets(const Point& a, const Point& b, const Box& box) {
     if (std::max(a.x(), b.x()) < box.x0 || std::min(a.x(), b.x()) > box.x1 || std::max(a.y(), b.y()) < box.y0 ||
         std::min(a.y(), b.y()) > box.y1)
@@ -59,8 +81,10 @@ class BoundaryChanges {
     const double s10 = side(box.x1, box.y0), s11 = side(box.x1, box.y1);
     return !((s00 > 0 && s01 > 0 && s10 > 0 && s11 > 0) || (s00 < 0 && s01 < 0 && s10 < 0 && s11 < 0));
   }
-  std::vector<Box> boxes_;
+  std::map<std::array<std::int64_t, 2>, std::size_t> cluster_of_;
+  std::vector<Cluster> clusters_;
   Box all_{};
+  std::size_t count_ = 0;
 };
 
 // An edge as it is listed: (lower node, higher node), or (reflex node,
@@ -164,6 +188,15 @@ EdgeList VisibilityCache::graph_edges(const ConfigurationSpace& cspace, const st
       changes.add(Point(std::bit_cast<double>(key[0]), std::bit_cast<double>(key[1])),
                   Point(std::bit_cast<double>(key[2]), std::bit_cast<double>(key[3])));
 
+  // Where much of the boundary changed (SLAM moved the map), most pairs
+  // would be tested again, and each against many changes: every node counts
+  // as new, which costs what the graph costs without the cache.
+  if (changes.size() > edges.size() / kMostlyChanged) {
+    std::fill(last.begin(), last.end(), -1);
+    std::fill(now.begin(), now.end(), -1);
+    ++counters_.rebuilt;
+  }
+
   // 3. The pairs of nodes found again that the pruning let through last
   // time: the same answer unless near a change. (A pair of such nodes not
   // listed was pruned, and is again: the pruning depends on the key alone.)
@@ -188,12 +221,16 @@ EdgeList VisibilityCache::graph_edges(const ConfigurationSpace& cspace, const st
     tested.push_back({reflex_node, other, nodes_see_each_other(cspace, nodes[reflex_node], nodes[other])});
     ++counters_.new_pairs;
   };
+  std::uint32_t first_kept = 0;  // the first reflex node found again (r: none)
+  while (first_kept < r && last[first_kept] < 0) ++first_kept;
   for (std::uint32_t i = 0; i < r; ++i) {
     if (last[i] < 0) {
-      // With every reflex node but the new ones before it (those paired with it already).
+      // With every reflex node but the new ones before it (those paired
+      // with it already): from the first node found again, if before it.
       constexpr std::uint32_t kBlock = 256;
       double score[kBlock];
-      for (std::uint32_t first = 0; first < r; first += kBlock) {
+      const std::uint32_t from = std::min(first_kept, i + 1);
+      for (std::uint32_t first = from; first < r; first += kBlock) {
         const std::uint32_t count = std::min(kBlock, r - first);
         corners.scores(i, first, count, score);
         for (std::uint32_t t = 0; t < count; ++t) {

@@ -122,7 +122,8 @@ bool nodes_see_each_other(const ConfigurationSpace& cspace, const Point& a, cons
 // pairs a node that is new takes part in are scored and tested afresh. So
 // the graph is the one built without the cache, edge for edge; a planner
 // that replans a map changed near the robot tests a few segments of
-// thousands. One per planning thread (not thread-safe); it holds one
+// thousands. Where most of the boundary changed (SLAM moved the map) it
+// builds the graph afresh. One per planning thread (not thread-safe); it holds one
 // C-space's tests, so a thread that alternates between two clearances
 // would do well with one per clearance.
 class VisibilityCache {
@@ -132,6 +133,11 @@ class VisibilityCache {
     std::int64_t kept = 0;       // segment tests answered from the last graph
     std::int64_t retested = 0;   // pairs found again whose segment comes near a change
     std::int64_t new_pairs = 0;  // pairs with a new node, tested (after pruning)
+    std::int64_t rebuilt = 0;    // graphs built afresh: most of the boundary had changed
+    Counters& operator+=(const Counters& o) {
+      builds += o.builds, kept += o.kept, retested += o.retested, new_pairs += o.new_pairs, rebuilt += o.rebuilt;
+      return *this;
+    }
   };
   const Counters& counters() const { return counters_; }
 
@@ -155,6 +161,9 @@ class VisibilityCache {
     std::uint32_t reflex, other;  // node indices of the graph it was built for
     bool free;
   };
+  // More than 1 / kMostlyChanged of the boundary's edges changed: the graph
+  // is built afresh (and kept for the next).
+  static constexpr std::size_t kMostlyChanged = 2;
   // pruned_graph_edges with pruning, through the cache.
   EdgeList graph_edges(const ConfigurationSpace& cspace, const std::vector<Point>& nodes, std::uint32_t r);
 

@@ -162,9 +162,10 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
               use_cache ? "" : " (cache off: --no-cache)");
   const auto visibility = cache.visibility_counters();
   std::printf("path graph segment tests (%lld graphs built): %lld kept from an earlier plan, %lld tested again near "
-              "a change, %lld of new pairs\n",
+              "a change, %lld of new pairs; %lld graphs afresh (most of the boundary changed)\n",
               static_cast<long long>(visibility.builds), static_cast<long long>(visibility.kept),
-              static_cast<long long>(visibility.retested), static_cast<long long>(visibility.new_pairs));
+              static_cast<long long>(visibility.retested), static_cast<long long>(visibility.new_pairs),
+              static_cast<long long>(visibility.rebuilt));
   std::sort(timed.begin(), timed.end(), [](const Timed& a, const Timed& b) { return a.cpu_ms > b.cpu_ms; });
   std::printf("slowest (plan one with --utime):\n");
   for (std::size_t i = 0; i < std::min<std::size_t>(5, timed.size()); ++i)
