@@ -141,8 +141,16 @@ TEST(Exploration, MissionCommandsStartPauseResumeAndHome) {
   ASSERT_TRUE(m.spin_sim([&] { return m.phase() == pex::explore_state_t::PHASE_HOME; }, 300.0))
       << m.report_with_logs();
   EXPECT_LT(std::hypot(m.truth()->x - start.x, m.truth()->y - start.y), 0.5) << m.report();
+  // Stopped there: the wheels are commanded to zero, and once the base has
+  // come to rest (it was driving when HOME came: a few cm of braking) it
+  // stays, as after the pause.
+  ASSERT_TRUE(m.cmd());
+  EXPECT_EQ(m.cmd()->v, 0.0);
+  EXPECT_EQ(m.cmd()->omega, 0.0);
+  m.spin_sim([] { return false; }, 2.0);
   const pex::pose_t home_at = *m.truth();
   m.spin_sim([] { return false; }, 5.0);
+  EXPECT_EQ(m.phase(), +pex::explore_state_t::PHASE_HOME);
   EXPECT_LT(std::hypot(m.truth()->x - home_at.x, m.truth()->y - home_at.y), 0.02) << m.report();
   EXPECT_EQ(m.clock()->collisions, 0) << m.report();
   m.stop_all();
