@@ -433,7 +433,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     query.choice.resize(plan.candidates.size());
     for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.choice[i] = !plan.candidates[i].blacklisted;
     query.required = required;
-    matrix = shortest_paths_to_cheapest(cspace, *start, targets, query);
+    matrix = shortest_paths_to_cheapest(cspace, *start, targets, query, visibility);
   }
   plan.stats.segment_tests = matrix.segment_tests;
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {

@@ -479,8 +479,20 @@ PathMatrix shortest_path_matrix(const ConfigurationSpace& cspace, const Point& s
   return out;
 }
 
+namespace {
+
+// A lazy search from the start that settles more reflex nodes than this is
+// on its way to testing as many pairs as the whole pruned graph, one by one
+// where the graph scores them in blocks and a VisibilityCache keeps most of
+// them from the last plan (a ragged map: thousands of reflex nodes along
+// walls a scan at a time drew): it gives up for the whole graph's row.
+std::size_t lazy_settle_budget(std::uint32_t reflex_nodes) { return reflex_nodes / 10 + 64; }
+
+}  // namespace
+
 PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Point& start,
-                                      const std::vector<Point>& targets, const CheapestTargetQuery& query) {
+                                      const std::vector<Point>& targets, const CheapestTargetQuery& query,
+                                      VisibilityCache* cache) {
   const std::int64_t tests_before = cspace.segment_tests();
   const auto r = static_cast<std::uint32_t>(cspace.reflex_nodes().size());
   const std::size_t n = targets.size();
@@ -494,11 +506,15 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   std::size_t required_left = 0;
   for (std::size_t t = 0; t < n; ++t) required_left += is_required(query.required, t);
   double best_cost = kInf;
+  const std::size_t settle_budget = lazy_settle_budget(r);
+  bool over_budget = false;
   // A far goal is searched along the way to it, not in a disc around the robot.
   out.all_searched = search.run(
       source, search_aims(targets, query.choice, query.required),
       // Every path to a target through what is left costs at least `key`.
-      [&](double key) { return required_left == 0 && key > best_cost; },
+      [&](double key) {
+        return (required_left == 0 && key > best_cost) || (over_budget = search.settled_count() > settle_budget);
+      },
       [&](std::uint32_t u, double d) {
         const std::size_t t = u - source - 1;
         out.path_from_start[t] = search.path_to(u);
@@ -507,6 +523,11 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
         best_cost = std::min(best_cost, query.cost(t, d, out.path_from_start[t]));
         return true;
       });
+  if (over_budget) {
+    PathMatrixOptions whole;
+    whole.between_targets = false;
+    out = shortest_path_matrix(cspace, start, targets, whole, cache);
+  }
   out.segment_tests = cspace.segment_tests() - tests_before;
   return out;
 }
@@ -560,11 +581,8 @@ struct NearestTargetsSearch {
       std::nth_element(least.begin(), least.begin() + static_cast<std::ptrdiff_t>(need - 1), least.end());
       return std::max(bound, least[need - 1]);
     };
-    // A search that settles a tenth of the reflex nodes is on its way to
-    // testing as many pairs as the whole pruned graph, one by one where the
-    // graph scores them in blocks (a ragged map: thousands of reflex nodes
-    // along walls a scan at a time drew): it gives up for the whole matrix.
-    const std::size_t settle_budget = r / 10 + 64;
+    // Past the budget it gives up for the whole matrix.
+    const std::size_t settle_budget = lazy_settle_budget(r);
     bool over_budget = false;
     out.all_searched = search.run(
         r, aims, [&](double) { return over_budget = search.settled_count() > settle_budget; },

@@ -104,9 +104,14 @@ struct CheapestTargetQuery {
 // path_from_start, the others +inf and no path (not searched, whether
 // reachable or not: ConfigurationSpace::piece_of tells). between_m is empty.
 // On an open map it settles a few nodes of hundreds, those towards the
-// cheapest target (docs/exploration.md, "Planning time"). Pure and deterministic.
+// cheapest target (docs/exploration.md, "Planning time"). Where it would
+// settle more than a tenth of the reflex nodes (a ragged map), it gives up
+// for shortest_path_matrix's row from the start instead (between_targets
+// false): every target's length and path, all_searched, the same lengths.
+// Pure and deterministic. `cache` as for shortest_path_matrix.
 PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Point& start,
-                                      const std::vector<Point>& targets, const CheapestTargetQuery& query);
+                                      const std::vector<Point>& targets, const CheapestTargetQuery& query,
+                                      VisibilityCache* cache = nullptr);
 
 struct NearestTargetsQuery {
   std::size_t count = 10;  // how many of the `choice` targets, nearest by path length

@@ -71,12 +71,16 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   // FNV-1a over every plan's candidates (positions, reachability, costs and
   // paths, bit for bit) and best: a change of the planner that only makes it
   // faster must leave it as it was.
-  std::uint64_t digest = 14695981039346656037ull;
-  auto mix = [&](double v) {
+  // The goals digest covers each plan's chosen goal and its path only: a
+  // change that searches more or fewer candidates (their costs, +inf or not)
+  // but chooses the same leaves it as it was.
+  std::uint64_t digest = 14695981039346656037ull, goals_digest = digest;
+  auto mix_into = [](std::uint64_t& into, double v) {
     std::uint64_t bits;
     std::memcpy(&bits, &v, sizeof bits);
-    for (int k = 0; k < 8; ++k) digest = (digest ^ ((bits >> (8 * k)) & 0xffu)) * 1099511628211ull;
+    for (int k = 0; k < 8; ++k) into = (into ^ ((bits >> (8 * k)) & 0xffu)) * 1099511628211ull;
   };
+  auto mix = [&](double v) { mix_into(digest, v); };
   bool logged_goals = false;  // EXPLORE_STATE seen: its goal is the focus
   for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
     if (e->channel == pex::runtime::channels::kLidarScan) {
@@ -128,6 +132,16 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
         }
       }
       mix(static_cast<double>(result.plan.best));
+      if (const auto* best = result.plan.best_candidate()) {
+        mix_into(goals_digest, best->position.x());
+        mix_into(goals_digest, best->position.y());
+        for (const auto& q : best->path) {
+          mix_into(goals_digest, q.x());
+          mix_into(goals_digest, q.y());
+        }
+      } else {
+        mix_into(goals_digest, -1.0);
+      }
       timed.push_back({cpu_ms, m.utime, pex::mapping::vertex_count(decoded.polygons)});
       if (logged_goals) continue;
       const auto& candidates = result.plan.candidates;
@@ -153,8 +167,8 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   auto quantile = [&](double q) { return ms[static_cast<std::size_t>(q * static_cast<double>(ms.size() - 1))]; };
   std::printf("strategy %s: %zu plans (%zu failed), %zu MAP messages refused; maps up to %zu vertices\n",
               pex::planning::to_string(planner.strategy), timed.size(), failed, bad_maps, most_vertices);
-  std::printf("plans digest %016llx (the same log and planner give the same)\n",
-              static_cast<unsigned long long>(digest));
+  std::printf("plans digest %016llx, goals digest %016llx (the same log and planner give the same)\n",
+              static_cast<unsigned long long>(digest), static_cast<unsigned long long>(goals_digest));
   std::printf("plan CPU ms: p50 %.2f  p90 %.2f  p99 %.2f  max %.2f\n", quantile(0.5), quantile(0.9), quantile(0.99),
               ms.back());
   std::printf("offset tiles: %lld kept from an earlier plan, %lld computed%s\n",
