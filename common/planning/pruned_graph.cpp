@@ -102,6 +102,46 @@ EdgeList edges_in_order(std::vector<ListedEdge> listed, const std::vector<Point>
   return edges;
 }
 
+// The pairs of nodes a graph over `nodes` tests, in the order of the graph
+// built without the cache: each reflex pair once (i, j), then each reflex
+// node with each point (i, p). With `prune`, a pair the corners drop at
+// either end is left out. Only pairs with a node `is_new` marks are visited
+// (all of them, without a cache: a pair of nodes found again keeps its
+// answer, VisibilityCache). A new reflex node i is paired with every reflex
+// node after it and with the nodes found again before it: those before the
+// first found again are new and paired with i already. The block loop of
+// Corners::scores vectorises here (GCC's choice hung on the callers' code
+// once inlined into them: plans 30 % slower at p99 on intel's maps).
+template <class IsNew, class Test>
+[[gnu::noinline]] void for_each_pair_to_test(const Corners& corners, const std::vector<Point>& nodes, std::uint32_t r,
+                                             bool prune, IsNew is_new, Test test) {
+  const auto total = static_cast<std::uint32_t>(nodes.size());
+  std::uint32_t first_kept = 0;  // the first reflex node found again (r: none)
+  while (first_kept < r && is_new(first_kept)) ++first_kept;
+  for (std::uint32_t i = 0; i < r; ++i) {
+    if (!is_new(i)) continue;
+    // The cheap test for a block of j at once (both ends), then the pairs it keeps.
+    constexpr std::uint32_t kBlock = 256;
+    double score[kBlock];
+    for (std::uint32_t first = std::min(first_kept, i + 1); first < r; first += kBlock) {
+      const std::uint32_t count = std::min(kBlock, r - first);
+      if (prune) corners.scores(i, first, count, score);
+      for (std::uint32_t t = 0; t < count; ++t) {
+        const std::uint32_t j = first + t;
+        if (j == i || (j < i && is_new(j)) || (prune && score[t] < 0.0)) continue;
+        test(i, j);
+      }
+    }
+  }
+  for (std::uint32_t i = 0; i < r; ++i) {
+    for (std::uint32_t p = r; p < total; ++p) {
+      if (!is_new(i) && !is_new(p)) continue;
+      if (prune && corners.drops(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y())) continue;
+      test(i, p);
+    }
+  }
+}
+
 }  // namespace
 
 Corners::Corners(const ConfigurationSpace& cspace, const std::vector<Point>& nodes) {
@@ -217,35 +257,12 @@ EdgeList VisibilityCache::graph_edges(const ConfigurationSpace& cspace, const st
   }
 
   // 4. The pairs with a new node, pruned and tested as without the cache.
-  auto test = [&](std::uint32_t reflex_node, std::uint32_t other) {
-    tested.push_back({reflex_node, other, nodes_see_each_other(cspace, nodes[reflex_node], nodes[other])});
-    ++counters_.new_pairs;
-  };
-  std::uint32_t first_kept = 0;  // the first reflex node found again (r: none)
-  while (first_kept < r && last[first_kept] < 0) ++first_kept;
-  for (std::uint32_t i = 0; i < r; ++i) {
-    if (last[i] < 0) {
-      // With every reflex node but the new ones before it (those paired
-      // with it already): from the first node found again, if before it.
-      constexpr std::uint32_t kBlock = 256;
-      double score[kBlock];
-      const std::uint32_t from = std::min(first_kept, i + 1);
-      for (std::uint32_t first = from; first < r; first += kBlock) {
-        const std::uint32_t count = std::min(kBlock, r - first);
-        corners.scores(i, first, count, score);
-        for (std::uint32_t t = 0; t < count; ++t) {
-          const std::uint32_t j = first + t;
-          if (j == i || (last[j] < 0 && j < i) || score[t] < 0.0) continue;
-          test(i, j);
-        }
-      }
-    }
-    for (std::uint32_t p = r; p < total; ++p) {
-      if ((last[i] >= 0 && last[p] >= 0) || corners.drops(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y()))
-        continue;
-      test(i, p);
-    }
-  }
+  for_each_pair_to_test(
+      corners, nodes, r, true, [&](std::uint32_t v) { return last[v] < 0; },
+      [&](std::uint32_t reflex_node, std::uint32_t other) {
+        tested.push_back({reflex_node, other, nodes_see_each_other(cspace, nodes[reflex_node], nodes[other])});
+        ++counters_.new_pairs;
+      });
 
   std::vector<ListedEdge> listed;
   for (const TestedPair& pair : tested) {
@@ -263,37 +280,15 @@ EdgeList VisibilityCache::graph_edges(const ConfigurationSpace& cspace, const st
   return edges_in_order(std::move(listed), nodes, r);
 }
 
-// The block loop is in a function of its own so that it vectorises whatever
-// its callers hold (inlined into shortest_path_matrix, GCC's choice hung on
-// unrelated code there: plans 30 % slower at p99 on intel's maps).
-[[gnu::noinline]] EdgeList pruned_graph_edges(const ConfigurationSpace& cspace, const std::vector<Point>& nodes,
-                                              std::uint32_t r, bool prune, VisibilityCache* cache) {
+EdgeList pruned_graph_edges(const ConfigurationSpace& cspace, const std::vector<Point>& nodes, std::uint32_t r,
+                            bool prune, VisibilityCache* cache) {
   if (cache && prune) return cache->graph_edges(cspace, nodes, r);
-  const Corners corners(cspace, nodes);
-  const auto total = static_cast<std::uint32_t>(nodes.size());
   EdgeList edges;
-  for (std::uint32_t i = 0; i < r; ++i) {
-    // The cheap test for a block of j > i at once (both ends), then segment
-    // tests for what it keeps.
-    constexpr std::uint32_t kBlock = 256;
-    double score[kBlock];
-    for (std::uint32_t first = i + 1; first < r; first += kBlock) {
-      const std::uint32_t count = std::min(kBlock, r - first);
-      if (prune) corners.scores(i, first, count, score);
-      for (std::uint32_t t = 0; t < count; ++t) {
-        const std::uint32_t j = first + t;
-        if ((prune && score[t] < 0.0) || !nodes_see_each_other(cspace, nodes[i], nodes[j])) continue;
-        edges.add(i, j, distance(nodes[i], nodes[j]));
-      }
-    }
-  }
-  for (std::uint32_t i = 0; i < r; ++i) {
-    for (std::uint32_t p = r; p < total; ++p) {
-      if (prune && corners.drops(i, nodes[p].x() - nodes[i].x(), nodes[p].y() - nodes[i].y())) continue;
-      if (!nodes_see_each_other(cspace, nodes[i], nodes[p])) continue;
-      edges.add(i, p, distance(nodes[i], nodes[p]));
-    }
-  }
+  for_each_pair_to_test(
+      Corners(cspace, nodes), nodes, r, prune, [](std::uint32_t) { return true; },
+      [&](std::uint32_t i, std::uint32_t j) {
+        if (nodes_see_each_other(cspace, nodes[i], nodes[j])) edges.add(i, j, distance(nodes[i], nodes[j]));
+      });
   return edges;
 }
 
