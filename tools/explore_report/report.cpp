@@ -183,6 +183,9 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.control_ms_p99 = us_to_ms(counter(*st, "control_us_p99"));
     r.plan_cpu_ms_p50 = us_to_ms(counter(*st, "plan_cpu_us_p50"));
     r.plan_cpu_ms_p99 = us_to_ms(counter(*st, "plan_cpu_us_p99"));
+    r.goals_seen = counter(*st, "goals_seen");
+    const auto blocked = counter(*st, "goals_blocked"), no_progress = counter(*st, "goals_no_progress");
+    if (blocked && no_progress) r.goals_given_up = *blocked + *no_progress;
   }
   audit_poses(log, options.map_in_world, r);
   const bool free_space = options.scored_map == ScoredMap::kFreeSpace ||
@@ -297,6 +300,8 @@ std::string to_json(const Report& r) {
   j.number("slam_heading_error_mean_deg", r.slam_heading_error_mean_deg, 2);
   j.number("slam_error_aligned_mean_m", r.slam_error_aligned_mean_m, 3);
   j.string("scored_map", r.scored_map);
+  j.integer("goals_seen", r.goals_seen);
+  j.integer("goals_given_up", r.goals_given_up);
   return j.str();
 }
 

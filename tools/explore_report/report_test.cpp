@@ -103,7 +103,12 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   log.add(ch::kExploreState, state);
   log.add(ch::kSimClock, clock);
   log.add(ch::kDaemonStatus,
-          status("explorer", {{"plan_us_p50", 1500}, {"plan_us_p99", 12000}, {"plan_cpu_us_p99", 9000}}));
+          status("explorer", {{"plan_us_p50", 1500},
+                              {"plan_us_p99", 12000},
+                              {"plan_cpu_us_p99", 9000},
+                              {"goals_seen", 9},
+                              {"goals_blocked", 1},
+                              {"goals_no_progress", 2}}));
   log.add(ch::kDaemonStatus, status("slam", {{"plan_us_p50", 99}}));  // not the explorer's
   log.write();
 
@@ -137,6 +142,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   EXPECT_DOUBLE_EQ(*r.plan_ms_p50, 1.5);
   EXPECT_DOUBLE_EQ(*r.plan_ms_p99, 12.0);
   EXPECT_FALSE(r.control_ms_p99);  // the counter is absent
+  EXPECT_EQ(r.goals_seen, 9);
+  EXPECT_EQ(r.goals_given_up, 3);  // blocked and no progress
 
   const std::string json = to_json(r);
   EXPECT_EQ(json.rfind("{\"world\":\"room\",\"strategy\":\"greedy\",\"phase\":\"done_with_unreachable\","
@@ -148,7 +155,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   EXPECT_NE(json.find("\"collisions\":1,\"goals\":4,\"plans\":7,\"plan_ms_p50\":1.500,\"plan_ms_p99\":12.000,"
                       "\"control_ms_p99\":null,\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":9.000,"
                       "\"map_outside_free_m2\":null,\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,"
-                      "\"slam_error_max_m\":null,\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":\"MAP\"}"),
+                      "\"slam_error_max_m\":null,\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":\"MAP\","
+                      "\"goals_seen\":9,\"goals_given_up\":3}"),
             std::string::npos)
       << json;
 
@@ -227,7 +235,8 @@ TEST(ExploreReport, MissingChannelsGiveNulls) {
                             "\"goals\":0,\"plans\":0,\"plan_ms_p50\":null,\"plan_ms_p99\":null,\"control_ms_p99\":null,"
                             "\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":null,\"map_outside_free_m2\":null,"
                             "\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,\"slam_error_max_m\":null,"
-                            "\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":null}");
+                            "\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":null,"
+                            "\"goals_seen\":null,\"goals_given_up\":null}");
 }
 
 // The map's free space that is not reachable, split: beyond the room's wall
