@@ -358,12 +358,18 @@ TEST(CheapestTarget, OnARaggedMapGivesUpForTheGraphsRow) {
   const auto m = shortest_path_matrix(cs, start, targets, PathMatrixOptions{.between_targets = false});
   for (std::size_t i = 0; i < targets.size(); ++i) ASSERT_TRUE(std::isfinite(m.from_start_m[i])) << i;
 
-  VisibilityCache cache;
-  CheapestTargetQuery across;
-  across.cost = [](std::size_t i, double length_m, const std::vector<Point>&) {
-    return i == 0 ? length_m : std::numeric_limits<double>::infinity();
+  // Target `only` the one choice, its cost its length.
+  auto only_choice = [&](std::size_t only) {
+    CheapestTargetQuery q;
+    q.cost = [only](std::size_t i, double length_m, const std::vector<Point>&) {
+      return i == only ? length_m : std::numeric_limits<double>::infinity();
+    };
+    q.choice.assign(targets.size(), 0);
+    q.choice[only] = 1;
+    return q;
   };
-  across.choice = {1, 0, 0, 0};
+  VisibilityCache cache;
+  const CheapestTargetQuery across = only_choice(0);
   const auto far = shortest_paths_to_cheapest(cs, start, targets, across, &cache);
   EXPECT_EQ(cache.counters().builds, 1);
   EXPECT_TRUE(far.all_searched);
@@ -375,12 +381,7 @@ TEST(CheapestTarget, OnARaggedMapGivesUpForTheGraphsRow) {
   const auto far_uncached = shortest_paths_to_cheapest(cs, start, targets, across);
   EXPECT_EQ(far_uncached.from_start_m, far.from_start_m);
 
-  CheapestTargetQuery near = across;
-  near.cost = [](std::size_t i, double length_m, const std::vector<Point>&) {
-    return i == 1 ? length_m : std::numeric_limits<double>::infinity();
-  };
-  near.choice = {0, 1, 0, 0};
-  const auto close = shortest_paths_to_cheapest(cs, start, targets, near, &cache);
+  const auto close = shortest_paths_to_cheapest(cs, start, targets, only_choice(1), &cache);
   EXPECT_EQ(cache.counters().builds, 1);
   EXPECT_FALSE(close.all_searched);
   EXPECT_NEAR(close.from_start_m[1], m.from_start_m[1], 1e-9);
