@@ -385,8 +385,8 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
   //   disconnected interior or an overlap once a far copy widens the box.
   // (The typed_ops fuzzer found each: fuzz/known/README.md.) The cheap
   // test settles most; Boost only what it cannot vouch for. PolygonMap
-  // checks each tile at the end of an insert instead (validate off), the
-  // explorer's live view skips copies (validate_copies off).
+  // checks each tile at the end of an insert instead (validate off); the
+  // explorer's live view is not checked (validate off: live_view.cpp).
   bool copied = false;
   auto copy = [&](const TypedPolygon& polygon) {
     result.polygons.push_back(polygon);
@@ -399,8 +399,7 @@ TypedOpResult typed_union(const TypedMultiPolygon& a, const TypedMultiPolygon& b
       copy(a[i]);
       ++result.unchanged_tail;
     }
-  const bool recheck = options.validate && !a_rings.empty() &&
-                       ((options.validate_copies && copied) || holes_set_aside);
+  const bool recheck = options.validate && !a_rings.empty() && (copied || holes_set_aside);
   if (recheck) {
     std::string why;
     if (!is_valid_cheap_first(result.polygons, why))

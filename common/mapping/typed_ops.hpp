@@ -24,19 +24,15 @@ struct TypedOpOptions {
   // Set: every non-border edge gets this type without a search (inputs whose
   // origin alone decides the type, such as the obstacle band).
   std::optional<EdgeType> uniform_type;
-  // Check the output with bg::is_valid (ok == false if invalid). PolygonMap
-  // turns it off for intermediate results and checks each tile once at the
-  // end of an insert instead (validity checks cost as much as the overlay).
-  bool validate = true;
-  // With validate: typed_union checks its whole result again (the
-  // overlay's output with every polygon it copied unchanged and every hole
-  // it put back), since the overlay moves its output onto its grid but not
+  // Check the output with bg::is_valid (ok == false if invalid); typed_union
+  // checks its whole result, with the polygons it copied unchanged and the
+  // holes it put back (the overlay moves its output onto its grid but not
   // the copies, so an edge can come to overlap a copy, and Boost's verdict
-  // depends on the box it checks. false: copies
-  // are not looked at (the explorer's live view, a planning-only overlay
-  // whose rings Clipper's offset unions anyway: the check was a quarter of a
-  // campus plan's time).
-  bool validate_copies = true;
+  // depends on the box it checks). PolygonMap turns it off for intermediate
+  // results and checks each tile once at the end of an insert instead
+  // (validity checks cost as much as the overlay); the explorer's live view
+  // turns it off (planning only: live_view.cpp).
+  bool validate = true;
   // true: typed_union, typed_clip and typed_difference use Boost.Geometry's
   // overlay and the reassignment pass instead of the edge overlay (the
   // oracle of tests and fuzzing, the benchmark's comparison). Never a

@@ -31,7 +31,17 @@ mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle
 mapping::TypedMultiPolygon with_live_view(const mapping::TypedMultiPolygon& map, const mapping::TypedMultiPolygon& live) {
   if (live.empty()) return map;
   mapping::TypedOpOptions options;
-  options.validate_copies = false;  // planning only: see TypedOpOptions::validate_copies
+  // Not checked with bg::is_valid (half of a plan's CPU on ragged campus
+  // maps, where the cheap test cannot vouch for the whole map and Boost
+  // then checks all of it). The union only feeds the C-space's offset,
+  // which Clipper computes on a 10 um grid from the rings with their
+  // winding and then shrinks by the robot's radius: what the check would
+  // catch (a hole put back or a polygon copied a fraction of a micrometre
+  // across an edge the overlay moved onto its grid) is gone after either
+  // step. A failed overlay or a result outside its area bounds is still
+  // refused (typed_union checks those always), and the plan then is the
+  // map's own. The map itself was checked when its message was decoded.
+  options.validate = false;
   const auto united = mapping::typed_union(map, live, options);
   return united.ok ? united.polygons : map;
 }
