@@ -84,9 +84,9 @@ std::string to_text(const MissionCheckpoint& c) {
   add("end_utime %lld\n", static_cast<long long>(c.end_utime));
   add("travelled_m %.17g\n", c.travelled_m);
   if (c.home) add("home %.17g %.17g %.17g\n", c.home->x_m, c.home->y_m, c.home->theta_rad);
-  add("outcomes %lld %lld %lld %lld\n", static_cast<long long>(c.outcomes.reached),
+  add("outcomes %lld %lld %lld %lld %lld\n", static_cast<long long>(c.outcomes.reached),
       static_cast<long long>(c.outcomes.seen), static_cast<long long>(c.outcomes.blocked),
-      static_cast<long long>(c.outcomes.no_progress));
+      static_cast<long long>(c.outcomes.no_progress), static_cast<long long>(c.outcomes.overdue));
   add("plans %lld\n", static_cast<long long>(c.plans));
   for (const auto& p : c.visited) add("visited %.17g %.17g\n", p.x(), p.y());
   for (const auto& p : c.blacklist) add("blacklist %.17g %.17g\n", p.x(), p.y());
@@ -132,6 +132,8 @@ std::optional<MissionCheckpoint> checkpoint_from_text(const std::string& text, s
       c.home = h;
     } else if (key == "outcomes") {
       ok = static_cast<bool>(f >> c.outcomes.reached >> c.outcomes.seen >> c.outcomes.blocked >> c.outcomes.no_progress);
+      // The fifth, overdue, is newer: a checkpoint written before it has four.
+      if (ok && !(f >> std::ws).eof()) ok = static_cast<bool>(f >> c.outcomes.overdue);
     } else if (key == "plans") {
       ok = static_cast<bool>(f >> c.plans);
     } else if (key == "visited" || key == "blacklist") {
@@ -572,9 +574,9 @@ void Mission::give_up_goal(GiveUp kind, const std::string& why) {
   // after another (intel, greedy: FAILED at coverage 0.993 after five), and
   // each is blacklisted, so they run out; a stuck robot still fails on the
   // goals it makes no progress to.
-  if (kind == GiveUp::kNoProgress && ++goal_failures_ >= options_.max_consecutive_failures) {
+  if (kind != GiveUp::kBlocked && ++goal_failures_ >= options_.max_consecutive_failures) {
     finish(Phase::kFailed,
-           "gave up " + std::to_string(goal_failures_) + " goals in a row for want of progress; the last: " + why,
+           "gave up " + std::to_string(goal_failures_) + " goals in a row unreached; the last: " + why,
            now_utime_);
   } else {
     enter(Phase::kSelecting, "gave up a goal: " + why);
@@ -786,8 +788,8 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       give_up_goal(GiveUp::kNoProgress,
                    format("no progress for %.0f s", static_cast<double>(options_.progress_timeout_us) * 1e-6));
     } else if (now_utime > goal_deadline_utime_) {
-      ++outcomes_.no_progress;
-      give_up_goal(GiveUp::kNoProgress, "not reached in four times its path's driving time");
+      ++outcomes_.overdue;
+      give_up_goal(GiveUp::kOverdue, "not reached in four times its path's driving time");
     }
   }
 

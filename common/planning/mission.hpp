@@ -12,8 +12,11 @@
 //                                                  -> SELECTING (after a newer map)
 //                    seen (its frontier is gone)   -> SELECTING
 //                    blocked (no path any more)    -> blacklisted, SELECTING
-//                    given up (no progress, or not reached within
-//                      progress timeout + 4 x its path's driving time) -> blacklisted, SELECTING
+//                    given up: no progress (the path not shorter and the
+//                      frontier not moved on for progress_timeout_us), or
+//                      overdue (progressing, but not reached within progress
+//                      timeout + 4 x its path's driving time: a frontier that
+//                      keeps receding ahead) -> blacklisted, SELECTING
 //                  each outcome counted in GoalOutcomes.
 //   DONE           no frontier left, or only frontiers already visited (the robot
 //                  stood at their goal facing them: driving cannot show more);
@@ -23,8 +26,9 @@
 //                  it, still SELECTING: a turn on the spot (look_around) and, if
 //                  the robot is in a lesser piece of the C-space, a way back
 //                  along where it came from (back_out_m), planning all along
-//   FAILED         max_consecutive_failures goals given up for want of progress
-//                  (the robot could not get closer: stuck) or plans failed in a
+//   FAILED         max_consecutive_failures goals given up in a row, for want
+//                  of progress or overdue (the robot could not get closer:
+//                  stuck; or it wanders after frontiers it never reaches) or plans failed in a
 //                  row; goals blocked by a newer map are given up and
 //                  blacklisted but are no failure of the robot
 //   PAUSED         `pause`: wheels stopped, goal and state kept; `resume` goes on
@@ -153,8 +157,12 @@ struct GoalOutcomes {
   std::int64_t reached = 0;
   std::int64_t seen = 0;         // its frontier was explored before the robot got there
   std::int64_t blocked = 0;      // no path to it any more: blacklisted
-  std::int64_t no_progress = 0;  // the path did not shrink for progress_timeout_us: blacklisted
-  std::int64_t given_up() const { return blocked + no_progress; }
+  std::int64_t no_progress = 0;  // neither path nor frontier moved on for progress_timeout_us: blacklisted
+  // Progressing, yet not reached by its deadline (Mission::deadline_for): on
+  // open ground, mostly a goal whose frontier receded ahead of the robot
+  // while it explored on the way: blacklisted.
+  std::int64_t overdue = 0;
+  std::int64_t given_up() const { return blocked + no_progress + overdue; }
 };
 
 // What the planner is asked: everything it needs, copied, so it can run on
@@ -265,10 +273,11 @@ class Mission {
   void on_follow_plan(const Plan& plan, std::int64_t now_utime);
   void on_home_plan(const Plan& plan);
   void select(const Plan& plan, std::int64_t now_utime);
-  // Why a goal is given up. Only kNoProgress (the robot could not get
-  // closer: stuck) counts toward FAILED; kBlocked (a newer map has no path
-  // to it) is the map changing, not the robot failing.
-  enum class GiveUp { kBlocked, kNoProgress };
+  // Why a goal is given up (each its GoalOutcomes count). kNoProgress (the
+  // robot could not get closer: stuck) and kOverdue (never reached) count
+  // toward FAILED; kBlocked (a newer map has no path to it) is the map
+  // changing, not the robot failing.
+  enum class GiveUp { kBlocked, kNoProgress, kOverdue };
   void give_up_goal(GiveUp kind, const std::string& why);
   void count_plan_failure(const Plan& plan);
   // When a drive along a path of this length is over, however it seems to

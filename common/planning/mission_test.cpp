@@ -199,6 +199,26 @@ TEST(Mission, ABrokenCheckpointIsRefusedWithAReason) {
   EXPECT_FALSE(checkpoint_from_text("polyexplore-mission 1\nphase 42\nend\n", &why));
   EXPECT_FALSE(checkpoint_from_text("polyexplore-mission 1\nwhatever 1\nend\n", &why));
   EXPECT_NE(why.find("unknown key"), std::string::npos) << why;
+  EXPECT_FALSE(checkpoint_from_text("polyexplore-mission 1\noutcomes 1 2 3 4 x\nend\n", &why));
+  EXPECT_NE(why.find("bad value for 'outcomes'"), std::string::npos) << why;
+}
+
+TEST(Mission, ACheckpointKeepsEveryGoalOutcome) {
+  MissionCheckpoint c;
+  c.outcomes = GoalOutcomes{1, 2, 3, 4, 5};
+  std::string why;
+  const auto back = checkpoint_from_text(to_text(c), &why);
+  ASSERT_TRUE(back) << why;
+  EXPECT_EQ(back->outcomes.reached, 1);
+  EXPECT_EQ(back->outcomes.seen, 2);
+  EXPECT_EQ(back->outcomes.blocked, 3);
+  EXPECT_EQ(back->outcomes.no_progress, 4);
+  EXPECT_EQ(back->outcomes.overdue, 5);
+  // A checkpoint written before the overdue count has four.
+  const auto old = checkpoint_from_text("polyexplore-mission 1\noutcomes 1 2 3 4\nend\n", &why);
+  ASSERT_TRUE(old) << why;
+  EXPECT_EQ(old->outcomes.no_progress, 4);
+  EXPECT_EQ(old->outcomes.overdue, 0);
 }
 
 TEST(Mission, AtTheGoalItTurnsToFaceTheFrontierBeforeItCountsAsReached) {
@@ -421,6 +441,8 @@ TEST(Mission, FailsAfterRepeatedGoalsWithoutProgress) {
   ASSERT_EQ(phase, Phase::kFailed);
   EXPECT_NE(status.find("no progress"), std::string::npos);
   EXPECT_EQ(m.blacklist().size(), 2u);
+  EXPECT_EQ(m.goal_outcomes().no_progress, 2);
+  EXPECT_EQ(m.goal_outcomes().overdue, 0);
 }
 
 // A goal given up is tried once more before the mission ends: here the wheels
@@ -525,11 +547,15 @@ TEST(Mission, AGoalThatMovesOnForEverIsGivenUpAtItsDeadline) {
     if (t % kSecond == 0) m.on_map(receding(20.0 + 0.5 * static_cast<double>(t / kSecond)), t);
     m.on_pose(Pose2{15, 1.5, 0}, t);
     step_with_inline_planning(m, t);
-    if (m.goal_outcomes().no_progress > 0) given_up_at = t;
+    if (m.goal_outcomes().given_up() > 0) given_up_at = t;
   }
   // Deadline: progress timeout (5 s) + 4 x the first path (4.65 m) at 0.4 m/s = 51.5 s.
   ASSERT_GT(given_up_at, 0);
   EXPECT_NEAR(static_cast<double>(given_up_at) * 1e-6, 51.5, 0.5);
+  // Counted as overdue: it progressed all along.
+  EXPECT_EQ(m.goal_outcomes().overdue, 1);
+  EXPECT_EQ(m.goal_outcomes().no_progress, 0);
+  EXPECT_EQ(m.blacklist().size(), 1u);
 }
 
 TEST(Mission, StaleInputsStopTheRobotUntilTheyAreFresh) {

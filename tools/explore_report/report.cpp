@@ -185,7 +185,9 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.plan_cpu_ms_p99 = us_to_ms(counter(*st, "plan_cpu_us_p99"));
     r.goals_seen = counter(*st, "goals_seen");
     const auto blocked = counter(*st, "goals_blocked"), no_progress = counter(*st, "goals_no_progress");
-    if (blocked && no_progress) r.goals_given_up = *blocked + *no_progress;
+    // goals_overdue is newer: before it, goals_no_progress counted those too.
+    const auto overdue = counter(*st, "goals_overdue");
+    if (blocked && no_progress) r.goals_given_up = *blocked + *no_progress + overdue.value_or(0);
   }
   audit_poses(log, options.map_in_world, r);
   const bool free_space = options.scored_map == ScoredMap::kFreeSpace ||

@@ -84,7 +84,7 @@ struct Report {
   std::optional<std::int64_t> collisions, goals, plans;  // goals: reached (there, facing the frontier)
   // The explorer's other goal outcomes (its DAEMON_STATUS counters): seen
   // (its frontier explored on the way, before the robot got there), given
-  // up (blocked, or no progress). Null when the log holds no such counter.
+  // up (blocked, no progress or overdue). Null when the log holds no such counter.
   std::optional<std::int64_t> goals_seen, goals_given_up;
   std::optional<double> plan_ms_p50, plan_ms_p99, control_ms_p99;
   std::optional<double> plan_cpu_ms_p50, plan_cpu_ms_p99;  // the planner thread's CPU time

@@ -108,7 +108,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
                               {"plan_cpu_us_p99", 9000},
                               {"goals_seen", 9},
                               {"goals_blocked", 1},
-                              {"goals_no_progress", 2}}));
+                              {"goals_no_progress", 2},
+                              {"goals_overdue", 4}}));
   log.add(ch::kDaemonStatus, status("slam", {{"plan_us_p50", 99}}));  // not the explorer's
   log.write();
 
@@ -143,7 +144,7 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   EXPECT_DOUBLE_EQ(*r.plan_ms_p99, 12.0);
   EXPECT_FALSE(r.control_ms_p99);  // the counter is absent
   EXPECT_EQ(r.goals_seen, 9);
-  EXPECT_EQ(r.goals_given_up, 3);  // blocked and no progress
+  EXPECT_EQ(r.goals_given_up, 7);  // blocked, no progress and overdue
 
   const std::string json = to_json(r);
   EXPECT_EQ(json.rfind("{\"world\":\"room\",\"strategy\":\"greedy\",\"phase\":\"done_with_unreachable\","
@@ -156,7 +157,7 @@ TEST(ExploreReport, FullLogGivesEveryField) {
                       "\"control_ms_p99\":null,\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":9.000,"
                       "\"map_outside_free_m2\":null,\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,"
                       "\"slam_error_max_m\":null,\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":\"MAP\","
-                      "\"goals_seen\":9,\"goals_given_up\":3}"),
+                      "\"goals_seen\":9,\"goals_given_up\":7}"),
             std::string::npos)
       << json;
 
