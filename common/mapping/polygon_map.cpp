@@ -27,10 +27,6 @@ TypedOpOptions op_options(const PolygonMapOptions& options, const Box& box, bool
   return typed;
 }
 
-bool scan_is_valid(const TypedPolygon& scan, std::string& why) {
-  return (types_match_rings(scan) && is_clearly_valid(std::span(&scan, 1))) || is_valid(scan, &why);
-}
-
 // Insert, step 1: the scan and its band split at the tile lines (each piece
 // of an edge keeps its type) and clipped to every tile their envelope meets.
 // The tiles partition the plane, so the pieces' areas must add up to the
@@ -299,7 +295,7 @@ InsertResult PolygonMap::insert(const PreparedScan& prepared) {
     result.ok = false;
   };
   std::string why;
-  if (!scan_is_valid(prepared.polygon, why)) {
+  if (!is_valid_cheap_first(prepared.polygon, &why)) {
     result.ok = false;
     result.error = "scan polygon invalid: " + why;
     return result;

@@ -244,6 +244,10 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons, UnclearPolygons* u
   return true;
 }
 
+bool is_valid_cheap_first(const TypedPolygon& polygon, std::string* why) {
+  return (types_match_rings(polygon) && is_clearly_valid(std::span(&polygon, 1))) || is_valid(polygon, why);
+}
+
 bool is_valid_cheap_first(std::span<const TypedPolygon> polygons, std::string& why) {
   if (is_clearly_valid(polygons)) return true;
   MultiPolygon geometry;

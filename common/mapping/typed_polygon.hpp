@@ -57,6 +57,10 @@ bool types_match_rings(const TypedMultiPolygon& polygons);
 // given, receives Boost's reason on failure.
 bool is_valid(const TypedPolygon& polygon, std::string* why = nullptr);
 bool is_valid(const TypedMultiPolygon& polygons, std::string* why = nullptr);
+// The same verdict for one polygon, is_clearly_valid asked first (below):
+// Boost only for what the cheap test cannot vouch for. For polygons checked
+// as they come (scans, decoded map messages).
+bool is_valid_cheap_first(const TypedPolygon& polygon, std::string* why = nullptr);
 
 // Even-odd (crossing number) point-in-ring test, independent of the ring's
 // orientation (holes are stored clockwise in the counter-clockwise ring

@@ -137,7 +137,7 @@ DecodedMap decode_map(const pex::polygon_map_t& msg, const MapDecodeOptions& opt
       polygon.geometry.inners().push_back(closed(h));
       polygon.edge_types.push_back(h.types);
     }
-    if (!mapping::is_valid(polygon)) {
+    if (!mapping::is_valid_cheap_first(polygon)) {
       ++out.polygons_dropped;
       continue;
     }
