@@ -26,11 +26,11 @@
 //                  it, still SELECTING: a turn on the spot (look_around) and, if
 //                  the robot is in a lesser piece of the C-space, a way back
 //                  along where it came from (back_out_m), planning all along
-//   FAILED         max_consecutive_failures goals given up in a row, for want
-//                  of progress or overdue (the robot could not get closer:
-//                  stuck; or it wanders after frontiers it never reaches) or plans failed in a
-//                  row; goals blocked by a newer map are given up and
-//                  blacklisted but are no failure of the robot
+//   FAILED         max_consecutive_failures goals given up in a row for want
+//                  of progress (the robot could not get closer: stuck) or
+//                  overdue (it chases frontiers it never reaches), or plans
+//                  failed in a row; goals blocked by a newer map are given up
+//                  and blacklisted but are no failure of the robot
 //   PAUSED         `pause`: wheels stopped, goal and state kept; `resume` goes on
 //   HOMING / HOME  `home`: back to the pose the mission started at, then stopped
 //   STOPPED        `stop`: wheels stopped until `start`
