@@ -565,6 +565,11 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
 }
 
 void Mission::give_up_goal(GiveUp kind, const std::string& why) {
+  switch (kind) {
+    case GiveUp::kBlocked: ++outcomes_.blocked; break;
+    case GiveUp::kNoProgress: ++outcomes_.no_progress; break;
+    case GiveUp::kOverdue: ++outcomes_.overdue; break;
+  }
   if (goal_) blacklist_.push_back(*goal_);
   goal_.reset();
   follower_.clear();
@@ -620,7 +625,6 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   }
   const GoalCandidate& same = plan.candidates[static_cast<std::size_t>(match)];
   if (!same.reachable) {
-    ++outcomes_.blocked;
     give_up_goal(GiveUp::kBlocked, "no path to it any more");
     return;
   }
@@ -784,11 +788,9 @@ MissionOutput Mission::step(std::int64_t now_utime) {
     }
     if (plan_due(now_utime)) request_plan(now_utime, Purpose::kFollow, goal_tight_);
     if (now_utime - progress_utime_ > options_.progress_timeout_us) {
-      ++outcomes_.no_progress;
       give_up_goal(GiveUp::kNoProgress,
                    format("no progress for %.0f s", static_cast<double>(options_.progress_timeout_us) * 1e-6));
     } else if (now_utime > goal_deadline_utime_) {
-      ++outcomes_.overdue;
       give_up_goal(GiveUp::kOverdue, "not reached in four times its path's driving time");
     }
   }

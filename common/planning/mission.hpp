@@ -273,10 +273,10 @@ class Mission {
   void on_follow_plan(const Plan& plan, std::int64_t now_utime);
   void on_home_plan(const Plan& plan);
   void select(const Plan& plan, std::int64_t now_utime);
-  // Why a goal is given up (each its GoalOutcomes count). kNoProgress (the
-  // robot could not get closer: stuck) and kOverdue (never reached) count
-  // toward FAILED; kBlocked (a newer map has no path to it) is the map
-  // changing, not the robot failing.
+  // Why a goal is given up; give_up_goal counts it in GoalOutcomes.
+  // kNoProgress (the robot could not get closer: stuck) and kOverdue (never
+  // reached) count toward FAILED; kBlocked (a newer map has no path to it)
+  // is the map changing, not the robot failing.
   enum class GiveUp { kBlocked, kNoProgress, kOverdue };
   void give_up_goal(GiveUp kind, const std::string& why);
   void count_plan_failure(const Plan& plan);
