@@ -27,6 +27,28 @@ TypedOpOptions op_options(const PolygonMapOptions& options, const Box& box, bool
   return typed;
 }
 
+// One layer's part in one tile: each polygon meeting the tile's box clipped
+// by the walk along the box (clip_split_to_tile: the polygons were split at
+// the tile lines), or by the overlay where the walk leaves it.
+TypedOpResult clip_split_layer(const TypedMultiPolygon& polygons, const std::vector<Box>& envelopes, const Box& box,
+                               const TypedOpOptions& options) {
+  TypedOpResult result{true, {}, {}, {}, 0};
+  for (std::size_t k = 0; k < polygons.size(); ++k) {
+    if (bg::disjoint(envelopes[k], box) || clip_split_to_tile(polygons[k], box, result.polygons)) continue;
+    auto piece = typed_clip(TypedMultiPolygon{polygons[k]}, box, options);
+    if (!piece.ok) return piece;
+    for (auto& p : piece.polygons) result.polygons.push_back(std::move(p));
+  }
+  return result;
+}
+
+std::vector<Box> envelopes_of(const TypedMultiPolygon& polygons) {
+  std::vector<Box> boxes;
+  boxes.reserve(polygons.size());
+  for (const auto& p : polygons) boxes.push_back(bg::return_envelope<Box>(p.geometry.outer()));
+  return boxes;
+}
+
 // Insert, step 1: the scan and its band split at the tile lines (each piece
 // of an edge keeps its type) and clipped to every tile their envelope meets.
 // The tiles partition the plane, so the pieces' areas must add up to the
@@ -43,15 +65,15 @@ std::optional<std::vector<TilePiece>> clip_to_tiles(const PreparedScan& prepared
   Box envelope = bg::return_envelope<Box>(prepared.polygon.geometry);
   if (!band.empty()) bg::expand(envelope, bg::return_envelope<Box>(band_geometry));
   const auto [first, last] = grid.range(envelope);
+  const std::vector<Box> scan_boxes = envelopes_of(scan), band_boxes = envelopes_of(band);
   std::vector<TilePiece> pieces;
   double free_sum = 0.0, band_sum = 0.0;
   for (auto i = first.first; i <= last.first; ++i) {
     for (auto j = first.second; j <= last.second; ++j) {
       const TileKey key{i, j};
       const Box box = grid.box(key);
-      auto free = typed_clip(scan, box, op_options(options, box, false));
-      TypedOpResult clipped_band{true, {}, {}, {}, 0};
-      if (!band.empty()) clipped_band = typed_clip(band, box, op_options(options, box, true));
+      auto free = clip_split_layer(scan, scan_boxes, box, op_options(options, box, false));
+      auto clipped_band = clip_split_layer(band, band_boxes, box, op_options(options, box, true));
       if (!free.ok || !clipped_band.ok) {
         why = !free.ok ? free.error : clipped_band.error;
         return std::nullopt;

@@ -1,6 +1,8 @@
 #include "mapping/tile_grid.hpp"
 
 #include <algorithm>
+#include <array>
+#include <optional>
 #include <cmath>
 #include <vector>
 
@@ -69,6 +71,252 @@ void split_ring(Ring& ring, std::vector<EdgeType>* types, const TileGrid& grid) 
   if (types) *types = std::move(out_types);
 }
 
+// A point of a box's boundary in counter-clockwise order from the lower
+// left corner: the side (0 bottom, 1 right, 2 top, 3 left; a corner belongs
+// to the side it starts) and the position along it, growing
+// counter-clockwise. Compared exactly, as the coordinates are.
+struct SidePosition {
+  int side = 0;
+  double along = 0.0;
+  auto operator<=>(const SidePosition&) const = default;
+};
+
+// clip_split_to_tile's walk (see tile_grid.hpp). Each edge is inside the box
+// (its interior in the box's interior), on a side with the polygon's inside
+// towards the box (kept, typed kBorder), or outside; the maximal runs of
+// kept edges of a ring that is not kept whole start and end on the sides,
+// and each run's end is joined to the next run's start counter-clockwise
+// along the sides: the polygon's inside is on the left of its edges and of
+// a counter-clockwise walk round the box alike.
+class TileClipper {
+ public:
+  explicit TileClipper(const Box& box)
+      : x0_(box.min_corner().x()), y0_(box.min_corner().y()), x1_(box.max_corner().x()), y1_(box.max_corner().y()),
+        corners_{Point(x0_, y0_), Point(x1_, y0_), Point(x1_, y1_), Point(x0_, y1_)} {}
+
+  bool clip(const TypedPolygon& polygon, TypedMultiPolygon& out) {
+    const std::size_t rings = 1 + polygon.geometry.inners().size();
+    if (polygon.edge_types.size() != rings) return false;
+    chains_.clear();
+    bool outer_whole = false;
+    whole_holes_.clear();
+    std::vector<std::size_t> open_rings;  // rings with no kept edge: for the box's own test
+    for (std::size_t r = 0; r < rings; ++r) {
+      const Ring& ring = r == 0 ? polygon.geometry.outer() : polygon.geometry.inners()[r - 1];
+      if (ring.size() < 4) return false;
+      const std::size_t n = ring.size() - 1;
+      kinds_.resize(n);
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto kind = classify(ring[i], ring[i + 1]);
+        if (!kind) return false;
+        kinds_[i] = *kind;
+        kept += *kind != Kind::kOut ? 1 : 0;
+      }
+      if (kept == n) {
+        if (r == 0) outer_whole = true;
+        else whole_holes_.push_back(r);
+        continue;
+      }
+      if (kept == 0) {
+        open_rings.push_back(r);
+        continue;
+      }
+      // Runs of kept edges, each from the edge after an outside one.
+      for (std::size_t i = 0; i < n; ++i) {
+        if (kinds_[i] == Kind::kOut || kinds_[(i + n - 1) % n] != Kind::kOut) continue;
+        Chain chain{r, i, 0};
+        while (kinds_[(i + chain.edges) % n] != Kind::kOut) {
+          const std::size_t e = (i + chain.edges) % n;
+          // A vertex inside the run on a side, with edges into the box on
+          // both sides of it: the boundary touches the side there, and the
+          // walk along the side would pass through it.
+          if (chain.edges > 0 && on_side(ring[e]) && kinds_[e] == Kind::kIn &&
+              kinds_[(e + n - 1) % n] == Kind::kIn)
+            return false;
+          ++chain.edges;
+        }
+        chain.types.assign(chain.edges, EdgeType::kBorder);
+        const auto& types = polygon.edge_types[r];
+        for (std::size_t k = 0; k < chain.edges; ++k)
+          if (kinds_[(i + k) % n] == Kind::kIn) chain.types[k] = types[(i + k) % n];
+        chain.start = position(ring[i]);
+        chain.end = position(ring[(i + chain.edges) % n]);
+        chains_.push_back(std::move(chain));
+      }
+    }
+    const auto ring_of = [&](std::size_t r) -> const Ring& {
+      return r == 0 ? polygon.geometry.outer() : polygon.geometry.inners()[r - 1];
+    };
+    TypedMultiPolygon pieces;
+    if (outer_whole) {
+      // The whole polygon, holes and all (inside its outer ring, so in the box).
+      if (!chains_.empty()) return false;  // a hole beyond its outer ring: not a valid polygon
+      TypedPolygon whole = polygon;
+      for (std::size_t r = 0; r < rings; ++r) retype_sides(ring_of(r), whole.edge_types[r]);
+      out.push_back(std::move(whole));
+      return true;
+    }
+    if (chains_.empty()) {
+      // No edge reaches into the box but the whole holes' (checked alone
+      // below): the box is inside the polygon or outside it, as its centre is.
+      const Point centre((x0_ + x1_) / 2, (y0_ + y1_) / 2);
+      bool inside = false;
+      for (const std::size_t r : open_rings) {
+        const Ring& ring = ring_of(r);
+        for (std::size_t i = 0; i + 1 < ring.size(); ++i) inside ^= ray_crosses(centre, ring[i], ring[i + 1]);
+      }
+      if (!inside) {
+        if (!whole_holes_.empty()) return false;  // a hole in the box, the box outside: not valid
+        return true;
+      }
+      TypedPolygon box;
+      box.geometry.outer().assign(corners_.begin(), corners_.end());
+      box.geometry.outer().push_back(corners_[0]);
+      box.edge_types.assign(1, std::vector<EdgeType>(4, EdgeType::kBorder));
+      pieces.push_back(std::move(box));
+    } else if (!stitch(ring_of, pieces)) {
+      return false;
+    }
+    if (!whole_holes_.empty()) {
+      // Holes inside the box are inside one of the pieces: without a test
+      // which, only where there is one.
+      if (pieces.size() != 1) return false;
+      for (const std::size_t r : whole_holes_) {
+        pieces[0].geometry.inners().push_back(ring_of(r));
+        pieces[0].edge_types.push_back(polygon.edge_types[r]);
+        retype_sides(ring_of(r), pieces[0].edge_types.back());
+      }
+    }
+    for (auto& piece : pieces) out.push_back(std::move(piece));
+    return true;
+  }
+
+ private:
+  enum class Kind : std::uint8_t { kIn, kOnSide, kOut };
+  struct Chain {
+    std::size_t ring, first, edges;
+    std::vector<EdgeType> types;
+    SidePosition start, end;
+  };
+
+  bool outside(const Point& p) const { return p.x() < x0_ || p.x() > x1_ || p.y() < y0_ || p.y() > y1_; }
+  bool on_side(const Point& p) const {
+    return !outside(p) && (p.x() == x0_ || p.x() == x1_ || p.y() == y0_ || p.y() == y1_);
+  }
+  // The side line both points lie on, counter-clockwise along it or not;
+  // nullopt if they share none.
+  std::optional<bool> along_side(const Point& p, const Point& q) const {
+    if (p.y() == y0_ && q.y() == y0_) return q.x() > p.x();
+    if (p.x() == x1_ && q.x() == x1_) return q.y() > p.y();
+    if (p.y() == y1_ && q.y() == y1_) return q.x() < p.x();
+    if (p.x() == x0_ && q.x() == x0_) return q.y() < p.y();
+    return std::nullopt;
+  }
+  // What edge p-q is to the box; nullopt where the walk cannot tell (see
+  // tile_grid.hpp).
+  std::optional<Kind> classify(const Point& p, const Point& q) const {
+    const bool p_out = outside(p), q_out = outside(q);
+    if (!p_out && !q_out) {
+      if (const auto ccw = along_side(p, q)) return *ccw ? Kind::kOnSide : Kind::kOut;
+      return Kind::kIn;  // two points of a convex box not on one side: its interior between them
+    }
+    if (p_out && q_out) {
+      // Both beyond the box: the edge must not pass through it.
+      const bool meets = std::max(p.x(), q.x()) > x0_ && std::min(p.x(), q.x()) < x1_ &&
+                         std::max(p.y(), q.y()) > y0_ && std::min(p.y(), q.y()) < y1_;
+      return meets ? std::nullopt : std::optional(Kind::kOut);
+    }
+    // From a side straight out: the inner point on a side, the outer one on
+    // the far side of that side's line (not on it: an edge along the line).
+    const Point& in = p_out ? q : p;
+    const Point& out = p_out ? p : q;
+    if ((in.x() == x0_ && out.x() < x0_) || (in.x() == x1_ && out.x() > x1_) || (in.y() == y0_ && out.y() < y0_) ||
+        (in.y() == y1_ && out.y() > y1_))
+      return Kind::kOut;
+    return std::nullopt;
+  }
+  SidePosition position(const Point& p) const {
+    if (p.y() == y0_ && p.x() < x1_) return {0, p.x()};
+    if (p.x() == x1_ && p.y() < y1_) return {1, p.y()};
+    if (p.y() == y1_ && p.x() > x0_) return {2, -p.x()};
+    return {3, -p.y()};
+  }
+  void retype_sides(const Ring& ring, std::vector<EdgeType>& types) const {
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i)
+      if (along_side(ring[i], ring[i + 1])) types[i] = EdgeType::kBorder;
+  }
+
+  // Joins the runs into rings: from each run's end counter-clockwise along
+  // the sides (through the corners passed) to the next run's start.
+  template <class RingOf>
+  bool stitch(RingOf&& ring_of, TypedMultiPolygon& pieces) {
+    const std::size_t m = chains_.size();
+    // Two runs meeting at one point of a side: which joins which is not the walk's to say.
+    ends_.clear();
+    for (const Chain& c : chains_) ends_.push_back(c.start), ends_.push_back(c.end);
+    std::sort(ends_.begin(), ends_.end());
+    if (std::adjacent_find(ends_.begin(), ends_.end()) != ends_.end()) return false;
+    order_.resize(m);
+    for (std::size_t k = 0; k < m; ++k) order_[k] = k;
+    std::sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) { return chains_[a].start < chains_[b].start; });
+    auto next_of = [&](std::size_t c) {
+      const auto it = std::upper_bound(order_.begin(), order_.end(), chains_[c].end,
+                                       [&](const SidePosition& e, std::size_t k) { return e < chains_[k].start; });
+      return it == order_.end() ? order_.front() : *it;
+    };
+    used_.assign(m, 0);
+    for (std::size_t first = 0; first < m; ++first) {
+      if (used_[first]) continue;
+      TypedPolygon piece;
+      Ring& ring = piece.geometry.outer();
+      piece.edge_types.resize(1);
+      std::vector<EdgeType>& types = piece.edge_types[0];
+      std::size_t c = first;
+      do {
+        if (used_[c]) return false;  // a run reached twice: the sides' order does not close
+        used_[c] = 1;
+        const Chain& chain = chains_[c];
+        const Ring& source = ring_of(chain.ring);
+        const std::size_t n = source.size() - 1;
+        for (std::size_t k = 0; k < chain.edges; ++k) {
+          ring.push_back(source[(chain.first + k) % n]);
+          types.push_back(chain.types[k]);
+        }
+        const std::size_t next = next_of(c);
+        const SidePosition& e = chain.end;
+        const SidePosition& s = chains_[next].start;
+        ring.push_back(source[(chain.first + chain.edges) % n]);
+        types.push_back(EdgeType::kBorder);
+        if (!(s.side == e.side && s.along > e.along)) {
+          int k = e.side;
+          do {
+            k = (k + 1) % 4;
+            if (position(corners_[static_cast<std::size_t>(k)]) != s) {
+              ring.push_back(corners_[static_cast<std::size_t>(k)]);
+              types.push_back(EdgeType::kBorder);
+            }
+          } while (k != s.side);
+        }
+        c = next;
+      } while (c != first);
+      ring.push_back(ring.front());
+      // Counter-clockwise, as the walk makes every piece of a valid polygon.
+      if (!(bg::area(ring) > 0.0)) return false;
+      pieces.push_back(std::move(piece));
+    }
+    return true;
+  }
+
+  double x0_, y0_, x1_, y1_;
+  std::array<Point, 4> corners_;
+  std::vector<Kind> kinds_;
+  std::vector<Chain> chains_;
+  std::vector<std::size_t> whole_holes_, order_;
+  std::vector<SidePosition> ends_;
+  std::vector<char> used_;
+};
+
 }  // namespace
 
 std::int32_t TileGrid::index(double v) const {
@@ -102,6 +350,11 @@ void split_at_grid(TypedPolygon& polygon, double cell_m, double origin_m) {
   split_ring(polygon.geometry.outer(), &polygon.edge_types[0], grid);
   for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
     split_ring(polygon.geometry.inners()[k], &polygon.edge_types[1 + k], grid);
+}
+
+bool clip_split_to_tile(const TypedPolygon& polygon, const Box& tile, TypedMultiPolygon& out) {
+  TileClipper clipper(tile);
+  return clipper.clip(polygon, out);
 }
 
 }  // namespace pex::mapping

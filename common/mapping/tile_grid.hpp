@@ -35,4 +35,20 @@ void split_at_grid(MultiPolygon& geometry, double cell_m, double origin_m = 0.0)
 // The same for a typed polygon: the pieces of an edge keep its type.
 void split_at_grid(TypedPolygon& polygon, double cell_m, double origin_m = 0.0);
 
+// The part of `polygon` inside `tile` (a tile's box: its sides on grid lines),
+// exactly: every vertex of the result is one of the polygon's or a corner of
+// the box, with the types the overlay's clip gives (an edge on a side of the
+// box kBorder, like the stretches of the sides added). For a polygon split at
+// the grid's lines (split_at_grid), whose edges each lie in one tile, this is
+// a walk along the rings that joins the runs of edges inside the box along
+// its sides, in a fraction of an overlay's time.
+//
+// Returns false, with `out` as it was, where the polygon meets the box
+// otherwise: an edge from inside the box to outside it or across it (not
+// split at the box's lines), the boundary touching a side where it neither
+// enters nor leaves the box, two runs meeting at one point of a side, or a
+// hole inside the box with more than one piece around it. Those are left to
+// the overlay (typed_clip), which handles every case.
+bool clip_split_to_tile(const TypedPolygon& polygon, const Box& tile, TypedMultiPolygon& out);
+
 }  // namespace pex::mapping
