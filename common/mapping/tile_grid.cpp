@@ -17,6 +17,17 @@ constexpr double kGridSnap = 1e-9;
 // Points where segment p-q crosses grid lines, ordered from p to q.
 void grid_crossings(const Point& p, const Point& q, const TileGrid& grid, std::vector<Point>& out) {
   out.clear();
+  // Most edges lie well within one tile: no line within kClearOfLinesM of
+  // their box (far more than line()'s rounding onto the overlay's grid
+  // moves a line), decided without line()'s rounding.
+  constexpr double kClearOfLinesM = 1e-5;
+  auto clear_of_lines = [&](double lo, double hi) {
+    const double line_below = grid.origin_m + std::floor((lo - grid.origin_m) / grid.size_m) * grid.size_m;
+    return lo - line_below > kClearOfLinesM && line_below + grid.size_m - hi > kClearOfLinesM;
+  };
+  if (clear_of_lines(std::min(p.x(), q.x()), std::max(p.x(), q.x())) &&
+      clear_of_lines(std::min(p.y(), q.y()), std::max(p.y(), q.y())))
+    return;
   // Canonical order, so both traversal directions compute the same bits.
   const bool swap = (q.x() < p.x()) || (q.x() == p.x() && q.y() < p.y());
   const Point a = swap ? q : p, b = swap ? p : q;

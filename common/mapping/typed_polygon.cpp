@@ -77,10 +77,17 @@ namespace {
 
 struct SweepEdge {
   Point a, b;
-  double min_x, max_x, min_y, max_y;
   std::uint32_t ring;   // global ring index
   std::uint32_t index;  // edge index in its ring
   std::uint32_t ring_edges;
+};
+
+// What the sweep reads of an edge for every pair it passes: its box, packed
+// apart from the edge (the sweep's inner loop was bound by reading whole
+// edges).
+struct SweepBox {
+  double min_x, max_x, min_y, max_y;
+  std::uint32_t edge;
 };
 
 // Closer than the clearance counts as touching. Not 1e-9 m alone:
@@ -141,6 +148,7 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons, UnclearPolygons* u
   thread_local std::vector<const Ring*> rings;
   thread_local std::vector<std::size_t> ring_polygon;  // the polygon of each ring
   thread_local std::vector<SweepEdge> edges;
+  thread_local std::vector<SweepBox> sweep;
   rings.clear();
   ring_polygon.clear();
   edges.clear();
@@ -164,30 +172,37 @@ bool is_clearly_valid(std::span<const TypedPolygon> polygons, UnclearPolygons* u
         if (!std::isfinite(a.x()) || !std::isfinite(a.y())) return fail(k, k);
         if (a.x() == b.x() && a.y() == b.y()) return fail(k, k);
         twice_area += a.x() * b.y() - b.x() * a.y();
-        edges.push_back({a, b, std::min(a.x(), b.x()), std::max(a.x(), b.x()), std::min(a.y(), b.y()),
-                         std::max(a.y(), b.y()), static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(i),
+        edges.push_back({a, b, static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(i),
                          static_cast<std::uint32_t>(ring.size() - 1)});
       }
       if ((r == first_ring) != (twice_area > 0.0)) return fail(k, k);
     }
   }
+  sweep.clear();
   double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x, min_y = min_x, max_y = -min_x;
-  for (const SweepEdge& e : edges) {
-    min_x = std::min(min_x, e.min_x), max_x = std::max(max_x, e.max_x);
-    min_y = std::min(min_y, e.min_y), max_y = std::max(max_y, e.max_y);
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const SweepEdge& e = edges[k];
+    sweep.push_back({std::min(e.a.x(), e.b.x()), std::max(e.a.x(), e.b.x()), std::min(e.a.y(), e.b.y()),
+                     std::max(e.a.y(), e.b.y()), static_cast<std::uint32_t>(k)});
+    const SweepBox& b = sweep.back();
+    min_x = std::min(min_x, b.min_x), max_x = std::max(max_x, b.max_x);
+    min_y = std::min(min_y, b.min_y), max_y = std::max(max_y, b.max_y);
   }
   const double clearance =
       edges.empty() ? kMinClearance : std::max(kMinClearance, kRelativeClearance * std::max(max_x - min_x, max_y - min_y));
   // Sweep over x: every pair of edges whose boxes overlap (with clearance).
-  std::sort(edges.begin(), edges.end(), [](const SweepEdge& l, const SweepEdge& r) { return l.min_x < r.min_x; });
-  for (std::size_t i = 0; i < edges.size(); ++i) {
-    const SweepEdge& e = edges[i];
-    for (std::size_t j = i + 1; j < edges.size() && edges[j].min_x <= e.max_x + clearance; ++j) {
-      const SweepEdge& f = edges[j];
-      if (f.min_y > e.max_y + clearance || f.max_y < e.min_y - clearance) continue;
+  std::sort(sweep.begin(), sweep.end(), [](const SweepBox& l, const SweepBox& r) { return l.min_x < r.min_x; });
+  for (std::size_t i = 0; i < sweep.size(); ++i) {
+    const SweepBox& eb = sweep[i];
+    const double reach_x = eb.max_x + clearance, low_y = eb.min_y - clearance, high_y = eb.max_y + clearance;
+    for (std::size_t j = i + 1; j < sweep.size() && sweep[j].min_x <= reach_x; ++j) {
+      if (sweep[j].min_y > high_y || sweep[j].max_y < low_y) continue;
+      const SweepEdge& e = edges[eb.edge];
+      const SweepEdge& f = edges[sweep[j].edge];
       if (e.ring == f.ring) {
         const std::uint32_t n = e.ring_edges;
-        const bool f_follows = (e.index + 1) % n == f.index, e_follows = (f.index + 1) % n == e.index;
+        const auto after = [n](std::uint32_t index) { return index + 1 == n ? 0 : index + 1; };
+        const bool f_follows = after(e.index) == f.index, e_follows = after(f.index) == e.index;
         if (f_follows || e_follows) {
           // Consecutive edges: they share one vertex; the other ends must be
           // clear of the other edge (no spike, no fold back onto it).
