@@ -499,16 +499,24 @@ class Overlay {
         }
       });
       tested_by_.assign(edges_.size(), kNone);
+      // Plain pointers and a copy of the buckets: through the members (of a
+      // thread_local), the stores to tested_by_ made every read reload them.
+      const InputEdge* const edges = edges_.data();
+      const std::uint32_t* const bucket_start = bucket_start_.data();
+      const std::uint32_t* const bucket_edges = bucket_edges_.data();
+      std::uint32_t* const tested_by = tested_by_.data();
+      const Buckets buckets = edge_buckets_;
       for (std::uint32_t k = 0; k < edges_.size(); ++k) {
-        const InputEdge& e = edges_[k];
+        const InputEdge& e = edges[k];
         if (e.side != 0 || !near_meet_box(e)) continue;
         const IPoint ed = e.q - e.p;
-        edge_buckets_.for_each(e.cp, e.cq, 2, [&](std::size_t b) {
-          for (std::uint32_t m = bucket_start_[b]; m < bucket_start_[b + 1]; ++m) {
-            const std::uint32_t j = bucket_edges_[m];
-            if (tested_by_[j] == k) continue;  // met in an earlier bucket
-            tested_by_[j] = k;
-            const InputEdge& f = edges_[j];
+        buckets.for_each(e.cp, e.cq, 2, [&](std::size_t b) {
+          const std::uint32_t last = bucket_start[b + 1];
+          for (std::uint32_t m = bucket_start[b]; m < last; ++m) {
+            const std::uint32_t j = bucket_edges[m];
+            if (tested_by[j] == k) continue;  // met in an earlier bucket
+            tested_by[j] = k;
+            const InputEdge& f = edges[j];
             if (f.max_x < e.min_x || f.min_x > e.max_x || f.max_y < e.min_y || f.min_y > e.max_y) continue;
             const int d1 = sign(cross(ed, f.p - e.p)), d2 = sign(cross(ed, f.q - e.p));
             if (d1 * d2 >= 0) continue;
@@ -533,13 +541,20 @@ class Overlay {
   // those two, in `near`: every hot pixel a segment between those cells
   // passes but does not end in (margin 1), and those its bent pieces can
   // pass (below). Most edges have none.
-  void gather_near(const IPoint& cp, const IPoint& cq, I64 margin, std::vector<IPoint>& near) {
+  void gather_near(const IPoint& from, const IPoint& to, I64 margin, std::vector<IPoint>& near) {
     near.clear();
+    // Copies in locals: `near` grows while the buckets are read, and the
+    // compiler must assume that a store there changes what a reference or
+    // a member (of a thread_local) holds.
+    const IPoint cp = from, cq = to;
     const I64 min_x = std::min(cp.x, cq.x) - margin, max_x = std::max(cp.x, cq.x) + margin;
     const I64 min_y = std::min(cp.y, cq.y) - margin, max_y = std::max(cp.y, cq.y) + margin;
-    hot_buckets_.for_each(cp, cq, margin + 1, [&](std::size_t b) {
-      const IPoint* last = hot_by_bucket_.data() + hot_start_[b + 1];
-      for (const IPoint* c = hot_by_bucket_.data() + hot_start_[b]; c != last; ++c)
+    const IPoint* const hot = hot_by_bucket_.data();
+    const std::uint32_t* const hot_start = hot_start_.data();
+    const Buckets buckets = hot_buckets_;
+    buckets.for_each(cp, cq, margin + 1, [&](std::size_t b) {
+      const IPoint* last = hot + hot_start[b + 1];
+      for (const IPoint* c = hot + hot_start[b]; c != last; ++c)
         if (c->x >= min_x && c->x <= max_x && c->y >= min_y && c->y <= max_y && *c != cp && *c != cq)
           near.push_back(*c);
     });
