@@ -525,7 +525,9 @@ void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t l
     // the chord's length): no square root per point.
     const Point& pa = points[a];
     const double dx = points[b].x() - pa.x(), dy = points[b].y() - pa.y();
-    const double length = std::hypot(dx, dy);
+    // sqrt, not hypot: a map's coordinates are far from where hypot's care
+    // against overflow matters, and hypot is several times slower.
+    const double length = std::sqrt(dx * dx + dy * dy);
     double worst = -1.0;
     std::size_t worst_index = a;
     for (std::size_t i = a + 1; i < b; ++i) {
