@@ -11,16 +11,23 @@
 // Invariants: nothing crashes; each result is either refused with a reason
 // or valid, typed on every edge, and of a plausible area: a union covers
 // each operand and no more than both, a difference no more than its first
-// operand, a clip no more than the operand or the box.
+// operand, a clip no more than the operand or the box. And the tile clip of
+// the map's insert (clip_split_to_tile): each polygon of the first operand
+// split at a grid of 0.75 m through the input's grid points (vertices on
+// lines, edges along them); every tile the walk clips is valid and has the
+// overlay's area, and the tiles' areas add up to the polygon's.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
+#include <sstream>
 #include <string>
 
 #include <boost/geometry.hpp>
 
 #include "fuzz_check.hpp"
 #include "fuzz_input.hpp"
+#include "mapping/tile_grid.hpp"
 #include "mapping/typed_ops.hpp"
 #include "mapping/typed_polygon.hpp"
 
@@ -99,6 +106,53 @@ void check_result(const TypedOpResult& r, const char* op, double lo, double hi, 
                      std::to_string(hi) + "]");
 }
 
+TypedOpOptions clip_options(const Box& box) {
+  TypedOpOptions options;
+  options.border_box = box;
+  return options;
+}
+
+// The polygon, the tile and the walk's piece, to the last bit.
+std::string case_of(const TypedPolygon& split, const Box& box, const TypedMultiPolygon& walked) {
+  std::ostringstream out;
+  out << std::setprecision(17) << "\n  split polygon " << bg::wkt(split.geometry) << "\n  tile " << bg::wkt(box)
+      << "\n  walked " << bg::wkt(geometry_of(walked));
+  return out.str();
+}
+
+// The walk's tiles against the overlay's clip of the same split polygon.
+void check_tile_clips(const TypedPolygon& polygon) {
+  const TileGrid grid{0.75, 0.25};
+  const auto [first, last] = grid.range(bg::return_envelope<Box>(polygon.geometry));
+  if (last.first - first.first > 8 || last.second - first.second > 8) return;  // a vertex far away
+  TypedPolygon split = polygon;
+  split_at_grid(split, grid.size_m, grid.origin_m);
+  const double whole = bg::area(split.geometry), boundary = bg::perimeter(split.geometry);
+  double walked_sum = 0.0;
+  bool all_walked = true;
+  for (auto i = first.first; i <= last.first; ++i)
+    for (auto j = first.second; j <= last.second; ++j) {
+      const Box box = grid.box({i, j});
+      TypedMultiPolygon walked;
+      if (!clip_split_to_tile(split, box, walked)) {
+        all_walked = false;
+        continue;
+      }
+      std::string why;
+      PEX_FUZZ_CHECK(is_valid(walked, &why), "tile clip gave invalid polygons: " + why + case_of(split, box, walked));
+      const auto overlaid = typed_clip({split}, box, clip_options(box));
+      const double tolerance = 1e-9 * std::max(1.0, whole) + (boundary + 4 * grid.size_m) * kOverlayMovesM;
+      if (overlaid.ok)
+        PEX_FUZZ_CHECK(std::abs(area(walked) - area(overlaid.polygons)) <= tolerance,
+                       "tile clip area " + std::to_string(area(walked)) + " against the overlay's " +
+                           std::to_string(area(overlaid.polygons)) + case_of(split, box, walked));
+      walked_sum += area(walked);
+    }
+  if (all_walked)
+    PEX_FUZZ_CHECK(std::abs(walked_sum - whole) <= 1e-9 * std::max(1.0, whole),
+                   "tile clips add up to " + std::to_string(walked_sum) + ", the polygon is " + std::to_string(whole));
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -118,5 +172,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                std::max(0.0, area_a - area_b), area_a, rounded * (perimeter_a + perimeter_b));
   check_result(typed_clip(a, box, options), "clip", 0.0, std::min(area_a, bg::area(box)),
                rounded * (perimeter_a + bg::perimeter(box)));
+  for (const auto& polygon : a) check_tile_clips(polygon);
   return 0;
 }

@@ -109,6 +109,7 @@ class TileClipper {
     const std::size_t rings = 1 + polygon.geometry.inners().size();
     if (polygon.edge_types.size() != rings) return false;
     chains_.clear();
+    on_sides_.clear();
     bool outer_whole = false;
     whole_holes_.clear();
     std::vector<std::size_t> open_rings;  // rings with no kept edge: for the box's own test
@@ -119,6 +120,8 @@ class TileClipper {
       kinds_.resize(n);
       std::size_t kept = 0;
       for (std::size_t i = 0; i < n; ++i) {
+        if (near_sides(ring[i])) return false;
+        if (on_side(ring[i])) on_sides_.push_back(ring[i]);
         const auto kind = classify(ring[i], ring[i + 1]);
         if (!kind) return false;
         kinds_[i] = *kind;
@@ -159,6 +162,17 @@ class TileClipper {
     const auto ring_of = [&](std::size_t r) -> const Ring& {
       return r == 0 ? polygon.geometry.outer() : polygon.geometry.inners()[r - 1];
     };
+    // Two vertices at one point of a side: split_at_grid puts crossings
+    // within 1e-9 m of a line on it, which can make a polygon touch itself
+    // there (two crossings put on one corner). Inside or outside is then not
+    // the walk's to say.
+    std::sort(on_sides_.begin(), on_sides_.end(), [](const Point& a, const Point& b) {
+      return a.x() != b.x() ? a.x() < b.x() : a.y() < b.y();
+    });
+    if (std::adjacent_find(on_sides_.begin(), on_sides_.end(), [](const Point& a, const Point& b) {
+          return a.x() == b.x() && a.y() == b.y();
+        }) != on_sides_.end())
+      return false;
     TypedMultiPolygon pieces;
     if (outer_whole) {
       // The whole polygon, holes and all (inside its outer ring, so in the box).
@@ -199,6 +213,11 @@ class TileClipper {
         retype_sides(ring_of(r), pieces[0].edge_types.back());
       }
     }
+    // A hole may touch its outer ring or another hole at a point (valid),
+    // and a piece's ring may then pass that point twice or through a vertex
+    // of a hole: the overlay cuts such rings apart, the walk leaves them to
+    // it. Only polygons with holes can (a scan has none, a band rarely).
+    if (!polygon.geometry.inners().empty() && !is_clearly_valid(pieces)) return false;
     for (auto& piece : pieces) out.push_back(std::move(piece));
     return true;
   }
@@ -212,6 +231,24 @@ class TileClipper {
   };
 
   bool outside(const Point& p) const { return p.x() < x0_ || p.x() > x1_ || p.y() < y0_ || p.y() > y1_; }
+  // A vertex within kNearSideM of the box's sides but not on them, or on a
+  // side within kNearSideM of a corner but not at it. Features that small
+  // near the sides are below the overlay's grid, which snaps them away: a
+  // piece would keep them as slivers or spikes, and split_at_grid may have
+  // moved a vertex there by up to 1e-9 m (onto a line), which can fold such
+  // a feature over.
+  static constexpr double kNearSideM = kOverlayMovesM;
+  bool near_sides(const Point& p) const {
+    const double dx = std::max({x0_ - p.x(), 0.0, p.x() - x1_}), dy = std::max({y0_ - p.y(), 0.0, p.y() - y1_});
+    if (dx > 0.0 || dy > 0.0) return dx * dx + dy * dy < kNearSideM * kNearSideM;  // outside
+    const double gap = std::min(std::min(p.x() - x0_, x1_ - p.x()), std::min(p.y() - y0_, y1_ - p.y()));
+    if (gap > 0.0) return gap < kNearSideM;  // inside
+    for (const Point& corner : corners_) {  // on a side
+      const double d2 = bg::comparable_distance(p, corner);
+      if (d2 > 0.0 && d2 < kNearSideM * kNearSideM) return true;
+    }
+    return false;
+  }
   bool on_side(const Point& p) const {
     return !outside(p) && (p.x() == x0_ || p.x() == x1_ || p.y() == y0_ || p.y() == y1_);
   }
@@ -229,7 +266,11 @@ class TileClipper {
   std::optional<Kind> classify(const Point& p, const Point& q) const {
     const bool p_out = outside(p), q_out = outside(q);
     if (!p_out && !q_out) {
-      if (const auto ccw = along_side(p, q)) return *ccw ? Kind::kOnSide : Kind::kOut;
+      // Along a side clockwise: the polygon's inside is beyond the side. Left
+      // to the overlay: another edge of the polygon may run along the same
+      // stretch the other way (a spike a hair wide, valid to Boost), which
+      // the overlay's grid closes and the walk would take for a side.
+      if (const auto ccw = along_side(p, q)) return *ccw ? std::optional(Kind::kOnSide) : std::nullopt;
       return Kind::kIn;  // two points of a convex box not on one side: its interior between them
     }
     if (p_out && q_out) {
@@ -263,11 +304,15 @@ class TileClipper {
   template <class RingOf>
   bool stitch(RingOf&& ring_of, TypedMultiPolygon& pieces) {
     const std::size_t m = chains_.size();
-    // Two runs meeting at one point of a side: which joins which is not the walk's to say.
+    // Two runs meeting at one point of a side (or nearer than the overlay's
+    // grid): which joins which is not the walk's to say.
     ends_.clear();
     for (const Chain& c : chains_) ends_.push_back(c.start), ends_.push_back(c.end);
     std::sort(ends_.begin(), ends_.end());
-    if (std::adjacent_find(ends_.begin(), ends_.end()) != ends_.end()) return false;
+    if (std::adjacent_find(ends_.begin(), ends_.end(), [](const SidePosition& a, const SidePosition& b) {
+          return a.side == b.side && b.along - a.along < kNearSideM;
+        }) != ends_.end())
+      return false;
     order_.resize(m);
     for (std::size_t k = 0; k < m; ++k) order_[k] = k;
     std::sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) { return chains_[a].start < chains_[b].start; });
@@ -297,6 +342,7 @@ class TileClipper {
         const std::size_t next = next_of(c);
         const SidePosition& e = chain.end;
         const SidePosition& s = chains_[next].start;
+        const std::size_t stretch_first = ring.size();
         ring.push_back(source[(chain.first + chain.edges) % n]);
         types.push_back(EdgeType::kBorder);
         if (!(s.side == e.side && s.along > e.along)) {
@@ -309,6 +355,13 @@ class TileClipper {
             }
           } while (k != s.side);
         }
+        // The stretch along the sides from the run's end to the next run's
+        // start: a piece shorter than the overlay's grid would be a sliver.
+        const Point& stretch_end = ring_of(chains_[next].ring)[chains_[next].first];
+        for (std::size_t v = stretch_first; v < ring.size(); ++v)
+          if (bg::comparable_distance(ring[v], v + 1 < ring.size() ? ring[v + 1] : stretch_end) <
+              kNearSideM * kNearSideM)
+            return false;
         c = next;
       } while (c != first);
       ring.push_back(ring.front());
@@ -326,6 +379,7 @@ class TileClipper {
   std::vector<std::size_t> whole_holes_, order_;
   std::vector<SidePosition> ends_;
   std::vector<char> used_;
+  std::vector<Point> on_sides_;  // the vertices on a side
 };
 
 }  // namespace
