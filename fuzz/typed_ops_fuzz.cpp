@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
+#include <span>
 #include <sstream>
 #include <string>
 
@@ -127,6 +128,15 @@ void check_tile_clips(const TypedPolygon& polygon) {
   if (last.first - first.first > 8 || last.second - first.second > 8) return;  // a vertex far away
   TypedPolygon split = polygon;
   split_at_grid(split, grid.size_m, grid.origin_m);
+  // split_at_grid puts crossings within 1e-9 m of a line on it, which can
+  // fold a feature of a hair's width over: the overlay and the walk then
+  // answer differently and neither is wrong, and bg::is_valid's verdict on
+  // such a polygon changes with the compiler's rounding (this one was valid
+  // to clang's build, not to gcc's). The walk's pieces must be valid where
+  // the split polygon is; their areas are compared with the overlay's where
+  // it is clearly valid (is_clearly_valid: no feature near Boost's grid).
+  const bool valid = is_valid(split);
+  const bool comparable = valid && is_clearly_valid(std::span(&split, 1));
   const double whole = bg::area(split.geometry), boundary = bg::perimeter(split.geometry);
   double walked_sum = 0.0;
   bool all_walked = true;
@@ -138,17 +148,19 @@ void check_tile_clips(const TypedPolygon& polygon) {
         all_walked = false;
         continue;
       }
+      if (!valid) continue;
       std::string why;
       PEX_FUZZ_CHECK(is_valid(walked, &why), "tile clip gave invalid polygons: " + why + case_of(split, box, walked));
+      walked_sum += area(walked);
+      if (!comparable) continue;
       const auto overlaid = typed_clip({split}, box, clip_options(box));
       const double tolerance = 1e-9 * std::max(1.0, whole) + (boundary + 4 * grid.size_m) * kOverlayMovesM;
       if (overlaid.ok)
         PEX_FUZZ_CHECK(std::abs(area(walked) - area(overlaid.polygons)) <= tolerance,
                        "tile clip area " + std::to_string(area(walked)) + " against the overlay's " +
                            std::to_string(area(overlaid.polygons)) + case_of(split, box, walked));
-      walked_sum += area(walked);
     }
-  if (all_walked)
+  if (all_walked && comparable)
     PEX_FUZZ_CHECK(std::abs(walked_sum - whole) <= 1e-9 * std::max(1.0, whole),
                    "tile clips add up to " + std::to_string(walked_sum) + ", the polygon is " + std::to_string(whole));
 }

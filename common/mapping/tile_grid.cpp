@@ -101,9 +101,10 @@ struct SidePosition {
 // a counter-clockwise walk round the box alike.
 class TileClipper {
  public:
-  explicit TileClipper(const Box& box)
-      : x0_(box.min_corner().x()), y0_(box.min_corner().y()), x1_(box.max_corner().x()), y1_(box.max_corner().y()),
-        corners_{Point(x0_, y0_), Point(x1_, y0_), Point(x1_, y1_), Point(x0_, y1_)} {}
+  void set_box(const Box& box) {
+    x0_ = box.min_corner().x(), y0_ = box.min_corner().y(), x1_ = box.max_corner().x(), y1_ = box.max_corner().y();
+    corners_ = {Point(x0_, y0_), Point(x1_, y0_), Point(x1_, y1_), Point(x0_, y1_)};
+  }
 
   bool clip(const TypedPolygon& polygon, TypedMultiPolygon& out) {
     const std::size_t rings = 1 + polygon.geometry.inners().size();
@@ -112,9 +113,12 @@ class TileClipper {
     on_sides_.clear();
     bool outer_whole = false;
     whole_holes_.clear();
-    std::vector<std::size_t> open_rings;  // rings with no kept edge: for the box's own test
+    open_rings_.clear();
+    const auto ring_of = [&](std::size_t r) -> const Ring& {
+      return r == 0 ? polygon.geometry.outer() : polygon.geometry.inners()[r - 1];
+    };
     for (std::size_t r = 0; r < rings; ++r) {
-      const Ring& ring = r == 0 ? polygon.geometry.outer() : polygon.geometry.inners()[r - 1];
+      const Ring& ring = ring_of(r);
       if (ring.size() < 4) return false;
       const std::size_t n = ring.size() - 1;
       kinds_.resize(n);
@@ -133,7 +137,7 @@ class TileClipper {
         continue;
       }
       if (kept == 0) {
-        open_rings.push_back(r);
+        open_rings_.push_back(r);
         continue;
       }
       // Runs of kept edges, each from the edge after an outside one.
@@ -159,9 +163,6 @@ class TileClipper {
         chains_.push_back(std::move(chain));
       }
     }
-    const auto ring_of = [&](std::size_t r) -> const Ring& {
-      return r == 0 ? polygon.geometry.outer() : polygon.geometry.inners()[r - 1];
-    };
     // Two vertices at one point of a side: split_at_grid puts crossings
     // within 1e-9 m of a line on it, which can make a polygon touch itself
     // there (two crossings put on one corner). Inside or outside is then not
@@ -187,7 +188,7 @@ class TileClipper {
       // below): the box is inside the polygon or outside it, as its centre is.
       const Point centre((x0_ + x1_) / 2, (y0_ + y1_) / 2);
       bool inside = false;
-      for (const std::size_t r : open_rings) {
+      for (const std::size_t r : open_rings_) {
         const Ring& ring = ring_of(r);
         for (std::size_t i = 0; i + 1 < ring.size(); ++i) inside ^= ray_crosses(centre, ring[i], ring[i + 1]);
       }
@@ -372,11 +373,12 @@ class TileClipper {
     return true;
   }
 
-  double x0_, y0_, x1_, y1_;
+  double x0_ = 0.0, y0_ = 0.0, x1_ = 0.0, y1_ = 0.0;
   std::array<Point, 4> corners_;
   std::vector<Kind> kinds_;
   std::vector<Chain> chains_;
   std::vector<std::size_t> whole_holes_, order_;
+  std::vector<std::size_t> open_rings_;  // rings with no kept edge: for the box's own test
   std::vector<SidePosition> ends_;
   std::vector<char> used_;
   std::vector<Point> on_sides_;  // the vertices on a side
@@ -418,7 +420,8 @@ void split_at_grid(TypedPolygon& polygon, double cell_m, double origin_m) {
 }
 
 bool clip_split_to_tile(const TypedPolygon& polygon, const Box& tile, TypedMultiPolygon& out) {
-  TileClipper clipper(tile);
+  thread_local TileClipper clipper;  // its scratch keeps its capacity: this runs per tile of every insert
+  clipper.set_box(tile);
   return clipper.clip(polygon, out);
 }
 
