@@ -107,12 +107,6 @@ void check_result(const TypedOpResult& r, const char* op, double lo, double hi, 
                      std::to_string(hi) + "]");
 }
 
-TypedOpOptions clip_options(const Box& box) {
-  TypedOpOptions options;
-  options.border_box = box;
-  return options;
-}
-
 // The polygon, the tile and the walk's piece, to the last bit.
 std::string case_of(const TypedPolygon& split, const Box& box, const TypedMultiPolygon& walked) {
   std::ostringstream out;
@@ -153,7 +147,7 @@ void check_tile_clips(const TypedPolygon& polygon) {
       PEX_FUZZ_CHECK(is_valid(walked, &why), "tile clip gave invalid polygons: " + why + case_of(split, box, walked));
       walked_sum += area(walked);
       if (!comparable) continue;
-      const auto overlaid = typed_clip({split}, box, clip_options(box));
+      const auto overlaid = typed_clip({split}, box);  // it types the box's sides kBorder itself
       const double tolerance = 1e-9 * std::max(1.0, whole) + (boundary + 4 * grid.size_m) * kOverlayMovesM;
       if (overlaid.ok)
         PEX_FUZZ_CHECK(std::abs(area(walked) - area(overlaid.polygons)) <= tolerance,

@@ -76,17 +76,11 @@ void add_hole(TypedPolygon& p, std::vector<Point> clockwise, EdgeType type) {
   p.edge_types.emplace_back(n, type);
 }
 
-TypedOpOptions clip_options(const Box& box) {
-  TypedOpOptions options;
-  options.border_box = box;
-  return options;
-}
-
 // The walk's piece and the overlay's (typed_clip) of the same split polygon
 // agree: area, validity and the length of each edge type, within what the
 // overlay's 1 um grid moves.
 void expect_like_the_overlay(const TypedPolygon& split, const Box& box, const TypedMultiPolygon& walked) {
-  const auto overlaid = typed_clip({split}, box, clip_options(box));
+  const auto overlaid = typed_clip({split}, box);  // it types the box's sides kBorder itself
   ASSERT_TRUE(overlaid.ok) << overlaid.error;
   std::string why;
   EXPECT_TRUE(is_valid(walked, &why)) << why;
