@@ -143,7 +143,7 @@ class TileClipper {
       // Runs of kept edges, each from the edge after an outside one.
       for (std::size_t i = 0; i < n; ++i) {
         if (kinds_[i] == Kind::kOut || kinds_[(i + n - 1) % n] != Kind::kOut) continue;
-        Chain chain{r, i, 0};
+        Chain chain{r, i, 0, {}, {}, {}};
         while (kinds_[(i + chain.edges) % n] != Kind::kOut) {
           const std::size_t e = (i + chain.edges) % n;
           // A vertex inside the run on a side, with edges into the box on
