@@ -16,6 +16,9 @@ constexpr double kStraightCurvature = 1e-6;
 // A point the body already overlaps may come this much nearer while the robot
 // drives along it (sliding off a wall it grazed).
 constexpr double kTouchingSlackM = 0.005;
+// The speed model counts a robot this slow as stopped (rounding of the
+// braking steps leaves a few 1e-17 m/s otherwise).
+constexpr double kStoppedMps = 1e-3;
 
 double straight_free_distance(double x, double y, double r) {
   if (x <= 0.0 || std::abs(y) >= r) return kInf;  // behind or beside the swept band
@@ -80,22 +83,44 @@ double max_safe_speed(double free_distance_m, const ScanGuardOptions& options) {
   return a * (std::sqrt(t * t + 2.0 * room / a) - t);
 }
 
-GuardedCommand guard_command(std::span<const mapping::Point> points_robot_frame, double v_mps, double omega_radps,
-                             double travelled_since_scan_m, const ScanGuardOptions& options) {
+double ScanGuard::braked_speed(double step_s) const {
+  const double braked = speed_mps_ - std::max(0.0, step_s) * options_.max_decel_mps2;
+  return braked > kStoppedMps ? braked : 0.0;
+}
+
+void ScanGuard::sent(double v_mps, double step_s) { speed_mps_ = std::max({0.0, v_mps, braked_speed(step_s)}); }
+
+GuardedCommand ScanGuard::command(std::span<const mapping::Point> points_robot_frame, double v_mps, double omega_radps,
+                                  double since_scan_s, double step_s) {
   GuardedCommand out{v_mps, omega_radps, false};
-  if (!(v_mps > 0.0)) return out;
-  const double curvature = omega_radps / v_mps;
-  const double free = free_distance_along_arc(points_robot_frame, curvature, options.body_radius_m) -
-                      std::max(0.0, travelled_since_scan_m);
-  const double safe = max_safe_speed(free, options);
-  if (v_mps <= safe) return out;
-  out.limited = true;
-  if (safe > 0.0) {
-    out.v_mps = safe;
-    out.omega_radps = curvature * safe;  // the same arc, slower
-  } else {
-    out.v_mps = 0.0;  // blocked: turn on the spot (omega kept)
+  if (v_mps > 0.0) {
+    const double curvature = omega_radps / v_mps;
+    // The robot drove on since the scan came in, at most at the speed it may have.
+    const double used = std::max(0.0, since_scan_s) * speed_mps_;
+    const double rolling = braked_speed(step_s);
+    const double bare =
+        max_safe_speed(free_distance_along_arc(points_robot_frame, curvature, options_.body_radius_m) - used, options_);
+    double safe = bare;
+    if (options_.side_margin_m > 0.0 && safe > options_.creep_speed_mps) {
+      // A wider body: where it meets a return the bare one passes beside it.
+      const double wide = free_distance_along_arc(points_robot_frame, curvature,
+                                                  options_.body_radius_m + options_.side_margin_m) -
+                          used;
+      safe = std::max(max_safe_speed(wide, options_), options_.creep_speed_mps);
+    }
+    if (bare < rolling) {
+      out = {0.0, 0.0, true};  // no room on the new arc from the speed it has: brake on the old one
+    } else if (v_mps > safe) {
+      out.limited = true;
+      if (safe > 0.0) {
+        out.v_mps = safe;
+        out.omega_radps = curvature * safe;  // the same arc, slower
+      } else {
+        out.v_mps = 0.0;  // blocked and stopped: turn on the spot (omega kept)
+      }
+    }
   }
+  sent(out.v_mps, step_s);
   return out;
 }
 

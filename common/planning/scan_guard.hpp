@@ -17,6 +17,12 @@ namespace pex::planning {
 struct ScanGuardOptions {
   double body_radius_m = 0.25;     // the robot's disk itself, no margin
   double margin_m = 0.03;          // kept between the body and a return when stopped
+  // A return this near the side of the band the body sweeps holds the robot
+  // to creep_speed_mps: the wheels, the pose since the scan and the next
+  // command's turn move the body a few millimetres off the arc the guard
+  // checked, and only at a crawl are those millimetres few (0: off).
+  double side_margin_m = 0.03;
+  double creep_speed_mps = 0.1;
   double max_decel_mps2 = 0.5;     // braking the guard may count on
   // How long the robot keeps its speed after a command before it brakes: the
   // control period, the base driver and the drives. An intel mission touched
@@ -51,14 +57,45 @@ struct GuardedCommand {
   bool limited = false;  // the guard changed the command
 };
 
-// The command the guard lets through. A forward command keeps its curvature
-// (the follower's path) at a speed from which the robot can brake on that arc
-// margin_m short of the first return, counting travelled_since_scan_m (how far
-// the robot may have moved since the scan was taken) as already used up. When
-// the arc is blocked at once the robot turns on the spot at the commanded
-// turn rate instead: a disk turning in place sweeps nothing new. Commands
-// that do not drive forward pass unchanged.
-GuardedCommand guard_command(std::span<const mapping::Point> points_robot_frame, double v_mps, double omega_radps,
-                             double travelled_since_scan_m, const ScanGuardOptions& options);
+// The guard between the follower and the wheels: it keeps a model of the
+// forward speed the robot may still have (the commands it let through,
+// braked no faster than max_decel_mps2), because a robot does not turn onto a
+// new arc at the speed it is told but at the speed it has.
+//
+// A forward command keeps its curvature (the follower's path) at a speed from
+// which the robot can brake on that arc margin_m short of the first return,
+// counting what it may have driven since the scan as used up, and at most
+// creep_speed_mps while a return lies within side_margin_m of the band the
+// body sweeps. A new arc the robot cannot brake on from the speed it may still
+// have is refused: the command is a stop, on which the drives brake both
+// wheels alike, on the arc the robot is driving (the one let through before,
+// checked when it was). Blocked with the robot stopped, it turns on the spot
+// at the commanded rate: a disk turning in place sweeps nothing new, one
+// turning while it rolls swings its side off the arc toward the turn (fr079,
+// simulated: a straight run 1 mm past a corner, then a turn toward it at
+// 0.4 m/s). Commands that do not drive forward pass unchanged.
+// Pure: points and time steps in, command out; no clock, no I/O.
+class ScanGuard {
+ public:
+  explicit ScanGuard(ScanGuardOptions options = {}) : options_(options) {}
+
+  // The command to send step_s after the previous one, on returns (robot
+  // frame) taken since_scan_s ago.
+  GuardedCommand command(std::span<const mapping::Point> points_robot_frame, double v_mps, double omega_radps,
+                         double since_scan_s, double step_s);
+  // A command sent without the guard (no scan yet, guard off): the speed
+  // model follows it too.
+  void sent(double v_mps, double step_s);
+  // The forward speed the robot may still have (m/s).
+  double speed_mps() const { return speed_mps_; }
+  const ScanGuardOptions& options() const { return options_; }
+
+ private:
+  // The speed the robot may have step_s after the last command, braking.
+  double braked_speed(double step_s) const;
+
+  ScanGuardOptions options_;
+  double speed_mps_ = 0.0;
+};
 
 }  // namespace pex::planning

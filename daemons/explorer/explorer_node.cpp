@@ -17,7 +17,7 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 ExplorerNode::ExplorerNode(ExplorerOptions options, Planning planning)
-    : options_(std::move(options)), mission_(options_.mission) {
+    : options_(std::move(options)), mission_(options_.mission), guard_(options_.guard) {
   if (planning == Planning::kWorkerThread) worker_ = std::make_unique<PlanWorker>();
 }
 
@@ -116,17 +116,17 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   pex::velocity_cmd_t cmd = stop_command(now_utime);
   cmd.v = last_.command.v_mps;
   cmd.omega = last_.command.omega_radps;
-  if (options_.scan_guard && scan_utime_ && cmd.v > 0.0) {
-    // The robot drove on since the scan came in (at most the last command's
-    // speed): that much of the free arc is gone already.
+  const double step_s = last_step_utime_ ? std::max<std::int64_t>(0, now_utime - *last_step_utime_) * 1e-6 : 0.0;
+  last_step_utime_ = now_utime;
+  if (options_.scan_guard && scan_utime_) {
     const double since_scan_s = std::max<std::int64_t>(0, now_utime - *scan_utime_) * 1e-6;
-    const auto guarded =
-        planning::guard_command(scan_points_, cmd.v, cmd.omega, last_v_mps_ * since_scan_s, options_.guard);
+    const auto guarded = guard_.command(scan_points_, cmd.v, cmd.omega, since_scan_s, step_s);
     if (guarded.limited) ++counters_.guard_limited_steps;
     cmd.v = guarded.v_mps;
     cmd.omega = guarded.omega_radps;
+  } else {
+    guard_.sent(cmd.v, step_s);
   }
-  last_v_mps_ = cmd.v;
   return cmd;
 }
 

@@ -142,7 +142,8 @@ class ExplorerNode {
   std::vector<mapping::Point> scan_points_;
   std::optional<pex::laser_scan_t> last_scan_;  // for the live view of the next plan
   std::optional<std::int64_t> scan_utime_;
-  double last_v_mps_ = 0.0;  // the forward speed last commanded
+  planning::ScanGuard guard_;                  // with its model of the robot's speed
+  std::optional<std::int64_t> last_step_utime_;  // the previous control step
 };
 
 }  // namespace pex::explorer

@@ -123,6 +123,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.scan_guard = config.get<bool>("scan_guard", o.scan_guard);
   o.guard.body_radius_m = config.get<double>("guard_body_radius_m", o.guard.body_radius_m, in_range(0.01, 5.0));
   o.guard.margin_m = config.get<double>("guard_margin_m", o.guard.margin_m, in_range(0.0, 1.0));
+  o.guard.side_margin_m = config.get<double>("guard_side_margin_m", o.guard.side_margin_m, in_range(0.0, 1.0));
+  o.guard.creep_speed_mps = config.get<double>("guard_creep_speed_mps", o.guard.creep_speed_mps, in_range(0.0, 5.0));
   o.guard.max_decel_mps2 = config.get<double>("guard_decel_mps2", o.guard.max_decel_mps2, in_range(0.01, 20.0));
   o.guard.latency_s = config.get<double>("guard_latency_ms", o.guard.latency_s * 1e3, in_range(0.0, 2000.0)) * 1e-3;
   o.live_view.range_m = config.get<double>("live_view_range_m", o.live_view.range_m, in_range(0.0, 30.0));
