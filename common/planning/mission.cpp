@@ -552,6 +552,7 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
   looking_around_ = false;
   backing_out_ = backed_out_ = false;
   goal_ = best->position;
+  goal_missing_map_utime_ = -1;
   goal_frontier_ = best->frontier_point;
   progress_goal_ = best->frontier_point;
   best_remaining_m_ = best->path_length_m;
@@ -609,6 +610,20 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
       match_reachable = c.reachable;
     }
   }
+  if (match < 0 && !plan.best_candidate()) {
+    // Gone, and nothing else within reach on this map either: at the end of
+    // a mission a frontier behind a passage that SLAM's corrections open and
+    // close drops out of one map and comes back in the next (intel, greedy:
+    // 400 s and 27 m of path to one goal that never shrank, MOVING and
+    // "no goal on this map" by turns, each turn a stop). The goal and its
+    // path are kept until a newer map confirms.
+    if (goal_missing_map_utime_ < 0) goal_missing_map_utime_ = last_request_map_utime_;
+    if (last_request_map_utime_ == goal_missing_map_utime_) {
+      status_ = "goal's frontier not on this map, no other goal: going on until a newer map confirms";
+      return;
+    }
+  }
+  goal_missing_map_utime_ = -1;
   if (match < 0) {
     // The frontier behind the goal has been seen: a success, choose anew.
     ++outcomes_.seen;

@@ -345,6 +345,9 @@ class Mission {
   std::int64_t reached_utime_ = -1;           // the last goal was reached then ...
   std::int64_t scan_wait_until_utime_ = -1;   // ... and a map with a scan from then on is awaited until this
   std::int64_t last_empty_map_utime_ = -1;
+  // The map on which the goal's frontier dropped out while no other goal was
+  // reachable (-1: it has not): the goal is kept until a newer map confirms.
+  std::int64_t goal_missing_map_utime_ = -1;
   int empty_plans_ = 0;
   int goal_failures_ = 0;
   int plan_failures_ = 0;

@@ -301,6 +301,43 @@ TEST(Mission, GoalGoneOnANewMapChoosesAnother) {
   EXPECT_TRUE(m.blacklist().empty());  // explored, not given up
 }
 
+// At the end of a mission a frontier behind a passage SLAM's corrections
+// open and close drops out of one map and comes back in the next. With no
+// other goal in reach, the goal is kept (and driven to) until a newer map
+// confirms it gone; one map without it is not "seen".
+TEST(Mission, AGoalGoneFromOneMapWithNothingElseInReachIsKeptUntilANewerMapConfirms) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{14, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point goal = *out.goal;
+  EXPECT_GT(goal.x(), 15.0);
+  // One map without the frontier: still moving to the goal, on its path.
+  m.on_map(corridor(false, false), 900'000);
+  m.on_pose(Pose2{14.3, 1.5, 0}, kSecond);
+  out = step_with_inline_planning(m, kSecond);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(distance(*out.goal, goal), 0.01);
+  EXPECT_GT(out.command.v_mps, 0.0);
+  // It comes back: the same goal, nothing counted.
+  m.on_map(corridor(false, true), 1'900'000);
+  m.on_pose(Pose2{14.6, 1.5, 0}, 2 * kSecond);
+  out = step_with_inline_planning(m, 2 * kSecond);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(distance(*out.goal, goal), 0.01);
+  EXPECT_EQ(m.goal_outcomes().seen, 0);
+  // Gone on one map and on the next: seen.
+  for (int k = 3; k <= 4; ++k) {
+    m.on_map(corridor(false, false), k * kSecond - 100'000);
+    m.on_pose(Pose2{14.3 + 0.3 * k, 1.5, 0}, k * kSecond);
+    out = step_with_inline_planning(m, k * kSecond);
+  }
+  EXPECT_EQ(m.goal_outcomes().seen, 1);
+  EXPECT_EQ(out.phase, Phase::kSelecting) << out.status;
+  EXPECT_FALSE(out.goal.has_value());
+}
+
 TEST(Mission, BlockedGoalIsBlacklisted) {
   // Without approach points: the frontier behind the gap would otherwise be
   // approached (looked at through the gap) instead of being blocked.
