@@ -88,7 +88,6 @@ class ScanGuard {
   void sent(double v_mps, double step_s);
   // The forward speed the robot may still have (m/s).
   double speed_mps() const { return speed_mps_; }
-  const ScanGuardOptions& options() const { return options_; }
 
  private:
   // The speed the robot may have step_s after the last command, braking.
