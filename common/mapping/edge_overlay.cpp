@@ -302,6 +302,7 @@ class Overlay {
   std::vector<std::uint32_t> hot_start_, hot_cells_;        // hot cells by bucket
   std::vector<IPoint> hot_by_bucket_;                       // hot_[hot_cells_[m]]: read without the hop
   std::vector<std::uint32_t> tested_by_;  // by edge of b: the edge of a that last met it
+  std::vector<std::uint32_t> candidates_;  // scratch of find_hot_pixels
   std::vector<Bend> bends_;               // by edge, then along it
   std::vector<IPoint> path_, found_, edge_near_, piece_near_;  // scratch of bend_edges
   std::vector<IPoint> vertices_;
@@ -511,13 +512,24 @@ class Overlay {
         if (e.side != 0 || !near_meet_box(e)) continue;
         const IPoint ed = e.q - e.p;
         buckets.for_each(e.cp, e.cq, 2, [&](std::size_t b) {
-          const std::uint32_t last = bucket_start[b + 1];
-          for (std::uint32_t m = bucket_start[b]; m < last; ++m) {
+          const std::uint32_t first = bucket_start[b], last = bucket_start[b + 1];
+          // The edges whose boxes meet e's and that no earlier bucket
+          // brought are listed first, without a branch per edge: which
+          // ones do is a coin toss to the branch predictor.
+          if (candidates_.size() < last - first) candidates_.resize(last - first);
+          std::uint32_t* const listed = candidates_.data();
+          std::size_t count = 0;
+          const I64 lo_x = e.min_x, hi_x = e.max_x, lo_y = e.min_y, hi_y = e.max_y;
+          for (std::uint32_t m = first; m < last; ++m) {
             const std::uint32_t j = bucket_edges[m];
-            if (tested_by[j] == k) continue;  // met in an earlier bucket
-            tested_by[j] = k;
             const InputEdge& f = edges[j];
-            if (f.max_x < e.min_x || f.min_x > e.max_x || f.max_y < e.min_y || f.min_y > e.max_y) continue;
+            listed[count] = j;
+            count += static_cast<std::size_t>((tested_by[j] != k) & (f.max_x >= lo_x) & (f.min_x <= hi_x) &
+                                              (f.max_y >= lo_y) & (f.min_y <= hi_y));
+            tested_by[j] = k;
+          }
+          for (std::size_t c = 0; c < count; ++c) {
+            const InputEdge& f = edges[listed[c]];
             const int d1 = sign(cross(ed, f.p - e.p)), d2 = sign(cross(ed, f.q - e.p));
             if (d1 * d2 >= 0) continue;
             const IPoint fd = f.q - f.p;
@@ -553,10 +565,24 @@ class Overlay {
     const std::uint32_t* const hot_start = hot_start_.data();
     const Buckets buckets = hot_buckets_;
     buckets.for_each(cp, cq, margin + 1, [&](std::size_t b) {
-      const IPoint* last = hot + hot_start[b + 1];
-      for (const IPoint* c = hot + hot_start[b]; c != last; ++c)
-        if (c->x >= min_x && c->x <= max_x && c->y >= min_y && c->y <= max_y && *c != cp && *c != cq)
-          near.push_back(*c);
+      const IPoint* c = hot + hot_start[b];
+      const IPoint* const last = hot + hot_start[b + 1];
+      if (c == last) return;
+      // Written without branches (each pixel stored, kept by moving the
+      // end past it): whether a pixel is near is a coin toss to the branch
+      // predictor, and its misses were most of the look-up.
+      std::size_t kept = near.size();
+      near.resize(kept + static_cast<std::size_t>(last - c));
+      IPoint* const out = near.data();
+      const I64 lo_x = min_x, hi_x = max_x, lo_y = min_y, hi_y = max_y;
+      const IPoint end_a = cp, end_b = cq;
+      for (; c != last; ++c) {
+        const IPoint h = *c;
+        out[kept] = h;
+        kept += static_cast<std::size_t>((h.x >= lo_x) & (h.x <= hi_x) & (h.y >= lo_y) & (h.y <= hi_y) &
+                                         ((h.x != end_a.x) | (h.y != end_a.y)) & ((h.x != end_b.x) | (h.y != end_b.y)));
+      }
+      near.resize(kept);
     });
   }
 
