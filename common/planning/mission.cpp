@@ -1,5 +1,6 @@
 #include "planning/mission.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -84,9 +85,10 @@ std::string to_text(const MissionCheckpoint& c) {
   add("end_utime %lld\n", static_cast<long long>(c.end_utime));
   add("travelled_m %.17g\n", c.travelled_m);
   if (c.home) add("home %.17g %.17g %.17g\n", c.home->x_m, c.home->y_m, c.home->theta_rad);
-  add("outcomes %lld %lld %lld %lld %lld\n", static_cast<long long>(c.outcomes.reached),
+  add("outcomes %lld %lld %lld %lld %lld %lld\n", static_cast<long long>(c.outcomes.reached),
       static_cast<long long>(c.outcomes.seen), static_cast<long long>(c.outcomes.blocked),
-      static_cast<long long>(c.outcomes.no_progress), static_cast<long long>(c.outcomes.overdue));
+      static_cast<long long>(c.outcomes.no_progress), static_cast<long long>(c.outcomes.overdue),
+      static_cast<long long>(c.outcomes.came_back));
   add("plans %lld\n", static_cast<long long>(c.plans));
   for (const auto& p : c.visited) add("visited %.17g %.17g\n", p.x(), p.y());
   for (const auto& p : c.blacklist) add("blacklist %.17g %.17g\n", p.x(), p.y());
@@ -132,8 +134,10 @@ std::optional<MissionCheckpoint> checkpoint_from_text(const std::string& text, s
       c.home = h;
     } else if (key == "outcomes") {
       ok = static_cast<bool>(f >> c.outcomes.reached >> c.outcomes.seen >> c.outcomes.blocked >> c.outcomes.no_progress);
-      // The fifth, overdue, is newer: a checkpoint written before it has four.
+      // The fifth, overdue, and the sixth, came_back, are newer: a checkpoint
+      // written before them has four or five.
       if (ok && !(f >> std::ws).eof()) ok = static_cast<bool>(f >> c.outcomes.overdue);
+      if (ok && !(f >> std::ws).eof()) ok = static_cast<bool>(f >> c.outcomes.came_back);
     } else if (key == "plans") {
       ok = static_cast<bool>(f >> c.plans);
     } else if (key == "visited" || key == "blacklist") {
@@ -610,27 +614,42 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
       match_reachable = c.reachable;
     }
   }
-  if (match < 0 && !plan.best_candidate()) {
-    // Gone, and nothing else within reach on this map either: at the end of
-    // a mission a frontier behind a passage that SLAM's corrections open and
-    // close drops out of one map and comes back in the next (intel, greedy:
-    // 400 s and 27 m of path to one goal that never shrank, MOVING and
-    // "no goal on this map" by turns, each turn a stop). The goal and its
-    // path are kept until a newer map confirms.
+  if (match < 0) {
+    // Gone from this map: a frontier behind a passage that SLAM's
+    // corrections open and close drops out of one map and comes back in the
+    // next (intel, greedy: 400 s and 27 m of path to one goal that never
+    // shrank, MOVING and "no goal on this map" by turns, each turn a stop;
+    // with other goals in reach, a switch to one of them and back, 10-18 m
+    // each way). The goal and its path are kept until a newer map confirms.
     if (goal_missing_map_utime_ < 0) goal_missing_map_utime_ = last_request_map_utime_;
     if (last_request_map_utime_ == goal_missing_map_utime_) {
-      status_ = "goal's frontier not on this map, no other goal: going on until a newer map confirms";
+      status_ = "goal's frontier not on this map: going on until a newer map confirms";
       return;
     }
   }
   goal_missing_map_utime_ = -1;
   if (match < 0) {
-    // The frontier behind the goal has been seen: a success, choose anew.
-    ++outcomes_.seen;
+    // The frontier behind the goal has been seen: a success, choose anew;
+    // unless a goal here was seen before and its frontier came back (b30,
+    // intel greedy: one place chosen six times, 5-10 m each), which the
+    // robot cannot clear by driving there: given up here (retried once
+    // before the mission ends, as every goal given up).
+    const Point at = *goal_;
+    const bool seen_here_before = std::any_of(seen_at_.begin(), seen_at_.end(), [&](const Point& p) {
+      return distance(p, at) <= options_.goal_match_radius_m;
+    });
     goal_failures_ = 0;
     goal_.reset();
     follower_.clear();
-    enter(Phase::kSelecting, "goal seen");
+    if (seen_here_before) {
+      ++outcomes_.came_back;
+      blacklist_.push_back(at);
+      enter(Phase::kSelecting, "goal seen again where its frontier came back before: given up here");
+    } else {
+      ++outcomes_.seen;
+      seen_at_.push_back(at);
+      enter(Phase::kSelecting, "goal seen");
+    }
     if (goal_tight_) {
       last_request_utime_ = -1;  // select on a plan with the full clearance first
     } else {

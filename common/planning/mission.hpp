@@ -10,7 +10,9 @@
 //                  kept (no switching) until it is
 //                    reached (there, and turned to face its frontier point)
 //                                                  -> SELECTING (after a newer map)
-//                    seen (its frontier is gone)   -> SELECTING
+//                    seen (its frontier is gone from two maps in a row)
+//                                                  -> SELECTING; seen where a
+//                      goal was seen before: blacklisted (came back)
 //                    blocked (no path any more)    -> blacklisted, SELECTING
 //                    given up: no progress (the path not shorter and the
 //                      frontier not moved on for progress_timeout_us), or
@@ -162,7 +164,11 @@ struct GoalOutcomes {
   // open ground, mostly a goal whose frontier receded ahead of the robot
   // while it explored on the way: blacklisted.
   std::int64_t overdue = 0;
-  std::int64_t given_up() const { return blocked + no_progress + overdue; }
+  // Seen where a goal was seen before: a frontier the maps show and drop by
+  // turns (a passage SLAM's corrections open and close, a sliver at a glass
+  // gap), not one the robot clears by driving there: blacklisted.
+  std::int64_t came_back = 0;
+  std::int64_t given_up() const { return blocked + no_progress + overdue + came_back; }
 };
 
 // What the planner is asked: everything it needs, copied, so it can run on
@@ -366,6 +372,9 @@ class Mission {
   PlanStats plan_stats_;
   std::vector<Point> blacklist_;  // goals given up and goals reached
   std::vector<Point> visited_;
+  // Where goals were seen (GoalOutcomes::came_back). Not checkpointed: a
+  // restarted mission learns them again, at one more trip each.
+  std::vector<Point> seen_at_;
   GoalOutcomes outcomes_;
 };
 

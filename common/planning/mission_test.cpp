@@ -292,13 +292,69 @@ TEST(Mission, GoalGoneOnANewMapChoosesAnother) {
   auto out = step_with_inline_planning(m, 0);
   ASSERT_EQ(out.phase, Phase::kMoving);
   EXPECT_GT(out.goal->x(), 10.0);
-  // The right end turned out to be a wall.
+  const Point right_goal = *out.goal;
+  // The right end turned out to be a wall. One map without it: the goal is
+  // kept (a map can drop a frontier and show it again in the next).
   m.on_map(corridor(true, false), 900'000);
   m.on_pose(Pose2{14.5, 1.5, 0}, 1'000'000);
   out = step_with_inline_planning(m, 1'000'000);  // replan period reached
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(distance(*out.goal, right_goal), 0.01);
+  EXPECT_EQ(m.goal_outcomes().seen, 0);
+  // A newer map without it either: seen; the other end is chosen.
+  m.on_map(corridor(true, false), 1'900'000);
+  m.on_pose(Pose2{14.8, 1.5, 0}, 2'000'000);
+  out = step_with_inline_planning(m, 2'000'000);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_LT(out.goal->x(), 1.0);
+  EXPECT_EQ(m.goal_outcomes().seen, 1);
   EXPECT_TRUE(m.blacklist().empty());  // explored, not given up
+}
+
+// A frontier the maps show and drop by turns (b30, intel greedy: one place
+// chosen six times, 5-10 m each, among trips to others): the second time a
+// goal there is seen, it is given up, and the robot goes elsewhere.
+TEST(Mission, AGoalSeenWhereOneWasSeenBeforeIsGivenUp) {
+  Mission m(test_options());
+  std::int64_t t = 0;
+  // Maps and poses at t, a step at t + 100 ms.
+  auto at = [&](const mapping::TypedMultiPolygon& map, double x) {
+    m.on_map(map, t);
+    m.on_pose(Pose2{x, 1.5, 0}, t + 100'000);
+    t += kSecond;
+    return step_with_inline_planning(m, t - kSecond + 100'000);
+  };
+  auto out = at(corridor(true, true), 14.0);
+  ASSERT_EQ(out.phase, Phase::kMoving);
+  const Point right_goal = *out.goal;
+  ASSERT_GT(right_goal.x(), 15.0);
+  // The right end gone from two maps in a row: seen, the left end chosen.
+  at(corridor(true, false), 14.0);
+  out = at(corridor(true, false), 14.0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(out.goal->x(), 5.0);
+  EXPECT_EQ(m.goal_outcomes().seen, 1);
+  // The maps turn: the right end is back and the left one gone (seen too),
+  // so the right end is chosen again.
+  at(corridor(false, true), 14.0);
+  out = at(corridor(false, true), 14.0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  ASSERT_LT(distance(*out.goal, right_goal), 0.5) << out.status;
+  EXPECT_EQ(m.goal_outcomes().seen, 2);
+  EXPECT_TRUE(m.blacklist().empty());
+  // Gone again: seen where it was seen before, given up there.
+  at(corridor(true, false), 14.0);
+  out = at(corridor(true, false), 14.0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(out.goal->x(), 5.0);
+  EXPECT_EQ(m.goal_outcomes().seen, 2);
+  EXPECT_EQ(m.goal_outcomes().came_back, 1);
+  // Back once more: blacklisted, so the robot keeps to the left end.
+  out = at(corridor(true, true), 14.0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(out.goal->x(), 5.0);
+  ASSERT_FALSE(m.blacklist().empty());
+  EXPECT_LT(distance(m.blacklist().back(), right_goal), 0.01);
 }
 
 // At the end of a mission a frontier behind a passage SLAM's corrections

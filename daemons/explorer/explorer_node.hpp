@@ -100,6 +100,7 @@ class ExplorerNode {
     v.total("goals_blocked", last_.goals.blocked);
     v.total("goals_no_progress", last_.goals.no_progress);
     v.total("goals_overdue", last_.goals.overdue);
+    v.total("goals_came_back", last_.goals.came_back);
     v.total("phase", static_cast<std::int64_t>(last_.phase));
     v.total("plan_us_p50", us(plan_ms_.quantile(0.5)));
     v.total("plan_us_p99", us(plan_ms_.quantile(0.99)));

@@ -185,9 +185,11 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.plan_cpu_ms_p99 = us_to_ms(counter(*st, "plan_cpu_us_p99"));
     r.goals_seen = counter(*st, "goals_seen");
     const auto blocked = counter(*st, "goals_blocked"), no_progress = counter(*st, "goals_no_progress");
-    // goals_overdue is newer: before it, goals_no_progress counted those too.
-    const auto overdue = counter(*st, "goals_overdue");
-    if (blocked && no_progress) r.goals_given_up = *blocked + *no_progress + overdue.value_or(0);
+    // goals_overdue and goals_came_back are newer: before the first,
+    // goals_no_progress counted those too; before the second, none was.
+    const auto overdue = counter(*st, "goals_overdue"), came_back = counter(*st, "goals_came_back");
+    if (blocked && no_progress)
+      r.goals_given_up = *blocked + *no_progress + overdue.value_or(0) + came_back.value_or(0);
   }
   audit_poses(log, options.map_in_world, r);
   const bool free_space = options.scored_map == ScoredMap::kFreeSpace ||

@@ -109,7 +109,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
                               {"goals_seen", 9},
                               {"goals_blocked", 1},
                               {"goals_no_progress", 2},
-                              {"goals_overdue", 4}}));
+                              {"goals_overdue", 3},
+                              {"goals_came_back", 1}}));
   log.add(ch::kDaemonStatus, status("slam", {{"plan_us_p50", 99}}));  // not the explorer's
   log.write();
 
@@ -144,7 +145,7 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   EXPECT_DOUBLE_EQ(*r.plan_ms_p99, 12.0);
   EXPECT_FALSE(r.control_ms_p99);  // the counter is absent
   EXPECT_EQ(r.goals_seen, 9);
-  EXPECT_EQ(r.goals_given_up, 7);  // blocked, no progress and overdue
+  EXPECT_EQ(r.goals_given_up, 7);  // blocked, no progress, overdue and came back
 
   const std::string json = to_json(r);
   EXPECT_EQ(json.rfind("{\"world\":\"room\",\"strategy\":\"greedy\",\"phase\":\"done_with_unreachable\","
