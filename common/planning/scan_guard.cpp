@@ -119,6 +119,8 @@ GuardedCommand ScanGuard::command(std::span<const mapping::Point> points_robot_f
         out.v_mps = 0.0;  // blocked and stopped: turn on the spot (omega kept)
       }
     }
+  } else if (v_mps == 0.0 && omega_radps != 0.0 && braked_speed(step_s) > 0.0) {
+    out = {0.0, 0.0, true};  // a turn on the spot waits until the robot may have stopped
   }
   sent(out.v_mps, step_s);
   return out;

@@ -8,6 +8,7 @@
 // line: a robot arcing round a corner meets the corner with its side, where a
 // straight-ahead check sees nothing. Pure: points in, command out; no clock,
 // no I/O.
+#include <algorithm>
 #include <span>
 
 #include "mapping/typed_polygon.hpp"
@@ -31,6 +32,12 @@ struct ScanGuardOptions {
   // on into it (simulated time at x10, where a loaded machine's few ms of
   // delay are tens of ms).
   double latency_s = 0.2;
+  // The forward speed the robot may have when the guard starts: the explorer
+  // sets its top speed. A restarted explorer does not know whether the base
+  // still drives its predecessor's last command (the base driver keeps it
+  // for its cmd_timeout_ms), so it assumes the worst until braking at
+  // max_decel_mps2 would have stopped the robot.
+  double start_speed_mps = 0.0;
 };
 
 // The arc length the robot (a disk of body_radius_m centred at the origin,
@@ -73,11 +80,14 @@ struct GuardedCommand {
 // at the commanded rate: a disk turning in place sweeps nothing new, one
 // turning while it rolls swings its side off the arc toward the turn (fr079,
 // simulated: a straight run 1 mm past a corner, then a turn toward it at
-// 0.4 m/s). Commands that do not drive forward pass unchanged.
+// 0.4 m/s). For the same reason a turn on the spot the follower asks for is
+// a stop until the robot may have stopped. Commands that drive backward
+// pass unchanged.
 // Pure: points and time steps in, command out; no clock, no I/O.
 class ScanGuard {
  public:
-  explicit ScanGuard(ScanGuardOptions options = {}) : options_(options) {}
+  explicit ScanGuard(ScanGuardOptions options = {})
+      : options_(options), speed_mps_(std::max(0.0, options.start_speed_mps)) {}
 
   // The command to send step_s after the previous one, on returns (robot
   // frame) taken since_scan_s ago.

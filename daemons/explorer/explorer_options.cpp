@@ -127,6 +127,9 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.guard.creep_speed_mps = config.get<double>("guard_creep_speed_mps", o.guard.creep_speed_mps, in_range(0.0, 5.0));
   o.guard.max_decel_mps2 = config.get<double>("guard_decel_mps2", o.guard.max_decel_mps2, in_range(0.01, 20.0));
   o.guard.latency_s = config.get<double>("guard_latency_ms", o.guard.latency_s * 1e3, in_range(0.0, 2000.0)) * 1e-3;
+  // A restarted explorer may find the base still driving its predecessor's
+  // last command: the guard starts from the top speed the explorer commands.
+  o.guard.start_speed_mps = o.mission.follower.max_speed_mps;
   o.live_view.range_m = config.get<double>("live_view_range_m", o.live_view.range_m, in_range(0.0, 30.0));
   return o;
 }
