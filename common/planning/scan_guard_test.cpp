@@ -201,6 +201,50 @@ TEST(ScanGuard, ANewArcWithoutRoomToBrakeFromTheSpeedTheRobotHasIsAStop) {
   EXPECT_EQ(rested.command(touching, 0.3, 0.8, 0.0, 5.0).omega_radps, 0.8);
 }
 
+// A turn on the spot while the robot may still roll swings its side off the
+// arc it is on; the guard holds it to a stop until the robot may have
+// stopped. A guard just started (a restarted explorer, the base perhaps
+// still driving the last command) counts on the robot rolling at
+// start_speed_mps.
+TEST(ScanGuard, ATurnOnTheSpotWaitsUntilTheRobotMayHaveStopped) {
+  ScanGuardOptions o;
+  const std::vector<Point> nothing;
+  auto steps_held = [&](ScanGuard& guard) {
+    int held = 0;
+    GuardedCommand next;
+    while ((next = guard.command(nothing, 0.0, 0.8, 0.0, 0.1)).omega_radps == 0.0 && held < 100) {
+      EXPECT_TRUE(next.limited);
+      EXPECT_EQ(next.v_mps, 0.0);
+      ++held;
+    }
+    EXPECT_EQ(next.omega_radps, 0.8);
+    EXPECT_FALSE(next.limited);
+    return held;
+  };
+  // 0.4 m/s braked at 0.05 m/s a step: rolling for 7 more steps, stopped at the 8th.
+  const int steps_to_stop = static_cast<int>(std::ceil(0.4 / (0.1 * o.max_decel_mps2) - 1e-9)) - 1;
+  ScanGuard rolling(o);
+  rolling.sent(0.4, 0.1);
+  EXPECT_EQ(steps_held(rolling), steps_to_stop);
+  // Stopped: the turn goes through at once.
+  ScanGuard standing(o);
+  EXPECT_EQ(steps_held(standing), 0);
+  // Just started, the robot perhaps still at the top speed: held alike.
+  o.start_speed_mps = 0.4;
+  ScanGuard started(o);
+  EXPECT_EQ(started.speed_mps(), 0.4);
+  EXPECT_EQ(steps_held(started), steps_to_stop);
+  // And a forward arc without room to brake from that speed is a stop too.
+  ScanGuard started_again(o);
+  const std::vector<Point> post{Point(0.2, 0.27)};
+  EXPECT_EQ(started_again.command(post, 0.05, 0.1, 0.0, 0.0).v_mps, 0.0);
+  // Backward commands pass unchanged (the laser does not see behind).
+  ScanGuard backing(o);
+  const auto back = backing.command(nothing, -0.1, 0.5, 0.0, 0.1);
+  EXPECT_EQ(back.v_mps, -0.1);
+  EXPECT_EQ(back.omega_radps, 0.5);
+}
+
 TEST(ScanGuard, AReturnBesideTheWayHoldsTheRobotToACrawl) {
   ScanGuardOptions o;
   // A corridor wall 1 cm beside the body, all the way: the bare body passes.
