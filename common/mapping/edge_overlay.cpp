@@ -500,12 +500,14 @@ class Overlay {
         }
       });
       tested_by_.assign(edges_.size(), kNone);
+      candidates_.resize(edges_.size());  // a bucket lists an edge once at most
       // Plain pointers and a copy of the buckets: through the members (of a
       // thread_local), the stores to tested_by_ made every read reload them.
       const InputEdge* const edges = edges_.data();
       const std::uint32_t* const bucket_start = bucket_start_.data();
       const std::uint32_t* const bucket_edges = bucket_edges_.data();
       std::uint32_t* const tested_by = tested_by_.data();
+      std::uint32_t* const candidates = candidates_.data();
       const Buckets buckets = edge_buckets_;
       for (std::uint32_t k = 0; k < edges_.size(); ++k) {
         const InputEdge& e = edges[k];
@@ -516,8 +518,7 @@ class Overlay {
           // The edges whose boxes meet e's and that no earlier bucket
           // brought are listed first, without a branch per edge: which
           // ones do is a coin toss to the branch predictor.
-          if (candidates_.size() < last - first) candidates_.resize(last - first);
-          std::uint32_t* const listed = candidates_.data();
+          std::uint32_t* const listed = candidates;
           std::size_t count = 0;
           const I64 lo_x = e.min_x, hi_x = e.max_x, lo_y = e.min_y, hi_y = e.max_y;
           for (std::uint32_t m = first; m < last; ++m) {
