@@ -205,7 +205,7 @@ TEST(Mission, ABrokenCheckpointIsRefusedWithAReason) {
 
 TEST(Mission, ACheckpointKeepsEveryGoalOutcome) {
   MissionCheckpoint c;
-  c.outcomes = GoalOutcomes{1, 2, 3, 4, 5};
+  c.outcomes = GoalOutcomes{1, 2, 3, 4, 5, 6};
   std::string why;
   const auto back = checkpoint_from_text(to_text(c), &why);
   ASSERT_TRUE(back) << why;
@@ -214,11 +214,18 @@ TEST(Mission, ACheckpointKeepsEveryGoalOutcome) {
   EXPECT_EQ(back->outcomes.blocked, 3);
   EXPECT_EQ(back->outcomes.no_progress, 4);
   EXPECT_EQ(back->outcomes.overdue, 5);
+  EXPECT_EQ(back->outcomes.came_back, 6);
   // A checkpoint written before the overdue count has four.
   const auto old = checkpoint_from_text("polyexplore-mission 1\noutcomes 1 2 3 4\nend\n", &why);
   ASSERT_TRUE(old) << why;
   EXPECT_EQ(old->outcomes.no_progress, 4);
   EXPECT_EQ(old->outcomes.overdue, 0);
+  EXPECT_EQ(old->outcomes.came_back, 0);
+  // One written before the came-back count has five.
+  const auto five = checkpoint_from_text("polyexplore-mission 1\noutcomes 1 2 3 4 5\nend\n", &why);
+  ASSERT_TRUE(five) << why;
+  EXPECT_EQ(five->outcomes.overdue, 5);
+  EXPECT_EQ(five->outcomes.came_back, 0);
 }
 
 TEST(Mission, AtTheGoalItTurnsToFaceTheFrontierBeforeItCountsAsReached) {
