@@ -334,6 +334,15 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   std::vector<Point> targets;
   std::vector<int> pieces;  // per candidate: its C-space piece
   for (const auto& fp : points) {
+    // Enclosed first: what lies behind such a frontier is bounded by the
+    // map itself, wherever the robot could stand.
+    if (chains[static_cast<std::size_t>(fp.chain)].enclosed_area_m2 < options.min_enclosed_area_m2 &&
+        !(distance(fp.point, robot_point) <= options.enclosed_goal_range_m) &&
+        !(focus && distance(fp.point, focus->frontier) <= focus->radius_m)) {
+      ++plan.stats.candidates_enclosed;
+      plan.enclosed_frontier_points.push_back(fp.point);
+      continue;
+    }
     std::optional<Point> position = cspace.nearest_interior_point(fp.point, options.candidate_snap_distance_m);
     bool out_of_view = false;
     if (position && !obstacles.in_view(*position, fp.point)) {
@@ -385,6 +394,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     c.approach = approach;
     c.chain = fp.chain;
     c.chain_length_m = fp.chain_length_m;
+    c.enclosed_area_m2 = chains[static_cast<std::size_t>(fp.chain)].enclosed_area_m2;
     for (const auto& b : blacklist)
       if (distance(b, c.position) <= options.blacklist_radius_m) c.blacklisted = true;
     plan.candidates.push_back(std::move(c));

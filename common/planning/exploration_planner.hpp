@@ -78,6 +78,21 @@ struct PlannerOptions {
   // it, docs/exploration.md): every frontier with a C-space point near it is
   // a goal. 0.02 m is the value measured.
   double reach_past_frontier_m = 0.0;
+  // A frontier candidate whose chain borders an unknown region the map
+  // encloses (FrontierChain::enclosed_area_m2: a hole of the map, less the
+  // map inside it) of less than this is not a goal: no visit can reveal
+  // more than that region, and most of it is the object whose unseen side
+  // the frontier is (the far side of a desk, a pillar's face, a cabinet seen
+  // through a crack). Such frontiers are *enclosed*: listed, not goals, and,
+  // like those behind walls, they do not keep the mission from DONE. A chain
+  // on the map's outside borders unbounded unknown space and is never
+  // enclosed. 0 = off (docs/exploration.md, "Enclosed frontiers").
+  double min_enclosed_area_m2 = 0.0;
+  // ... except within this straight-line distance of the robot (and the goal
+  // it follows, GoalFocus): a look on the way costs little, and it takes the
+  // robot deeper into the room it is in; what the rule saves is the trip
+  // back for one. 0: none.
+  double enclosed_goal_range_m = 0.0;
 };
 
 struct GoalCandidate {
@@ -89,6 +104,9 @@ struct GoalCandidate {
   bool approach = false;
   int chain = -1;               // frontier chain index
   double chain_length_m = 0.0;  // length of that frontier chain
+  // The unknown region behind that chain, when the map encloses it
+  // (FrontierChain::enclosed_area_m2); +inf: the map's outside.
+  double enclosed_area_m2 = std::numeric_limits<double>::infinity();
   bool blacklisted = false;
   bool reachable = false;       // in the robot's piece of the C-space: a path exists
   // The shortest path, its length and cost (path length plus the turn
@@ -109,6 +127,7 @@ struct PlanStats {
   int candidates_out_of_view = 0;
   int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
   int candidates_in_pockets = 0;     // PlannerOptions::reach_past_frontier_m: no disk reaches past them
+  int candidates_enclosed = 0;       // PlannerOptions::min_enclosed_area_m2: too little unknown behind them
   int cspace_vertices = 0;
   int reflex_nodes = 0;
   // The robot's piece of the C-space is not its largest (a nook the map
@@ -129,6 +148,8 @@ struct Plan {
   std::vector<Point> out_of_view_frontier_points;
   // Frontier candidates in pockets (PlannerOptions::reach_past_frontier_m).
   std::vector<Point> pocket_frontier_points;
+  // Frontier candidates facing a small enclosed region (PlannerOptions::min_enclosed_area_m2).
+  std::vector<Point> enclosed_frontier_points;
   int best = -1;                        // index into candidates, -1: none reachable
   // kTour: the visiting order (indices into candidates); best is its first,
   // or the nearest when the first is too far (TourOptions::max_first_leg_ratio).

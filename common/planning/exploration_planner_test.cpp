@@ -141,6 +141,85 @@ mapping::TypedMultiPolygon corridor_with_windows(double length_m = 30.0,
   return {typed_polygon(testing::RingSpec{pts, types})};
 }
 
+// A 10 x 10 m room, its top side frontier (unbounded unknown beyond), with
+// a 2 x 1 m desk whose right side the laser has not seen: the unknown behind
+// that frontier is the desk's 2 m2 at most.
+mapping::TypedMultiPolygon room_with_a_desk_seen_from_three_sides() {
+  auto desk = testing::rectangle_hole(4, 4, 6, 5);
+  desk.types = {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle};
+  return {typed_polygon(testing::rectangle(0, 0, 10, 10, {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle}),
+                        {desk})};
+}
+
+TEST(PlanExploration, AFrontierOnASmallEnclosedUnknownIsNoGoal) {
+  const auto map = room_with_a_desk_seen_from_three_sides();
+  auto desk_candidate = [](const Plan& plan) {
+    return std::find_if(plan.candidates.begin(), plan.candidates.end(),
+                        [](const GoalCandidate& c) { return c.frontier_point.y() < 9.0; });
+  };
+  // Off (0): both frontiers are goals, and the desk's is the nearer.
+  PlannerOptions o = options();
+  Plan plan = plan_exploration(map, Pose2{8, 4.5, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  ASSERT_EQ(plan.candidates.size(), 2u);
+  ASSERT_NE(desk_candidate(plan), plan.candidates.end());
+  EXPECT_TRUE(desk_candidate(plan)->reachable);
+  EXPECT_NEAR(desk_candidate(plan)->enclosed_area_m2, 2.0, 1e-9);
+  EXPECT_EQ(plan.best, static_cast<int>(desk_candidate(plan) - plan.candidates.begin()));
+  EXPECT_EQ(plan.stats.candidates_enclosed, 0);
+  // Above the desk's area: the desk's frontier is enclosed, the room's top
+  // (the unbounded outside) stays a goal however large the bound.
+  for (const double min_m2 : {3.0, 1000.0}) {
+    o.min_enclosed_area_m2 = min_m2;
+    plan = plan_exploration(map, Pose2{8, 4.5, 0}, {}, o);
+    ASSERT_TRUE(plan.ok) << plan.error;
+    ASSERT_EQ(plan.candidates.size(), 1u) << min_m2;
+    EXPECT_GT(plan.candidates[0].frontier_point.y(), 9.9);
+    EXPECT_TRUE(std::isinf(plan.candidates[0].enclosed_area_m2));
+    EXPECT_EQ(plan.best, 0);
+    EXPECT_EQ(plan.stats.candidates_enclosed, 1);
+    ASSERT_EQ(plan.enclosed_frontier_points.size(), 1u);
+    EXPECT_NEAR(plan.enclosed_frontier_points[0].x(), 6.0, 1e-9);
+    EXPECT_FALSE(margin_may_block(plan));
+  }
+  // Below it: still a goal.
+  o.min_enclosed_area_m2 = 1.5;
+  plan = plan_exploration(map, Pose2{8, 4.5, 0}, {}, o);
+  ASSERT_EQ(plan.candidates.size(), 2u);
+  EXPECT_EQ(plan.stats.candidates_enclosed, 0);
+}
+
+TEST(PlanExploration, AnEnclosedFrontierNearTheRobotOrFollowedIsStillAGoal) {
+  const auto map = room_with_a_desk_seen_from_three_sides();  // the desk's frontier at x = 6, y 4..5
+  PlannerOptions o = options();
+  o.min_enclosed_area_m2 = 3.0;
+  o.enclosed_goal_range_m = 4.0;
+  // 2 m from the robot: a look on the way, a goal (the nearest).
+  Plan plan = plan_exploration(map, Pose2{8, 4.5, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.candidates.size(), 2u);
+  EXPECT_EQ(plan.stats.candidates_enclosed, 0);
+  // 6.7 m away: enclosed.
+  plan = plan_exploration(map, Pose2{1, 9, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.candidates.size(), 1u);
+  EXPECT_EQ(plan.stats.candidates_enclosed, 1);
+  // ... unless it is the goal the robot follows.
+  GoalFocus focus;
+  focus.frontier = Point(6.0, 4.5);
+  focus.goal = Point(6.5, 4.5);
+  focus.radius_m = 1.0;
+  plan = plan_exploration(map, Pose2{1, 9, 0}, {}, o, nullptr, &focus);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  ASSERT_EQ(plan.candidates.size(), 2u);
+  EXPECT_EQ(plan.stats.candidates_enclosed, 0);
+  for (const auto& c : plan.candidates) {
+    if (c.frontier_point.y() < 9.0) {
+      EXPECT_TRUE(std::isfinite(c.path_length_m)) << "the followed goal's path";
+    }
+  }
+}
+
 // The planner with the pocket test on (PlannerOptions::reach_past_frontier_m).
 PlannerOptions pocket_options() {
   PlannerOptions o = options();

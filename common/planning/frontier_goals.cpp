@@ -7,11 +7,14 @@
 
 namespace pex::planning {
 
+namespace bg = boost::geometry;
+
 namespace {
 
 bool is_frontier(mapping::EdgeType type) { return type != mapping::EdgeType::kObstacle; }
 
-void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeType>& types,
+// The chains of one ring, each with the area the ring encloses (enclosed_areas).
+void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeType>& types, double enclosed_area_m2,
                      std::vector<FrontierChain>& chains) {
   const std::size_t n = ring.size() < 2 ? 0 : ring.size() - 1;  // edges
   if (n == 0 || types.size() != n) return;
@@ -30,6 +33,7 @@ void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeT
     chain.closed = true;
     chain.points.assign(ring.begin(), ring.end());
     chain.length_m = polyline_length(chain.points);
+    chain.enclosed_area_m2 = enclosed_area_m2;
     chains.push_back(std::move(chain));
     return;
   }
@@ -42,25 +46,74 @@ void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeT
       current.points.push_back(ring[i + 1]);
     } else if (!current.points.empty()) {
       current.length_m = polyline_length(current.points);
+      current.enclosed_area_m2 = enclosed_area_m2;
       chains.push_back(std::move(current));
       current = FrontierChain{};
     }
   }
   if (!current.points.empty()) {
     current.length_m = polyline_length(current.points);
+    current.enclosed_area_m2 = enclosed_area_m2;
     chains.push_back(std::move(current));
   }
 }
 
 }  // namespace
 
+std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map) {
+  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+  std::vector<std::vector<double>> areas(map.size());
+  struct Hole {
+    std::size_t polygon, index;
+    mapping::Box box;
+    double area_m2;
+  };
+  std::vector<Hole> holes;
+  std::vector<mapping::Box> outer_boxes(map.size());
+  for (std::size_t p = 0; p < map.size(); ++p) {
+    const auto& g = map[p].geometry;
+    areas[p].assign(1 + g.inners().size(), kUnbounded);
+    outer_boxes[p] = bg::return_envelope<mapping::Box>(g.outer());
+    for (std::size_t k = 0; k < g.inners().size(); ++k)
+      holes.push_back({p, k, bg::return_envelope<mapping::Box>(g.inners()[k]), std::abs(bg::area(g.inners()[k]))});
+  }
+  // The innermost hole holding each polygon (the smallest of those holding it).
+  std::vector<int> holder(map.size(), -1);
+  for (std::size_t p = 0; p < map.size(); ++p) {
+    const auto& outer = map[p].geometry.outer();
+    if (outer.size() < 4) continue;
+    for (std::size_t h = 0; h < holes.size(); ++h) {
+      if (holes[h].polygon == p || !bg::covered_by(outer_boxes[p], holes[h].box)) continue;
+      // Polygons may touch at a vertex, where the crossing test is
+      // arbitrary: three vertices spread over the ring vote.
+      const std::size_t n = outer.size() - 1;
+      int inside = 0;
+      for (std::size_t v : {std::size_t{0}, n / 3, (2 * n) / 3})
+        inside += mapping::inside_ring(outer[v], map[holes[h].polygon].geometry.inners()[holes[h].index]);
+      if (inside >= 2 && (holder[p] < 0 || holes[h].area_m2 < holes[static_cast<std::size_t>(holder[p])].area_m2))
+        holder[p] = static_cast<int>(h);
+    }
+  }
+  std::vector<double> region(holes.size());
+  for (std::size_t h = 0; h < holes.size(); ++h) region[h] = holes[h].area_m2;
+  for (std::size_t p = 0; p < map.size(); ++p)
+    if (holder[p] >= 0) region[static_cast<std::size_t>(holder[p])] -= std::abs(bg::area(map[p].geometry.outer()));
+  for (std::size_t h = 0; h < holes.size(); ++h)
+    areas[holes[h].polygon][1 + holes[h].index] = std::max(0.0, region[h]);
+  for (std::size_t p = 0; p < map.size(); ++p)
+    if (holder[p] >= 0) areas[p][0] = std::max(0.0, region[static_cast<std::size_t>(holder[p])]);
+  return areas;
+}
+
 std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map) {
   std::vector<FrontierChain> chains;
-  for (const auto& polygon : map) {
+  const auto areas = enclosed_areas(map);
+  for (std::size_t p = 0; p < map.size(); ++p) {
+    const auto& polygon = map[p];
     if (!mapping::types_match_rings(polygon)) continue;
-    add_ring_chains(polygon.geometry.outer(), polygon.edge_types[0], chains);
+    add_ring_chains(polygon.geometry.outer(), polygon.edge_types[0], areas[p][0], chains);
     for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
-      add_ring_chains(polygon.geometry.inners()[k], polygon.edge_types[1 + k], chains);
+      add_ring_chains(polygon.geometry.inners()[k], polygon.edge_types[1 + k], areas[p][1 + k], chains);
   }
   return chains;
 }

@@ -4,6 +4,7 @@
 // twice the sensor range apart along the frontier, so that every frontier
 // point is within sensor range of some candidate; visiting all candidates
 // therefore reveals what lies behind every frontier.
+#include <limits>
 #include <vector>
 
 #include "mapping/typed_polygon.hpp"
@@ -18,12 +19,30 @@ struct FrontierChain {
   std::vector<Point> points;  // polyline; closed chains repeat the first point at the end
   bool closed = false;        // the whole ring is frontier
   double length_m = 0.0;
+  // The area of the unknown region the chain borders, when the map encloses
+  // it: the chain lies on a hole of a map polygon (or on the outer ring of a
+  // polygon inside such a hole), and the region is the hole less the map's
+  // polygons inside it. +inf when the chain borders the unbounded outside.
+  // Everything in a hole is obstacle or unseen, so no visit to the chain can
+  // reveal more than this: the shadow behind a desk seen from three sides,
+  // the inside of a cabinet seen through a crack, a pillar's unseen face.
+  double enclosed_area_m2 = std::numeric_limits<double>::infinity();
 };
 
-// Every frontier chain of the map, ring by ring in map order. Edges typed
-// kBorder (a tile border that was not dissolved) count as frontier: they
-// separate the map from space it does not describe.
+// Every frontier chain of the map, ring by ring in map order, each with the
+// area it encloses (FrontierChain::enclosed_area_m2). Edges typed kBorder (a
+// tile border that was not dissolved) count as frontier: they separate the
+// map from space it does not describe.
 std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map);
+
+// Per polygon of `map`, per ring (outer first, then the holes, as
+// TypedPolygon::edge_types): the area of the unknown region the ring borders
+// on its non-free side, +inf for an outer ring not inside any hole. A hole's
+// region is the hole less the outer rings of the polygons directly inside it
+// (polygons are interior-disjoint, so each lies wholly in a hole or outside
+// it); an outer ring inside a hole borders that hole's region (the innermost
+// hole holding it).
+std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map);
 
 struct FrontierGoalOptions {
   // Radius within which a candidate "covers" the frontier (the paper's sensor

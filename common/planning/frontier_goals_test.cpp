@@ -37,6 +37,41 @@ TEST(FrontierChains, RunsOfFrontierEdgesAcrossTheRingStart) {
   EXPECT_NEAR(chains[2].length_m, 0.8, 1e-12);
 }
 
+// A 10 x 10 m room whose bottom side is frontier, with a desk (a 2 x 1 m
+// hole) seen from three sides, and a 3 x 4 m hole (a store room seen from
+// outside, its left side unseen) holding a 1 x 1 m island of free space
+// (seen through a window) that has a 0.6 x 0.6 m hole of its own.
+mapping::TypedMultiPolygon room_with_enclosed_unknown() {
+  using testing::rectangle;
+  using testing::rectangle_hole;
+  auto desk = rectangle_hole(2, 2, 4, 3);
+  desk.types = {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle};  // its right side unseen
+  auto store = rectangle_hole(6, 5, 9, 9);
+  store.types = {E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle};
+  auto crate = rectangle_hole(7.2, 6.2, 7.8, 6.8);
+  crate.types = {E::kFrontier, E::kFrontier, E::kFrontier, E::kFrontier};
+  return {typed_polygon(rectangle(0, 0, 10, 10, {E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle}),
+                        {desk, store}),
+          typed_polygon(rectangle(7, 6, 8, 7, {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle}), {crate})};
+}
+
+TEST(FrontierChains, AChainOnAHoleEnclosesTheHoleLessTheMapInsideIt) {
+  const auto chains = frontier_chains(room_with_enclosed_unknown());
+  ASSERT_EQ(chains.size(), 5u);
+  // In map order: the room's outside, the desk, the store room, the island's
+  // outside (in the store room), the island's hole.
+  EXPECT_TRUE(std::isinf(chains[0].enclosed_area_m2));  // beyond the room's open side: unbounded
+  EXPECT_NEAR(chains[1].enclosed_area_m2, 2.0, 1e-9);
+  EXPECT_NEAR(chains[2].enclosed_area_m2, 12.0 - 1.0, 1e-9);  // the island (with its hole) is not unknown
+  EXPECT_NEAR(chains[3].enclosed_area_m2, 11.0, 1e-9);        // the island borders the store room's unknown
+  EXPECT_NEAR(chains[4].enclosed_area_m2, 0.36, 1e-9);
+  const auto areas = enclosed_areas(room_with_enclosed_unknown());
+  ASSERT_EQ(areas.size(), 2u);
+  ASSERT_EQ(areas[0].size(), 3u);
+  ASSERT_EQ(areas[1].size(), 2u);
+  EXPECT_TRUE(std::isinf(areas[0][0]));
+}
+
 TEST(FrontierChains, ChainWrappingPastVertexZeroIsOneChain) {
   // Frontier on the last and the first edge: one chain through vertex 0.
   RingSpec outer{{Point(0, 0), Point(4, 0), Point(4, 4), Point(0, 4)},

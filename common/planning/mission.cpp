@@ -430,6 +430,7 @@ void Mission::list_frontiers(const Plan& plan) {
   for (const auto& p : plan.narrow_frontier_points) frontiers_.push_back({p, FrontierReason::kTooNarrow});
   for (const auto& p : plan.out_of_view_frontier_points) frontiers_.push_back({p, FrontierReason::kOutOfView});
   for (const auto& p : plan.pocket_frontier_points) frontiers_.push_back({p, FrontierReason::kPocket});
+  for (const auto& p : plan.enclosed_frontier_points) frontiers_.push_back({p, FrontierReason::kEnclosed});
 }
 
 void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime) {
@@ -471,28 +472,33 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
     const int narrow = plan.stats.candidates_not_in_cspace;
     const int out_of_view = plan.stats.candidates_out_of_view;
     const int pockets = plan.stats.candidates_in_pockets;
+    const int enclosed = plan.stats.candidates_enclosed;
     // DONE when every frontier goal left has been visited (the robot stood
     // there facing it: the map keeps a frontier the laser could not clear),
     // is out of view (behind a wall, seen from no place the robot can
     // reach: a sliver of a misaligned scan beyond a wall, a room behind a
-    // window) or is a pocket (no robot reaches past it: the far side of a
-    // gap narrower than the robot): driving cannot show more of any of them
-    // that the robot could reach. Any frontier it could not get to (no path,
-    // too narrow, given up) makes it DONE_WITH_UNREACHABLE. Both list them.
+    // window), is a pocket (no robot reaches past it: the far side of a
+    // gap narrower than the robot) or is enclosed (the unknown behind it is
+    // a small region the map closes in): driving cannot show more of any of
+    // them that the robot could reach, or not enough to be worth a trip. Any
+    // frontier it could not get to (no path, too narrow, given up) makes it
+    // DONE_WITH_UNREACHABLE. Both list them.
     const bool nothing_left = no_path == 0 && given_up == 0 && narrow == 0;
+    const std::string settled = std::to_string(visited) + " visited without clearing them, " +
+                                std::to_string(out_of_view) + " behind walls, " + std::to_string(pockets) +
+                                " in pockets narrower than the robot, " + std::to_string(enclosed) +
+                                " enclosed in small unknown regions)";
     std::string why;
-    if (plan.candidates.empty() && narrow == 0 && out_of_view == 0 && pockets == 0) {
+    if (plan.candidates.empty() && narrow == 0 && out_of_view == 0 && pockets == 0 && enclosed == 0) {
       why = "no frontier left";
     } else if (nothing_left) {
-      why = "every frontier left visited, out of view or in a pocket (" + std::to_string(visited) +
-            " visited without clearing them, " + std::to_string(out_of_view) + " behind walls, " +
-            std::to_string(pockets) + " in pockets narrower than the robot)";
+      why = "every frontier left visited, out of view, in a pocket or enclosed (" + settled;
     } else {
-      why = std::to_string(plan.candidates.size() + static_cast<std::size_t>(narrow + out_of_view + pockets)) +
+      why = std::to_string(plan.candidates.size() +
+                           static_cast<std::size_t>(narrow + out_of_view + pockets + enclosed)) +
             " frontier goals left, none reachable (" + std::to_string(no_path) + " without a path, " +
             std::to_string(narrow) + " too narrow for the robot, " + std::to_string(given_up) + " given up, " +
-            std::to_string(visited) + " visited without clearing them, " + std::to_string(out_of_view) +
-            " behind walls, " + std::to_string(pockets) + " in pockets narrower than the robot)";
+            settled;
     }
     if (empty_plans_ >= options_.done_confirmations && given_up > 0 && !given_up_retried_) {
       // Before it calls the mission done, every goal given up gets one more

@@ -90,6 +90,7 @@ enum class FrontierReason : std::int8_t {
   kVisited = 4,
   kOutOfView = 5,
   kPocket = 6,
+  kEnclosed = 7,
 };
 
 struct FrontierLeft {

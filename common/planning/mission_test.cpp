@@ -755,6 +755,17 @@ TEST(Mission, ARobotOutsideTheMarginsCSpacePlansWithoutTheMargin) {
   EXPECT_NE(out.status.find("not within"), std::string::npos) << out.status;
 }
 
+// The mission's output once two maps in a row (one second apart) showed
+// `map` with the robot at `pose`: what DONE needs (done_confirmations).
+MissionOutput after_two_maps(Mission& m, const mapping::TypedMultiPolygon& map, const Pose2& pose) {
+  for (std::int64_t t : {0 * kSecond, 1 * kSecond}) {
+    m.on_map(map, t);
+    m.on_pose(pose, t);
+    (void)step_with_inline_planning(m, t);
+  }
+  return step_with_inline_planning(m, kSecond + 1);
+}
+
 // A closed corridor and, behind its top wall, a sliver of free space whose
 // far side is frontier (a misaligned scan beyond a thin wall): no reachable
 // place has it in view, so driving cannot show more. DONE, with it listed.
@@ -763,12 +774,7 @@ TEST(Mission, DoneWhenTheOnlyFrontierLeftIsBehindAWall) {
       typed_polygon(rectangle(0, 0, 20, 3)),
       typed_polygon(rectangle(5, 3.05, 9, 3.15, {E::kObstacle, E::kFrontier, E::kFrontier, E::kFrontier}))};
   Mission m(test_options());
-  for (std::int64_t t : {0 * kSecond, 1 * kSecond}) {
-    m.on_map(map, t);
-    m.on_pose(Pose2{2, 1.5, 0}, t);
-    (void)step_with_inline_planning(m, t);
-  }
-  const auto out = step_with_inline_planning(m, kSecond + 1);
+  const auto out = after_two_maps(m, map, Pose2{2, 1.5, 0});
   EXPECT_EQ(out.phase, Phase::kDone) << out.status;
   ASSERT_EQ(out.frontiers.size(), 1u);
   EXPECT_EQ(out.frontiers[0].reason, FrontierReason::kOutOfView);
@@ -788,12 +794,7 @@ TEST(Mission, DoneWhenTheOnlyFrontierLeftIsAPocket) {
     MissionOptions o = test_options();
     o.planner.reach_past_frontier_m = reach_m;
     Mission m(o);
-    for (std::int64_t t : {0 * kSecond, 1 * kSecond}) {
-      m.on_map(map, t);
-      m.on_pose(Pose2{1, 2, 0}, t);
-      (void)step_with_inline_planning(m, t);
-    }
-    const auto out = step_with_inline_planning(m, kSecond + 1);
+    const auto out = after_two_maps(m, map, Pose2{1, 2, 0});
     if (reach_m == 0.0) {  // the test off: the slot is a goal
       EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
       continue;
@@ -802,6 +803,29 @@ TEST(Mission, DoneWhenTheOnlyFrontierLeftIsAPocket) {
     ASSERT_EQ(out.frontiers.size(), 1u);
     EXPECT_EQ(out.frontiers[0].reason, FrontierReason::kPocket);
     EXPECT_NE(out.status.find("1 in pockets narrower than the robot"), std::string::npos) << out.status;
+  }
+}
+
+TEST(Mission, DoneWhenTheOnlyFrontierLeftIsEnclosed) {
+  // A room explored but for the unseen right side of a 2 x 1 m desk: with
+  // min_enclosed_area_m2 above the desk's area that frontier is no goal, and
+  // the room is explored, the frontier listed as enclosed.
+  auto desk = testing::rectangle_hole(4, 1.5, 6, 2.5);
+  desk.types = {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle};
+  const mapping::TypedMultiPolygon map = {typed_polygon(rectangle(0, 0, 10, 4), {desk})};
+  for (const double min_m2 : {3.0, 0.0}) {
+    MissionOptions o = test_options();
+    o.planner.min_enclosed_area_m2 = min_m2;
+    Mission m(o);
+    const auto out = after_two_maps(m, map, Pose2{1, 1, 0});
+    if (min_m2 == 0.0) {  // off: the desk's side is a goal
+      EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+      continue;
+    }
+    EXPECT_EQ(out.phase, Phase::kDone) << out.status;
+    ASSERT_EQ(out.frontiers.size(), 1u);
+    EXPECT_EQ(out.frontiers[0].reason, FrontierReason::kEnclosed);
+    EXPECT_NE(out.status.find("1 enclosed in small unknown regions"), std::string::npos) << out.status;
   }
 }
 

@@ -58,6 +58,10 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("turn_cost_m_per_rad", planner.turn_cost_m_per_rad, non_negative<double>());
   planner.reach_past_frontier_m =
       config.get<double>("reach_past_frontier_m", planner.reach_past_frontier_m, in_range(0.0, 1.0));
+  planner.min_enclosed_area_m2 =
+      config.get<double>("min_enclosed_area_m2", planner.min_enclosed_area_m2, in_range(0.0, 1000.0));
+  planner.enclosed_goal_range_m =
+      config.get<double>("enclosed_goal_range_m", planner.enclosed_goal_range_m, in_range(0.0, 1000.0));
   if (planner.reach_past_frontier_m >= cspace.robot_radius_m)
     throw runtime::ConfigError(config.origin() +
                                ": reach_past_frontier_m must be less than robot_radius_m (the disk reaches past a "

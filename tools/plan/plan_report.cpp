@@ -46,14 +46,16 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   }
   out += format(
       "frontiers: %d chains (%d too short), %zu candidates, %d approach points, %d with no C-space near, %d out of "
-      "view (behind a wall), %d in pockets\n",
+      "view (behind a wall), %d in pockets, %d enclosed\n",
       plan.stats.frontier_chains, plan.stats.chains_too_short, plan.candidates.size(), plan.stats.approach_candidates,
-      plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view, plan.stats.candidates_in_pockets);
+      plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view, plan.stats.candidates_in_pockets,
+      plan.stats.candidates_enclosed);
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
-    out += format("  %zu: frontier (%.2f, %.2f) -> (%.2f, %.2f)%s, chain %d (%.2f m): ", i, c.frontier_point.x(),
+    out += format("  %zu: frontier (%.2f, %.2f) -> (%.2f, %.2f)%s, chain %d (%.2f m", i, c.frontier_point.x(),
                   c.frontier_point.y(), c.position.x(), c.position.y(), c.approach ? " approach point" : "", c.chain,
                   c.chain_length_m);
+    out += std::isfinite(c.enclosed_area_m2) ? format(", encloses %.2f m2): ", c.enclosed_area_m2) : std::string("): ");
     if (c.reachable && std::isfinite(c.path_length_m))
       out += format("path %.2f m, cost %.2f%s%s\n", c.path_length_m, c.cost, c.blacklisted ? ", blacklisted" : "",
                     static_cast<int>(i) == plan.best ? "  <- best" : "");
@@ -65,6 +67,8 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   for (const auto& p : plan.narrow_frontier_points) out += format("  frontier (%.2f, %.2f): too narrow\n", p.x(), p.y());
   for (const auto& p : plan.pocket_frontier_points)
     out += format("  frontier (%.2f, %.2f): pocket (no robot reaches past it)\n", p.x(), p.y());
+  for (const auto& p : plan.enclosed_frontier_points)
+    out += format("  frontier (%.2f, %.2f): enclosed (a small unknown region the map closes in)\n", p.x(), p.y());
   return out;
 }
 
@@ -113,6 +117,8 @@ std::string to_svg(const mapping::TypedMultiPolygon& map, const geometry::Pose2&
     out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#e00000\"/>\n", X(p.x()), Y(p.y()));
   for (const auto& p : plan.pocket_frontier_points)
     out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#8000c0\"/>\n", X(p.x()), Y(p.y()));
+  for (const auto& p : plan.enclosed_frontier_points)
+    out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#a06000\"/>\n", X(p.x()), Y(p.y()));
   if (const auto* best = plan.best_candidate(); best && best->path.size() >= 2) {
     std::string pts;
     for (const auto& p : best->path) pts += format("%.1f,%.1f ", X(p.x()), Y(p.y()));
