@@ -477,6 +477,44 @@ TEST(Mission, AnUnreachableMatchDoesNotBlockAGoalAReachableMatchStillHas) {
   EXPECT_EQ(m.goal_outcomes().blocked, 1);
 }
 
+// Frontiers seen from one place share its approach point. The goal followed
+// keeps its own frontier when a plan lists another frontier at the same
+// point first: else the robot at the goal turns to face each in turn.
+TEST(Mission, AFollowedGoalKeepsItsFrontierWhenAnotherSharesItsPlace) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  const Point goal = *out.goal;
+  m.on_map(corridor(false, true), kSecond);
+  m.on_pose(Pose2{10.5, 1.5, 0}, kSecond);
+  out = m.step(kSecond + 1);  // replan period reached
+  ASSERT_TRUE(out.plan_request.has_value() && out.plan_request->focus.has_value());
+  const Point frontier = out.plan_request->focus->frontier;
+  PlanResult result = compute_plan(*out.plan_request);
+  int same = -1;
+  for (std::size_t i = 0; i < result.plan.candidates.size(); ++i)
+    if (result.plan.candidates[i].reachable && distance(result.plan.candidates[i].position, goal) < 0.5)
+      same = static_cast<int>(i);
+  ASSERT_GE(same, 0);
+  ASSERT_LT(distance(result.plan.candidates[static_cast<std::size_t>(same)].frontier_point, frontier), 0.01);
+  GoalCandidate other = result.plan.candidates[static_cast<std::size_t>(same)];
+  other.position = goal;  // the very place of the goal
+  other.frontier_point = Point(frontier.x(), frontier.y() + 1.2);  // another frontier seen from there
+  result.plan.candidates.insert(result.plan.candidates.begin(), other);
+  if (result.plan.best >= 0) ++result.plan.best;
+  m.on_plan(result, kSecond + 2);
+  out = m.step(kSecond + 3);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  // The next plan request follows the goal's own frontier.
+  m.on_map(corridor(false, true), 2 * kSecond);
+  m.on_pose(Pose2{10.6, 1.5, 0}, 2 * kSecond);
+  out = m.step(2 * kSecond + 4);
+  ASSERT_TRUE(out.plan_request.has_value() && out.plan_request->focus.has_value()) << out.status;
+  EXPECT_LT(distance(out.plan_request->focus->frontier, frontier), 0.01);
+}
+
 // Goals blocked by a newer map (no path any more) are given up and
 // blacklisted, but they are not failures of the robot: at the end of a
 // mission in clutter the last goals often lie behind passages SLAM's
