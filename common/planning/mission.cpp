@@ -610,8 +610,8 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   // share one approach point (the place that sees them all), and taking
   // whichever came first swapped the goal's frontier from plan to plan, up
   // to metres away, so the robot at the goal turned to face each in turn
-  // and never reached it (b34, fr079: 27 goals given up as overdue in 16
-  // runs, one with the robot 0.12 m from it, spinning).
+  // until the deadline gave the goal up (b34, fr079 greedy: the robot
+  // 0.12 m from its goal, its heading swinging by over 100 degrees).
   const GoalFocus focus{*goal_, goal_frontier_, options_.goal_match_radius_m};
   int match = -1;
   double match_distance = std::numeric_limits<double>::infinity();
