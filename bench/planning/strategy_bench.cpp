@@ -42,13 +42,16 @@ int main(int argc, char** argv) {
   CLI::App app{"The goal strategies side by side on every world (true poses, no daemons): one JSON line each"};
   std::string config_path = std::string(PEX_SOURCE_DIR) + "/config/explorer.toml";
   std::string mapper_config_path = std::string(PEX_SOURCE_DIR) + "/config/polygon_mapper.toml";
-  std::vector<std::string> strategies{"greedy", "tour"};
+  std::vector<std::string> strategies;
   std::vector<std::string> worlds;
   double max_travel_m = 4000.0;
   app.add_option("--config", config_path, "explorer config (planner options)")->check(CLI::ExistingFile);
   app.add_option("--mapper-config", mapper_config_path, "polygon_mapper config (scan polygons, map)")
       ->check(CLI::ExistingFile);
-  app.add_option("--strategies", strategies, "goal strategies to compare")->delimiter(',');
+  // One word, comma-separated: a list option would take the world files
+  // after it for strategy names, and fail only after the first whole run.
+  std::string strategy_list = "greedy,tour";
+  app.add_option("--strategies", strategy_list, "goal strategies to compare, comma-separated (greedy,tour)");
   app.add_option("--max-travel-m", max_travel_m, "give a mission up after this much driving")->check(CLI::PositiveNumber);
   app.add_option("worlds", worlds, "world files (default: every worlds/*.wkt)")->check(CLI::ExistingFile);
   app.set_version_flag("--version", std::string("pex-bench-strategies ") + PEX_VERSION);
@@ -56,6 +59,16 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 64;
+  }
+  strategies.clear();
+  for (std::size_t from = 0; from <= strategy_list.size();) {
+    const std::size_t comma = std::min(strategy_list.find(',', from), strategy_list.size());
+    strategies.push_back(strategy_list.substr(from, comma - from));
+    if (!pex::planning::parse_goal_strategy(strategies.back())) {
+      std::fprintf(stderr, "pex-bench-strategies: unknown strategy '%s' (greedy, tour)\n", strategies.back().c_str());
+      return 64;
+    }
+    from = comma + 1;
   }
   if (worlds.empty()) {
     for (const auto& entry : std::filesystem::directory_iterator(std::string(PEX_SOURCE_DIR) + "/worlds"))
