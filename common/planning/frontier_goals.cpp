@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <utility>
+
+#include <boost/geometry/index/rtree.hpp>
 
 #include "planning/cspace.hpp"
 
 namespace pex::planning {
 
 namespace bg = boost::geometry;
+namespace bgi = boost::geometry::index;
 
 namespace {
 
@@ -77,13 +82,23 @@ std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map) {
     for (std::size_t k = 0; k < g.inners().size(); ++k)
       holes.push_back({p, k, bg::return_envelope<mapping::Box>(g.inners()[k]), std::abs(bg::area(g.inners()[k]))});
   }
-  // The innermost hole holding each polygon (the smallest of those holding it).
+  // The innermost hole holding each polygon (the smallest of those holding
+  // it). The holes whose boxes cover the polygon's come from an rtree: a
+  // map of many polygons and holes (a hostile MAP within max_map_vertices)
+  // must not cost their product.
+  std::vector<std::pair<mapping::Box, std::size_t>> boxes;
+  boxes.reserve(holes.size());
+  for (std::size_t h = 0; h < holes.size(); ++h) boxes.emplace_back(holes[h].box, h);
+  const bgi::rtree<std::pair<mapping::Box, std::size_t>, bgi::rstar<16>> hole_index(boxes);
   std::vector<int> holder(map.size(), -1);
+  std::vector<std::pair<mapping::Box, std::size_t>> covering;
   for (std::size_t p = 0; p < map.size(); ++p) {
     const auto& outer = map[p].geometry.outer();
     if (outer.size() < 4) continue;
-    for (std::size_t h = 0; h < holes.size(); ++h) {
-      if (holes[h].polygon == p || !bg::covered_by(outer_boxes[p], holes[h].box)) continue;
+    covering.clear();
+    hole_index.query(bgi::covers(outer_boxes[p]), std::back_inserter(covering));
+    for (const auto& [box, h] : covering) {
+      if (holes[h].polygon == p) continue;
       // Polygons may touch at a vertex, where the crossing test is
       // arbitrary: three vertices spread over the ring vote.
       const std::size_t n = outer.size() - 1;
