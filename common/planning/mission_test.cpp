@@ -430,34 +430,53 @@ TEST(Mission, BlockedGoalIsBlacklisted) {
   EXPECT_LT(out.goal->x(), 1.0);
 }
 
+// A mission set off towards the corridor's right end, and the plan it asks
+// for a second later (computed): the goal, the frontier it follows, and the
+// candidate of that plan at the goal (`same`, -1: none, or no plan asked).
+struct FollowedGoalReplan {
+  std::optional<Point> goal, frontier;
+  PlanResult result;
+  int same = -1;
+};
+FollowedGoalReplan follow_then_replan(Mission& m) {
+  FollowedGoalReplan r;
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  if (out.phase != Phase::kMoving || !out.goal) return r;
+  r.goal = *out.goal;
+  m.on_map(corridor(false, true), kSecond);
+  m.on_pose(Pose2{10.5, 1.5, 0}, kSecond);
+  out = m.step(kSecond + 1);  // replan period reached
+  if (!out.plan_request) return r;
+  if (out.plan_request->focus) r.frontier = out.plan_request->focus->frontier;
+  r.result = compute_plan(*out.plan_request);
+  for (std::size_t i = 0; i < r.result.plan.candidates.size(); ++i)
+    if (r.result.plan.candidates[i].reachable && distance(r.result.plan.candidates[i].position, *r.goal) < 0.5)
+      r.same = static_cast<int>(i);
+  return r;
+}
+
+// `c` listed first among the plan's candidates.
+void list_first(PlanResult& result, GoalCandidate c) {
+  result.plan.candidates.insert(result.plan.candidates.begin(), std::move(c));
+  if (result.plan.best >= 0) ++result.plan.best;
+}
+
 // In clutter several candidates match the goal being followed; one without
 // a path nearer the goal (a sliver past a chair leg) does not block it while
 // another that matches has a path.
 TEST(Mission, AnUnreachableMatchDoesNotBlockAGoalAReachableMatchStillHas) {
   Mission m(test_options());
-  m.on_map(corridor(false, true), 0);
-  m.on_pose(Pose2{10, 1.5, 0}, 0);
-  auto out = step_with_inline_planning(m, 0);
-  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
-  const Point goal = *out.goal;
-  m.on_map(corridor(false, true), kSecond);
-  m.on_pose(Pose2{10.5, 1.5, 0}, kSecond);
-  out = m.step(kSecond + 1);  // replan period reached
-  ASSERT_TRUE(out.plan_request.has_value());
-  PlanResult result = compute_plan(*out.plan_request);
-  int same = -1;
-  for (std::size_t i = 0; i < result.plan.candidates.size(); ++i)
-    if (result.plan.candidates[i].reachable && distance(result.plan.candidates[i].position, goal) < 0.5)
-      same = static_cast<int>(i);
+  auto [goal, frontier, result, same] = follow_then_replan(m);
   ASSERT_GE(same, 0);
   GoalCandidate sliver = result.plan.candidates[static_cast<std::size_t>(same)];
-  sliver.position = goal;  // nearer the goal than any other
+  sliver.position = *goal;  // nearer the goal than any other
   sliver.reachable = false;
   sliver.path.clear();
-  result.plan.candidates.insert(result.plan.candidates.begin(), sliver);
-  if (result.plan.best >= 0) ++result.plan.best;
+  list_first(result, sliver);
   m.on_plan(result, kSecond + 2);
-  out = m.step(kSecond + 3);
+  auto out = m.step(kSecond + 3);
   EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_EQ(m.goal_outcomes().blocked, 0);
   EXPECT_TRUE(m.blacklist().empty());
@@ -482,37 +501,23 @@ TEST(Mission, AnUnreachableMatchDoesNotBlockAGoalAReachableMatchStillHas) {
 // point first: else the robot at the goal turns to face each in turn.
 TEST(Mission, AFollowedGoalKeepsItsFrontierWhenAnotherSharesItsPlace) {
   Mission m(test_options());
-  m.on_map(corridor(false, true), 0);
-  m.on_pose(Pose2{10, 1.5, 0}, 0);
-  auto out = step_with_inline_planning(m, 0);
-  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
-  const Point goal = *out.goal;
-  m.on_map(corridor(false, true), kSecond);
-  m.on_pose(Pose2{10.5, 1.5, 0}, kSecond);
-  out = m.step(kSecond + 1);  // replan period reached
-  ASSERT_TRUE(out.plan_request.has_value() && out.plan_request->focus.has_value());
-  const Point frontier = out.plan_request->focus->frontier;
-  PlanResult result = compute_plan(*out.plan_request);
-  int same = -1;
-  for (std::size_t i = 0; i < result.plan.candidates.size(); ++i)
-    if (result.plan.candidates[i].reachable && distance(result.plan.candidates[i].position, goal) < 0.5)
-      same = static_cast<int>(i);
+  auto [goal, frontier, result, same] = follow_then_replan(m);
+  ASSERT_TRUE(frontier.has_value());
   ASSERT_GE(same, 0);
-  ASSERT_LT(distance(result.plan.candidates[static_cast<std::size_t>(same)].frontier_point, frontier), 0.01);
+  ASSERT_LT(distance(result.plan.candidates[static_cast<std::size_t>(same)].frontier_point, *frontier), 0.01);
   GoalCandidate other = result.plan.candidates[static_cast<std::size_t>(same)];
-  other.position = goal;  // the very place of the goal
-  other.frontier_point = Point(frontier.x(), frontier.y() + 1.2);  // another frontier seen from there
-  result.plan.candidates.insert(result.plan.candidates.begin(), other);
-  if (result.plan.best >= 0) ++result.plan.best;
+  other.position = *goal;  // the very place of the goal
+  other.frontier_point = Point(frontier->x(), frontier->y() + 1.2);  // another frontier seen from there
+  list_first(result, other);
   m.on_plan(result, kSecond + 2);
-  out = m.step(kSecond + 3);
+  auto out = m.step(kSecond + 3);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   // The next plan request follows the goal's own frontier.
   m.on_map(corridor(false, true), 2 * kSecond);
   m.on_pose(Pose2{10.6, 1.5, 0}, 2 * kSecond);
   out = m.step(2 * kSecond + 4);
   ASSERT_TRUE(out.plan_request.has_value() && out.plan_request->focus.has_value()) << out.status;
-  EXPECT_LT(distance(out.plan_request->focus->frontier, frontier), 0.01);
+  EXPECT_LT(distance(out.plan_request->focus->frontier, *frontier), 0.01);
 }
 
 // Goals blocked by a newer map (no path any more) are given up and
