@@ -60,7 +60,6 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 64;
   }
-  strategies.clear();
   for (std::size_t from = 0; from <= strategy_list.size();) {
     const std::size_t comma = std::min(strategy_list.find(',', from), strategy_list.size());
     strategies.push_back(strategy_list.substr(from, comma - from));
