@@ -416,21 +416,25 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     if (distance(a, b) > 1e-9) turn = std::abs(geometry::wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta_rad));
     return length_from_start_m + lead_m + options.turn_cost_m_per_rad * turn;
   };
+  // Only candidates in the robot's piece of the C-space are searched for: a
+  // search for one it cannot reach never bounds itself and settles the whole
+  // graph (the endgame of a large map, where the last frontiers lie in
+  // slivers of C-space cut off from the robot's).
+  auto searchable = [&](std::size_t i) { return own_piece < 0 || pieces[i] == own_piece; };
   std::vector<char> required;  // the followed goal: its path is wanted whatever the strategy
   if (focus) {
     required.resize(plan.candidates.size());
-    for (std::size_t i = 0; i < plan.candidates.size(); ++i) required[i] = focus->matches(plan.candidates[i]);
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i)
+      required[i] = searchable(i) && focus->matches(plan.candidates[i]);
   }
   PathMatrix matrix;
   VisibilityCache* visibility = cache ? &cache->visibility(options.cspace) : nullptr;
   if (options.strategy == GoalStrategy::kTour && options.tour.horizon_candidates > 0) {
     NearestTargetsQuery query;
     query.count = static_cast<std::size_t>(options.tour.horizon_candidates);
-    // Only candidates in the robot's piece of the C-space: one the search
-    // cannot reach would keep it from ever bounding itself.
     query.choice.resize(plan.candidates.size());
     for (std::size_t i = 0; i < plan.candidates.size(); ++i)
-      query.choice[i] = !plan.candidates[i].blacklisted && (own_piece < 0 || pieces[i] == own_piece);
+      query.choice[i] = !plan.candidates[i].blacklisted && searchable(i);
     query.required = required;
     matrix = shortest_paths_among_nearest(cspace, *start, targets, query, visibility);
   } else if (options.strategy == GoalStrategy::kTour) {
@@ -441,7 +445,8 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       return plan.candidates[i].blacklisted ? std::numeric_limits<double>::infinity() : cost_of(length_m, path);
     };
     query.choice.resize(plan.candidates.size());
-    for (std::size_t i = 0; i < plan.candidates.size(); ++i) query.choice[i] = !plan.candidates[i].blacklisted;
+    for (std::size_t i = 0; i < plan.candidates.size(); ++i)
+      query.choice[i] = !plan.candidates[i].blacklisted && searchable(i);
     query.required = required;
     matrix = shortest_paths_to_cheapest(cspace, *start, targets, query, visibility);
   }

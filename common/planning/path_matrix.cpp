@@ -503,8 +503,16 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   out.from_start_m.assign(n, kInf);
   out.path_from_start.resize(n);
   out.reflex_nodes = r;
-  std::size_t required_left = 0;
-  for (std::size_t t = 0; t < n; ++t) required_left += is_required(query.required, t);
+  std::size_t required_left = 0, choices = 0;
+  for (std::size_t t = 0; t < n; ++t) {
+    required_left += is_required(query.required, t);
+    choices += is_choice(query.choice, t);
+  }
+  if (required_left == 0 && choices == 0) {  // nothing wanted: nothing searched
+    out.all_searched = false;
+    out.segment_tests = 0;
+    return out;
+  }
   double best_cost = kInf;
   const std::size_t settle_budget = lazy_settle_budget(r);
   bool over_budget = false;

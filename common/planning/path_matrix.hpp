@@ -89,7 +89,8 @@ struct CheapestTargetQuery {
   std::function<double(std::size_t target, double length_m, const std::vector<Point>& path)> cost;
   std::vector<char> required;
   // Per target: may it be chosen (cost not always +inf)? Empty: every target.
-  // Only steers the search (A*'s lower bound aims at these and the required).
+  // Only steers the search (A*'s lower bound aims at these and the required);
+  // with no choice and no required target nothing is searched.
   std::vector<char> choice;
 };
 
