@@ -460,6 +460,30 @@ void BM_PlanStep(benchmark::State& state) {
 // Every map of the mission planned once, in order, with the offset tiles
 // kept from plan to plan as the explorer's worker keeps them: the per-plan
 // CPU time's p50, p99 and max over the mission (the target is the p99).
+// A hostile MAP within the explorer's max_map_vertices: a 200 m square with
+// a round hole of `hole` vertices holding `islands` squares of 0.3 m, the
+// shape that made enclosed_areas cost islands x hole vertices before its
+// work budget (frontier_goals.hpp). Counter: islands not placed.
+void BM_EnclosedAreasHostile(benchmark::State& state) {
+  const int hole_vertices = static_cast<int>(state.range(0)), islands = static_cast<int>(state.range(1));
+  testing::RingSpec hole;
+  for (int k = 0; k < hole_vertices; ++k) {  // clockwise
+    const double a = -2.0 * M_PI * k / hole_vertices;
+    hole.points.emplace_back(100.0 + 95.0 * std::cos(a), 100.0 + 95.0 * std::sin(a));
+  }
+  TypedMultiPolygon map{
+      testing::typed_polygon(testing::rectangle(0, 0, 200, 200), {hole})};
+  const int per_row = static_cast<int>(std::ceil(std::sqrt(islands)));
+  const double pitch = 120.0 / per_row;
+  for (int i = 0; i < islands; ++i) {
+    const double x = 40.0 + pitch * (i % per_row), y = 40.0 + pitch * (i / per_row);
+    map.push_back(testing::typed_polygon(testing::rectangle(x, y, x + 0.3 * pitch, y + 0.3 * pitch)));
+  }
+  int not_placed = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(enclosed_areas(map, &not_placed));
+  state.counters["not_placed"] = not_placed;
+}
+
 void BM_PlanMission(benchmark::State& state) {
   MissionScene* scene = mission_scene_or_skip(state);
   if (!scene) return;
@@ -510,6 +534,12 @@ BENCHMARK(BM_PlanStep)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+BENCHMARK(BM_EnclosedAreasHostile)
+    ->ArgNames({"hole", "islands"})
+    ->Args({1000, 100})
+    ->Args({100000, 100})
+    ->Args({100000, 20000})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)

@@ -328,7 +328,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   // behind a thin wall, a misaligned scan's free space beyond one), and a
   // robot sent there stands looking at the wall; such a point is dropped and
   // an approach point, which is in view by construction, tried instead.
-  const auto chains = frontier_chains(map);
+  const auto chains = frontier_chains(map, &plan.stats.polygons_not_placed);
   plan.stats.frontier_chains = static_cast<int>(chains.size());
   const auto points = frontier_candidates(chains, options.frontier, &plan.stats.chains_too_short);
   std::vector<Point> targets;

@@ -128,6 +128,10 @@ struct PlanStats {
   int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
   int candidates_in_pockets = 0;     // PlannerOptions::reach_past_frontier_m: no disk reaches past them
   int candidates_enclosed = 0;       // PlannerOptions::min_enclosed_area_m2: too little unknown behind them
+  // Map polygons whose hole was not looked up (enclosed_areas' work budget,
+  // a hostile map): their frontiers and those of the holes around them count
+  // as unbounded.
+  int polygons_not_placed = 0;
   int cspace_vertices = 0;
   int reflex_nodes = 0;
   // The robot's piece of the C-space is not its largest (a nook the map

@@ -65,7 +65,7 @@ void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeT
 
 }  // namespace
 
-std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map) {
+std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map, int* polygons_not_placed) {
   constexpr double kUnbounded = std::numeric_limits<double>::infinity();
   std::vector<std::vector<double>> areas(map.size());
   struct Hole {
@@ -90,6 +90,21 @@ std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map) {
   boxes.reserve(holes.size());
   for (std::size_t h = 0; h < holes.size(); ++h) boxes.emplace_back(holes[h].box, h);
   const bgi::rtree<std::pair<mapping::Box, std::size_t>, bgi::rstar<16>> hole_index(boxes);
+  // The tests read the hole's whole ring; a MAP of many polygons inside one
+  // long hole (hostile: a building's map has few polygons in its holes)
+  // would cost polygons x hole vertices. Past a budget of ring vertices
+  // read, linear in the map's size, a polygon is left unplaced: it is
+  // taken from no hole's region, and the holes it might lie in, and its own
+  // outer ring, count as unbounded (their frontiers goals as any other),
+  // so the budget can cost goals to visit, never a frontier skipped.
+  std::size_t map_vertices = 0;
+  for (const auto& polygon : map) {
+    map_vertices += polygon.geometry.outer().size();
+    for (const auto& inner : polygon.geometry.inners()) map_vertices += inner.size();
+  }
+  const std::size_t budget = kEnclosedLookupVerticesPerMapVertex * map_vertices + kEnclosedLookupVerticesFloor;
+  std::size_t read = 0;
+  std::vector<char> hole_unbounded(holes.size(), 0), placed(map.size(), 1);
   std::vector<int> holder(map.size(), -1);
   std::vector<std::pair<mapping::Box, std::size_t>> covering;
   for (std::size_t p = 0; p < map.size(); ++p) {
@@ -99,18 +114,31 @@ std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map) {
     hole_index.query(bgi::covers(outer_boxes[p]), std::back_inserter(covering));
     for (const auto& [box, h] : covering) {
       if (holes[h].polygon == p) continue;
+      const auto& hole_ring = map[holes[h].polygon].geometry.inners()[holes[h].index];
+      read += 3 * hole_ring.size();
+      if (read > budget) {
+        placed[p] = 0;
+        hole_unbounded[h] = 1;
+        continue;
+      }
       // Polygons may touch at a vertex, where the crossing test is
       // arbitrary: three vertices spread over the ring vote.
       const std::size_t n = outer.size() - 1;
       int inside = 0;
-      for (std::size_t v : {std::size_t{0}, n / 3, (2 * n) / 3})
-        inside += mapping::inside_ring(outer[v], map[holes[h].polygon].geometry.inners()[holes[h].index]);
+      for (std::size_t v : {std::size_t{0}, n / 3, (2 * n) / 3}) inside += mapping::inside_ring(outer[v], hole_ring);
       if (inside >= 2 && (holder[p] < 0 || holes[h].area_m2 < holes[static_cast<std::size_t>(holder[p])].area_m2))
         holder[p] = static_cast<int>(h);
     }
   }
+  int not_placed = 0;
+  for (std::size_t p = 0; p < map.size(); ++p) {
+    if (placed[p]) continue;
+    ++not_placed;
+    holder[p] = -1;  // its outer ring: unbounded; subtracted from no hole
+  }
+  if (polygons_not_placed) *polygons_not_placed = not_placed;
   std::vector<double> region(holes.size());
-  for (std::size_t h = 0; h < holes.size(); ++h) region[h] = holes[h].area_m2;
+  for (std::size_t h = 0; h < holes.size(); ++h) region[h] = hole_unbounded[h] ? kUnbounded : holes[h].area_m2;
   for (std::size_t p = 0; p < map.size(); ++p)
     if (holder[p] >= 0) region[static_cast<std::size_t>(holder[p])] -= std::abs(bg::area(map[p].geometry.outer()));
   for (std::size_t h = 0; h < holes.size(); ++h)
@@ -120,9 +148,9 @@ std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map) {
   return areas;
 }
 
-std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map) {
+std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map, int* polygons_not_placed) {
   std::vector<FrontierChain> chains;
-  const auto areas = enclosed_areas(map);
+  const auto areas = enclosed_areas(map, polygons_not_placed);
   for (std::size_t p = 0; p < map.size(); ++p) {
     const auto& polygon = map[p];
     if (!mapping::types_match_rings(polygon)) continue;

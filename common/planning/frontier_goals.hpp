@@ -4,6 +4,7 @@
 // twice the sensor range apart along the frontier, so that every frontier
 // point is within sensor range of some candidate; visiting all candidates
 // therefore reveals what lies behind every frontier.
+#include <cstddef>
 #include <limits>
 #include <vector>
 
@@ -33,7 +34,8 @@ struct FrontierChain {
 // area it encloses (FrontierChain::enclosed_area_m2). Edges typed kBorder (a
 // tile border that was not dissolved) count as frontier: they separate the
 // map from space it does not describe.
-std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map);
+// `polygons_not_placed` as for enclosed_areas.
+std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map, int* polygons_not_placed = nullptr);
 
 // Per polygon of `map`, per ring (outer first, then the holes, as
 // TypedPolygon::edge_types): the area of the unknown region the ring borders
@@ -42,7 +44,15 @@ std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map);
 // (polygons are interior-disjoint, so each lies wholly in a hole or outside
 // it); an outer ring inside a hole borders that hole's region (the innermost
 // hole holding it).
-std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map);
+// Finding the hole that holds a polygon reads the ring of each hole whose
+// box covers it, within a budget of kEnclosedLookupVerticesPerMapVertex
+// ring vertices per map vertex (plus kEnclosedLookupVerticesFloor): past
+// it, a polygon is not placed (counted in `polygons_not_placed` if given),
+// and its outer ring and the holes it was to be tested against border
+// unbounded regions, so frontiers are never wrongly taken as enclosed.
+inline constexpr std::size_t kEnclosedLookupVerticesPerMapVertex = 64;
+inline constexpr std::size_t kEnclosedLookupVerticesFloor = 1'000'000;
+std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map, int* polygons_not_placed = nullptr);
 
 struct FrontierGoalOptions {
   // Radius within which a candidate "covers" the frontier (the paper's sensor

@@ -50,6 +50,11 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
       plan.stats.frontier_chains, plan.stats.chains_too_short, plan.candidates.size(), plan.stats.approach_candidates,
       plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view, plan.stats.candidates_in_pockets,
       plan.stats.candidates_enclosed);
+  if (plan.stats.polygons_not_placed > 0)
+    out += format(
+        "  %d map polygons not placed in their holes (work budget): their frontiers and the holes' count as "
+        "unbounded\n",
+        plan.stats.polygons_not_placed);
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
     out += format("  %zu: frontier (%.2f, %.2f) -> (%.2f, %.2f)%s, chain %d (%.2f m", i, c.frontier_point.x(),
