@@ -461,27 +461,45 @@ void BM_PlanStep(benchmark::State& state) {
 // kept from plan to plan as the explorer's worker keeps them: the per-plan
 // CPU time's p50, p99 and max over the mission (the target is the p99).
 // A hostile MAP within the explorer's max_map_vertices: a 200 m square with
-// a round hole of `hole` vertices holding `islands` squares of 0.3 m, the
-// shape that made enclosed_areas cost islands x hole vertices before its
-// work budget (frontier_goals.hpp). Counter: islands not placed.
-void BM_EnclosedAreasHostile(benchmark::State& state) {
-  const int hole_vertices = static_cast<int>(state.range(0)), islands = static_cast<int>(state.range(1));
+// a round hole of `hole_vertices` holding `islands` squares of 0.3 of their
+// grid pitch, the shape that made enclosed_areas cost islands x hole
+// vertices before its work budget (frontier_goals.hpp).
+TypedMultiPolygon islands_in_a_long_hole(int hole_vertices, int islands) {
   testing::RingSpec hole;
   for (int k = 0; k < hole_vertices; ++k) {  // clockwise
     const double a = -2.0 * M_PI * k / hole_vertices;
     hole.points.emplace_back(100.0 + 95.0 * std::cos(a), 100.0 + 95.0 * std::sin(a));
   }
-  TypedMultiPolygon map{
-      testing::typed_polygon(testing::rectangle(0, 0, 200, 200), {hole})};
+  TypedMultiPolygon map{testing::typed_polygon(testing::rectangle(0, 0, 200, 200), {hole})};
   const int per_row = static_cast<int>(std::ceil(std::sqrt(islands)));
   const double pitch = 120.0 / per_row;
   for (int i = 0; i < islands; ++i) {
     const double x = 40.0 + pitch * (i % per_row), y = 40.0 + pitch * (i / per_row);
     map.push_back(testing::typed_polygon(testing::rectangle(x, y, x + 0.3 * pitch, y + 0.3 * pitch)));
   }
+  return map;
+}
+
+// Counter: islands not placed in their hole.
+void BM_EnclosedAreasHostile(benchmark::State& state) {
+  const auto map = islands_in_a_long_hole(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   int not_placed = 0;
   for (auto _ : state) benchmark::DoNotOptimize(enclosed_areas(map, &not_placed));
   state.counters["not_placed"] = not_placed;
+}
+
+// The whole plan on that map, the robot in the ring between the square and
+// the hole (shipped planner options).
+void BM_PlanHostile(benchmark::State& state) {
+  const auto map = islands_in_a_long_hole(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  PlannerOptions options;
+  options.min_enclosed_area_m2 = 2.0;
+  options.enclosed_goal_range_m = 4.0;
+  Plan plan;
+  for (auto _ : state) plan = plan_exploration(map, Pose2{2.0, 2.0, 0.0}, {}, options);
+  state.counters["ok"] = plan.ok;
+  state.counters["candidates"] = static_cast<double>(plan.candidates.size());
+  state.counters["not_placed"] = plan.stats.polygons_not_placed;
 }
 
 void BM_PlanMission(benchmark::State& state) {
@@ -540,6 +558,12 @@ BENCHMARK(BM_EnclosedAreasHostile)
     ->Args({100000, 100})
     ->Args({100000, 20000})
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PlanHostile)
+    ->ArgNames({"hole", "islands"})
+    ->Args({1000, 100})
+    ->Args({100000, 20000})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
