@@ -78,27 +78,12 @@ TEST(PlanExploration, SaysWhenTheRobotIsInALesserPieceOfTheCSpace) {
   EXPECT_TRUE(room.stats.robot_in_a_lesser_piece);
 }
 
-// A room 10 x 4 m with a pillar, and through a slit 0.3 m wide (narrower
-// than the robot) at its east wall a second room whose far wall is frontier:
-// its C-space is a piece of its own, too far from the first room's for an
-// approach point (approach_range_m 0 besides).
-mapping::TypedMultiPolygon a_room_cut_off_behind_a_slit() {
-  auto map = typed_polygon(testing::RingSpec{
-      {Point(0, 0), Point(10, 0), Point(10, 1.85), Point(11, 1.85), Point(11, 0), Point(16, 0), Point(16, 4),
-       Point(11, 4), Point(11, 2.15), Point(10, 2.15), Point(10, 4), Point(0, 4)},
-      {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle,
-       E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}});
-  map.geometry.inners().push_back({Point(4, 1.5), Point(4, 2.5), Point(5, 2.5), Point(5, 1.5), Point(4, 1.5)});
-  map.edge_types.push_back({E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle});
-  return {map};
-}
-
 TEST(PlanExploration, ACandidateInAnotherPieceOfTheCSpaceIsNotSearchedFor) {
   // No path can reach it: a search for it would settle the robot's whole
   // piece (on a large map, the plan's worst time) and find nothing.
   PlannerOptions o = options();
   o.approach_range_m = 0.0;
-  const auto map = a_room_cut_off_behind_a_slit();
+  const auto map = testing::a_room_cut_off_behind_a_slit();
   const Pose2 robot{1, 1, 0};
   // Greedy and the tour over the nearest candidates (the tour over all of
   // them computes every path from the start in one search anyway).
@@ -120,7 +105,7 @@ TEST(PlanExploration, ACandidateInAnotherPieceOfTheCSpaceIsNotSearchedFor) {
     EXPECT_EQ(followed.stats.segment_tests, 0);
   }
   // The same room with the slit widened: the candidate is searched for and reached.
-  auto open = a_room_cut_off_behind_a_slit();
+  auto open = testing::a_room_cut_off_behind_a_slit();
   for (auto& p : open[0].geometry.outer()) {
     if (std::abs(p.y() - 1.85) < 1e-9) p.y(1.2);
     if (std::abs(p.y() - 2.15) < 1e-9) p.y(2.8);

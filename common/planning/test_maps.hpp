@@ -67,4 +67,19 @@ inline CSpaceOptions disk(double radius_m) {
   return o;
 }
 
+// A room 10 x 4 m with a pillar, and through a slit 0.3 m wide (narrower
+// than the robot) at its east wall a second room whose far wall (x = 16) is
+// frontier: that room's C-space is a piece of its own. The far wall is in
+// view through the slit, so with approach points on (approach_range_m) it
+// gets one in the first room; with them off its candidate has no path.
+inline mapping::TypedMultiPolygon a_room_cut_off_behind_a_slit() {
+  constexpr auto O = EdgeType::kObstacle;
+  auto map = typed_polygon(RingSpec{{Point(0, 0), Point(10, 0), Point(10, 1.85), Point(11, 1.85), Point(11, 0),
+                                     Point(16, 0), Point(16, 4), Point(11, 4), Point(11, 2.15), Point(10, 2.15),
+                                     Point(10, 4), Point(0, 4)},
+                                    {O, O, O, O, O, EdgeType::kFrontier, O, O, O, O, O, O}},
+                           {rectangle_hole(4, 1.5, 5, 2.5)});
+  return {map};
+}
+
 }  // namespace pex::planning::testing

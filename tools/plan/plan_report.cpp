@@ -66,6 +66,8 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
                     static_cast<int>(i) == plan.best ? "  <- best" : "");
     else if (c.reachable)  // greedy stopped at the goal: this one costs more
       out += format("reachable, path not searched (costs more than the goal)%s\n", c.blacklisted ? ", blacklisted" : "");
+    else if (const int piece = cspace.piece_of(c.position); piece >= 0 && piece != cspace.piece_of(robot))
+      out += format("no path: in C-space piece %d, not the robot's\n", piece);
     else
       out += "no path\n";
   }

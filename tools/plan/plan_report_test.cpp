@@ -70,6 +70,25 @@ TEST(PlanReport, ACandidateGreedyDidNotSearchSaysSo) {
   EXPECT_EQ(text.find("inf"), std::string::npos) << text;
 }
 
+TEST(PlanReport, ACandidateInAnotherPieceSaysWhichPiece) {
+  Fixture f;
+  f.options.approach_range_m = 0.0;
+  const TypedMultiPolygon map = a_room_cut_off_behind_a_slit();
+  const pex::geometry::Pose2 robot{1.0, 1.0, 0.0};
+  const Plan plan = plan_exploration(map, robot, {}, f.options);
+  ASSERT_EQ(plan.candidates.size(), 1u);
+  ConfigurationSpace cspace;
+  cspace.build(map, f.options.cspace);
+  f.pose.x = robot.x_m;
+  f.pose.y = robot.y_m;
+  const std::string text = pex::plan_tool::describe(f.msg, f.pose, cspace, plan);
+  const int piece = cspace.piece_of(plan.candidates[0].position);
+  ASSERT_GE(piece, 0);
+  EXPECT_NE(piece, cspace.piece_of(Point(1.0, 1.0)));
+  EXPECT_NE(text.find("no path: in C-space piece " + std::to_string(piece) + ", not the robot's"), std::string::npos)
+      << text;
+}
+
 TEST(PlanReport, AFailedPlanSaysWhy) {
   Fixture f;
   Plan failed;
