@@ -74,8 +74,8 @@ TEST(FrontierChains, AChainOnAHoleEnclosesTheHoleLessTheMapInsideIt) {
 }
 
 // A 200 x 200 m room with a round hole of 1,000 vertices (radius 90 m)
-// holding `islands` squares of 0.5 m on a 2 m grid (rows from the centre
-// out): many polygons in one long hole, as a hostile MAP would have them.
+// holding `islands` squares of 0.5 m on a 2 m grid, 60 to a row from
+// (40, 40): many polygons in one long hole, as a hostile MAP would have them.
 mapping::TypedMultiPolygon islands_in_a_long_hole(int islands) {
   using testing::rectangle;
   RingSpec hole;
