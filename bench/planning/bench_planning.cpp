@@ -457,32 +457,10 @@ void BM_PlanStep(benchmark::State& state) {
   state.SetLabel(s.name + (state.range(1) == 0 ? " cspace" : " start row"));
 }
 
-// Every map of the mission planned once, in order, with the offset tiles
-// kept from plan to plan as the explorer's worker keeps them: the per-plan
-// CPU time's p50, p99 and max over the mission (the target is the p99).
-// A hostile MAP within the explorer's max_map_vertices: a 200 m square with
-// a round hole of `hole_vertices` holding `islands` squares of 0.3 of their
-// grid pitch, the shape that made enclosed_areas cost islands x hole
-// vertices before its work budget (frontier_goals.hpp).
-TypedMultiPolygon islands_in_a_long_hole(int hole_vertices, int islands) {
-  testing::RingSpec hole;
-  for (int k = 0; k < hole_vertices; ++k) {  // clockwise
-    const double a = -2.0 * M_PI * k / hole_vertices;
-    hole.points.emplace_back(100.0 + 95.0 * std::cos(a), 100.0 + 95.0 * std::sin(a));
-  }
-  TypedMultiPolygon map{testing::typed_polygon(testing::rectangle(0, 0, 200, 200), {hole})};
-  const int per_row = static_cast<int>(std::ceil(std::sqrt(islands)));
-  const double pitch = 120.0 / per_row;
-  for (int i = 0; i < islands; ++i) {
-    const double x = 40.0 + pitch * (i % per_row), y = 40.0 + pitch * (i / per_row);
-    map.push_back(testing::typed_polygon(testing::rectangle(x, y, x + 0.3 * pitch, y + 0.3 * pitch)));
-  }
-  return map;
-}
-
-// Counter: islands not placed in their hole.
+// enclosed_areas on testing::islands_in_a_long_hole (a hostile MAP within
+// the explorer's max_map_vertices). Counter: islands not placed in their hole.
 void BM_EnclosedAreasHostile(benchmark::State& state) {
-  const auto map = islands_in_a_long_hole(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const auto map = testing::islands_in_a_long_hole(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   int not_placed = 0;
   for (auto _ : state) benchmark::DoNotOptimize(enclosed_areas(map, &not_placed));
   state.counters["not_placed"] = not_placed;
@@ -491,7 +469,7 @@ void BM_EnclosedAreasHostile(benchmark::State& state) {
 // The whole plan on that map, the robot in the ring between the square and
 // the hole (shipped planner options).
 void BM_PlanHostile(benchmark::State& state) {
-  const auto map = islands_in_a_long_hole(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const auto map = testing::islands_in_a_long_hole(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   PlannerOptions options;
   options.min_enclosed_area_m2 = 2.0;
   options.enclosed_goal_range_m = 4.0;
@@ -502,6 +480,9 @@ void BM_PlanHostile(benchmark::State& state) {
   state.counters["not_placed"] = plan.stats.polygons_not_placed;
 }
 
+// Every map of the mission planned once, in order, with the offset tiles
+// kept from plan to plan as the explorer's worker keeps them: the per-plan
+// CPU time's p50, p99 and max over the mission (the target is the p99).
 void BM_PlanMission(benchmark::State& state) {
   MissionScene* scene = mission_scene_or_skip(state);
   if (!scene) return;

@@ -149,6 +149,18 @@ bool is_choice(const std::vector<char>& choice, std::size_t t) {
 bool is_required(const std::vector<char>& required, std::size_t t) {
   return t < required.size() && required[t] != 0;
 }
+// How many targets are required, and how many may be chosen.
+struct WantedTargets {
+  std::size_t required = 0, choices = 0;
+};
+WantedTargets count_wanted(std::size_t n, const std::vector<char>& choice, const std::vector<char>& required) {
+  WantedTargets w;
+  for (std::size_t t = 0; t < n; ++t) {
+    w.required += is_required(required, t);
+    w.choices += is_choice(choice, t);
+  }
+  return w;
+}
 std::vector<Point> search_aims(const std::vector<Point>& targets, const std::vector<char>& choice,
                                const std::vector<char>& required) {
   std::vector<Point> aims;
@@ -503,12 +515,9 @@ PathMatrix shortest_paths_to_cheapest(const ConfigurationSpace& cspace, const Po
   out.from_start_m.assign(n, kInf);
   out.path_from_start.resize(n);
   out.reflex_nodes = r;
-  std::size_t required_left = 0, choices = 0;
-  for (std::size_t t = 0; t < n; ++t) {
-    required_left += is_required(query.required, t);
-    choices += is_choice(query.choice, t);
-  }
-  if (required_left == 0 && choices == 0) {  // nothing wanted: nothing searched
+  const WantedTargets wanted = count_wanted(n, query.choice, query.required);
+  std::size_t required_left = wanted.required;
+  if (required_left == 0 && wanted.choices == 0) {  // nothing wanted: nothing searched
     out.all_searched = false;
     out.segment_tests = 0;
     return out;
@@ -562,13 +571,10 @@ struct NearestTargetsSearch {
   // lower bound is 0), so the first `count` choice targets settled are the
   // nearest. False when the search gave up (see below).
   bool search_from_start(PathMatrix& out) const {
-    std::size_t required_left = 0, choices = 0;
-    for (std::size_t t = 0; t < n(); ++t) {
-      required_left += is_required(t);
-      choices += is_choice(t);
-    }
+    const WantedTargets wanted = count_wanted(n(), query.choice, query.required);
+    std::size_t required_left = wanted.required;
     const std::vector<Point> aims = search_aims(targets, query.choice, query.required);
-    const std::size_t need = std::min(query.count, choices);
+    const std::size_t need = std::min(query.count, wanted.choices);
     if (need == 0 && required_left == 0) {  // nothing wanted: nothing searched
       out.all_searched = false;
       return true;

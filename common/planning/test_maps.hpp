@@ -82,4 +82,24 @@ inline mapping::TypedMultiPolygon a_room_cut_off_behind_a_slit() {
   return {map};
 }
 
+// A 200 x 200 m room with a round hole of `hole_vertices` (radius 95 m
+// about (100, 100)) holding `islands` squares, 0.3 of their grid pitch
+// across, on a square grid over (40..160, 40..160): many polygons in one
+// long hole, as a hostile MAP would have them (enclosed_areas' work budget).
+inline mapping::TypedMultiPolygon islands_in_a_long_hole(int hole_vertices, int islands) {
+  RingSpec hole;
+  for (int k = 0; k < hole_vertices; ++k) {  // clockwise
+    const double a = -2.0 * M_PI * k / hole_vertices;
+    hole.points.emplace_back(100.0 + 95.0 * std::cos(a), 100.0 + 95.0 * std::sin(a));
+  }
+  mapping::TypedMultiPolygon map{typed_polygon(rectangle(0, 0, 200, 200), {hole})};
+  const int per_row = static_cast<int>(std::ceil(std::sqrt(islands)));
+  const double pitch = 120.0 / per_row;
+  for (int i = 0; i < islands; ++i) {
+    const double x = 40.0 + pitch * (i % per_row), y = 40.0 + pitch * (i / per_row);
+    map.push_back(typed_polygon(rectangle(x, y, x + 0.3 * pitch, y + 0.3 * pitch)));
+  }
+  return map;
+}
+
 }  // namespace pex::planning::testing

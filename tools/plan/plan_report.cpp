@@ -55,6 +55,7 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
         "  %d map polygons not placed in their holes (work budget): their frontiers and the holes' count as "
         "unbounded\n",
         plan.stats.polygons_not_placed);
+  const int robot_piece = cspace.piece_of(robot);
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
     out += format("  %zu: frontier (%.2f, %.2f) -> (%.2f, %.2f)%s, chain %d (%.2f m", i, c.frontier_point.x(),
@@ -66,7 +67,7 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
                     static_cast<int>(i) == plan.best ? "  <- best" : "");
     else if (c.reachable)  // greedy stopped at the goal: this one costs more
       out += format("reachable, path not searched (costs more than the goal)%s\n", c.blacklisted ? ", blacklisted" : "");
-    else if (const int piece = cspace.piece_of(c.position); piece >= 0 && piece != cspace.piece_of(robot))
+    else if (const int piece = cspace.piece_of(c.position); piece >= 0 && piece != robot_piece)
       out += format("no path: in C-space piece %d, not the robot's\n", piece);
     else
       out += "no path\n";
