@@ -271,6 +271,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
         goal_failures_ = plan_failures_ = empty_plans_ = 0;
         end_utime_ = -1;
         want_tight_ = false;
+        through_frontier_.reset();
         trail_.clear();
         backing_out_ = backed_out_ = false;
         backed_out_from_.reset();
@@ -333,6 +334,7 @@ MissionOutput Mission::output() const {
   out.plans = plans_;
   out.looks_around = looks_around_;
   out.backs_out = backs_out_;
+  out.ways_in_without_margin = ways_in_without_margin_;
   out.plan_stats = plan_stats_;
   return out;
 }
@@ -349,6 +351,8 @@ void Mission::request_plan(std::int64_t now_utime, Purpose purpose, bool tight) 
   if (tight) r.options.cspace.clearance_margin_m = 0.0;
   if (purpose == Purpose::kHome) r.home = Point(home_->x_m, home_->y_m);
   if (purpose == Purpose::kFollow && goal_) r.focus = GoalFocus{*goal_, goal_frontier_, options_.goal_match_radius_m};
+  if (purpose == Purpose::kSelect && tight && through_frontier_)
+    r.focus = GoalFocus{*through_frontier_, *through_frontier_, options_.goal_match_radius_m};
   outstanding_id_ = r.id;
   outstanding_purpose_ = purpose;
   outstanding_tight_ = tight;
@@ -435,6 +439,33 @@ void Mission::list_frontiers(const Plan& plan) {
 
 void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime) {
   list_frontiers(plan);
+  if (through_frontier_) {
+    const Point frontier = *through_frontier_;
+    through_frontier_.reset();
+    if (tight) {
+      // The way to the frontier itself (not another approach point), if
+      // the plan without the margin has one (the request's focus had the
+      // paths of the candidates near the frontier searched); otherwise the
+      // usual plan with the margin.
+      const GoalFocus focus{frontier, frontier, options_.goal_match_radius_m};
+      const GoalCandidate* way_in = nullptr;
+      for (const auto& c : plan.candidates)
+        if (c.reachable && !c.approach && focus.matches(c) && !c.path.empty() &&
+            (!way_in || c.path_length_m < way_in->path_length_m))
+          way_in = &c;
+      want_tight_ = false;
+      if (!way_in) {
+        last_request_utime_ = -1;
+        status_ = "no way to the frontier seen from its approach point without the margin either";
+        return;
+      }
+      start_goal(*way_in, plan, now_utime);
+      goal_tight_ = true;
+      ++ways_in_without_margin_;
+      status_ += " (without clearance margin: the frontier seen from its approach point)";
+      return;
+    }
+  }
   if (!plan.best_candidate() && !tight && options_.tight_fallback &&
       options_.planner.cspace.clearance_margin_m > 0.0) {
     if (margin_may_block(plan)) {
@@ -558,21 +589,26 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
     }
     return;
   }
+  start_goal(*best, plan, now_utime);
+}
+
+void Mission::start_goal(const GoalCandidate& goal, const Plan& plan, std::int64_t now_utime) {
   empty_plans_ = 0;
   looking_around_ = false;
   backing_out_ = backed_out_ = false;
-  goal_ = best->position;
+  goal_ = goal.position;
+  goal_approach_ = goal.approach;
   goal_missing_map_utime_ = -1;
-  goal_frontier_ = best->frontier_point;
-  progress_goal_ = best->frontier_point;
-  best_remaining_m_ = best->path_length_m;
+  goal_frontier_ = goal.frontier_point;
+  progress_goal_ = goal.frontier_point;
+  best_remaining_m_ = goal.path_length_m;
   progress_utime_ = now_utime;
   // However the goal seems to progress, it gets at most this long (a goal
   // that keeps "moving on" without ever being reached is what makes a robot wander).
-  goal_deadline_utime_ = deadline_for(best->path_length_m, now_utime);
-  follower_.set_path(best->path);
-  enter(Phase::kMoving, format("moving to goal (%.2f, %.2f), path %.1f m, %.0f candidates", best->position.x(),
-                               best->position.y(), best->path_length_m, static_cast<double>(plan.candidates.size())));
+  goal_deadline_utime_ = deadline_for(goal.path_length_m, now_utime);
+  follower_.set_path(goal.path);
+  enter(Phase::kMoving, format("moving to goal (%.2f, %.2f), path %.1f m, %.0f candidates", goal.position.x(),
+                               goal.position.y(), goal.path_length_m, static_cast<double>(plan.candidates.size())));
 }
 
 void Mission::give_up_goal(GiveUp kind, const std::string& why) {
@@ -677,6 +713,7 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   // Commitment: the goal is kept even when another candidate is now cheaper;
   // switching back and forth between goals is what makes a robot wander.
   goal_ = same.position;
+  goal_approach_ = same.approach;
   goal_frontier_ = same.frontier_point;
   follower_.set_path(same.path);
   // Progress: the path got shorter, or the frontier moved on (a corridor's
@@ -822,6 +859,19 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       visited_.push_back(*goal_);
       blacklist_.push_back(*goal_);
       ++outcomes_.reached;
+      if (goal_approach_ && !goal_tight_ && options_.tight_fallback &&
+          options_.planner.cspace.clearance_margin_m > 0.0) {
+        // An approach point: the robot sees the frontier from its own piece
+        // of the C-space, the frontier's own place lies in another, and the
+        // margin may be what cuts them apart (b41, an office floor: a 0.66 m
+        // gap between a door's corner and a chair; the approach point reached,
+        // the frontier still there, and the rest of the floor never entered,
+        // although the plan without the margin went through; by the end of
+        // the mission SLAM's corrections had closed it for both). Next: a
+        // plan without the margin, here and now, for that frontier only.
+        through_frontier_ = goal_frontier_;
+        want_tight_ = true;
+      }
       goal_failures_ = 0;
       goal_.reset();
       follower_.clear();

@@ -217,6 +217,9 @@ struct MissionOutput {
   std::int64_t plans = 0;       // plan results used
   std::int64_t looks_around = 0;  // turns on the spot before DONE_WITH_UNREACHABLE (MissionOptions::look_around)
   std::int64_t backs_out = 0;     // drives back the way it came before DONE_WITH_UNREACHABLE (back_out_m)
+  // Goals taken without the margin to a frontier whose approach point was
+  // reached (Mission::through_frontier_).
+  std::int64_t ways_in_without_margin = 0;
   std::optional<PlanRequest> plan_request;  // run compute_plan() on it and call on_plan()
   PlanStats plan_stats;         // of the last plan
 };
@@ -280,6 +283,8 @@ class Mission {
   void on_follow_plan(const Plan& plan, std::int64_t now_utime);
   void on_home_plan(const Plan& plan);
   void select(const Plan& plan, std::int64_t now_utime);
+  // Sets `goal` (a candidate of `plan`) as the goal to drive to: MOVING.
+  void start_goal(const GoalCandidate& goal, const Plan& plan, std::int64_t now_utime);
   // Why a goal is given up; give_up_goal counts it in GoalOutcomes.
   // kNoProgress (the robot could not get closer: stuck) and kOverdue (never
   // reached) count toward FAILED; kBlocked (a newer map has no path to it)
@@ -345,6 +350,7 @@ class Mission {
   std::int64_t back_out_deadline_utime_ = 0;
   static constexpr double kBackOutAgainM = 2.0;
   std::int64_t backs_out_ = 0;
+  std::int64_t ways_in_without_margin_ = 0;
   std::int64_t last_request_utime_ = -1;
   std::int64_t last_request_map_utime_ = -1;
   std::int64_t select_after_map_utime_ = -1;  // SELECTING waits for a map newer than this
@@ -363,6 +369,10 @@ class Mission {
   std::optional<Point> goal_;
   Point goal_frontier_;      // the frontier point the goal is for
   bool goal_tight_ = false;  // the goal was planned without the clearance margin
+  bool goal_approach_ = false;  // the goal is an approach point (GoalCandidate::approach)
+  // An approach point was reached: the next select plan goes without the
+  // margin and takes a way to this frontier's own place, if it has one.
+  std::optional<Point> through_frontier_;
   double best_remaining_m_ = 0.0;
   Point progress_goal_;  // where the goal's frontier point was at the last progress
   std::int64_t progress_utime_ = 0;

@@ -775,6 +775,68 @@ TEST(Mission, SqueezesThroughANarrowGapWithoutTheMargin) {
   EXPECT_NE(out.status.find("none reachable"), std::string::npos) << out.status;
 }
 
+// Two rooms as rooms_with_a_narrow_gap(), the gap `gap_m` wide, and a
+// second frontier: room A's west wall.
+mapping::TypedMultiPolygon rooms_with_a_narrow_gap_and_a_west_frontier(double gap_m) {
+  const double y0 = 2.5 - gap_m / 2, y1 = 2.5 + gap_m / 2;
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(5, 0), Point(5, y0), Point(5.2, y0), Point(5.2, 0), Point(10, 0), Point(10, 5),
+       Point(5.2, 5), Point(5.2, y1), Point(5, y1), Point(5, 5), Point(0, 5)},
+      {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle,
+       E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier}})};
+}
+
+// Room B's frontier is seen through the gap from an approach point in room
+// A; its own place is beyond a gap the margin closes. Once the approach point
+// is reached and the frontier is still there, the robot goes through the gap
+// without the margin, although room A's west frontier is reachable with it
+// (b41: a floor's whole open plan lay behind such a gap). Where the gap is
+// too narrow even without the margin, it goes on to the west frontier.
+TEST(Mission, ReachedApproachPointLeadsThroughAGapOnlyThePlanWithoutTheMarginPasses) {
+  MissionOptions o = test_options();
+  o.planner.cspace.clearance_margin_m = 0.05;  // with the 0.3 m radius: a gap needs 0.7 m, 0.6 m without
+  for (const double gap_m : {0.66, 0.56}) {
+    SCOPED_TRACE(gap_m);
+    const auto map = rooms_with_a_narrow_gap_and_a_west_frontier(gap_m);
+    Mission m(o);
+    m.on_map(map, 0);
+    m.on_pose(Pose2{4, 2.5, 0}, 0);
+    auto out = step_with_inline_planning(m, 0);
+    ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+    ASSERT_TRUE(out.goal.has_value());
+    const Point approach = *out.goal;
+    EXPECT_LT(approach.x(), 5.0);  // in room A: the approach point, with the margin
+    EXPECT_GT(approach.x(), 3.0);
+    EXPECT_EQ(out.status.find("without clearance margin"), std::string::npos) << out.status;
+    m.on_pose(Pose2{approach.x(), approach.y(), 0}, 200'000);  // there, facing room B
+    out = step_with_inline_planning(m, 200'000);
+    ASSERT_EQ(out.phase, Phase::kSelecting) << out.status;
+    ASSERT_NE(out.status.find("reached"), std::string::npos) << out.status;
+    // A newer map: room B's frontier is still there.
+    m.on_map(map, 1'000'000);
+    m.on_pose(Pose2{approach.x(), approach.y(), 0}, 1'000'000);
+    out = step_with_inline_planning(m, 1'000'000);
+    ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+    ASSERT_TRUE(out.goal.has_value());
+    if (gap_m > 0.6) {
+      EXPECT_GT(out.goal->x(), 5.2) << out.status;  // through the gap
+      EXPECT_NE(out.status.find("seen from its approach point"), std::string::npos) << out.status;
+      EXPECT_EQ(out.ways_in_without_margin, 1);
+      // It is followed without the margin too, through the gap.
+      m.on_pose(Pose2{approach.x() + 0.1, approach.y(), 0}, 1'100'000);
+      out = step_with_inline_planning(m, 1'100'000);
+      m.on_pose(Pose2{approach.x() + 0.2, approach.y(), 0}, 2'000'000);
+      out = step_with_inline_planning(m, 2'000'000);
+      EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+      EXPECT_GT(out.goal->x(), 5.2) << out.status;
+    } else {
+      EXPECT_LT(out.goal->x(), 1.0) << out.status;  // room A's west frontier, with the margin
+      EXPECT_EQ(out.status.find("without clearance margin"), std::string::npos) << out.status;
+      EXPECT_EQ(out.ways_in_without_margin, 0);
+    }
+  }
+}
+
 // A robot that stands where the margin leaves no room (here 0.32 m from a
 // wall: inside the robot's radius plus margin, outside its radius) plans its
 // next goal without the margin instead of failing.
