@@ -449,14 +449,18 @@ void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utim
       // usual plan with the margin.
       const GoalFocus focus{frontier, frontier, options_.goal_match_radius_m};
       const GoalCandidate* way_in = nullptr;
-      for (const auto& c : plan.candidates)
+      bool still_there = false;
+      for (const auto& c : plan.candidates) {
+        still_there = still_there || focus.distance_to(c) <= focus.radius_m;
         if (c.reachable && !c.approach && focus.matches(c) && !c.path.empty() &&
             (!way_in || c.path_length_m < way_in->path_length_m))
           way_in = &c;
+      }
       want_tight_ = false;
       if (!way_in) {
         last_request_utime_ = -1;
-        status_ = "no way to the frontier seen from its approach point without the margin either";
+        status_ = still_there ? "no way without the margin either to the frontier seen from its approach point"
+                              : "the frontier seen from its approach point is cleared";
         return;
       }
       start_goal(*way_in, plan, now_utime);
