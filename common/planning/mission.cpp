@@ -348,7 +348,11 @@ void Mission::request_plan(std::int64_t now_utime, Purpose purpose, bool tight) 
   r.blacklist = blacklist_;
   r.options = options_.planner;
   r.tight = tight;
-  if (tight) r.options.cspace.clearance_margin_m = 0.0;
+  if (tight) {
+    // Without the margin; a way in keeps part of it (MissionOptions::way_in_margin_m).
+    const bool way_in = (purpose == Purpose::kSelect && through_frontier_) || (purpose == Purpose::kFollow && goal_way_in_);
+    r.options.cspace.clearance_margin_m = way_in ? way_in_margin_m() : 0.0;
+  }
   if (purpose == Purpose::kHome) r.home = Point(home_->x_m, home_->y_m);
   if (purpose == Purpose::kFollow && goal_) r.focus = GoalFocus{*goal_, goal_frontier_, options_.goal_match_radius_m};
   if (purpose == Purpose::kSelect && tight && through_frontier_)
@@ -464,9 +468,10 @@ void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utim
         return;
       }
       start_goal(*way_in, plan, now_utime);
-      goal_tight_ = true;
+      goal_tight_ = goal_way_in_ = true;
       ++ways_in_without_margin_;
-      status_ += " (without clearance margin: the frontier seen from its approach point)";
+      status_ += format(" (a way in, clearance margin %.3f m: the frontier seen from its approach point)",
+                        way_in_margin_m());
       return;
     }
   }
@@ -602,6 +607,7 @@ void Mission::start_goal(const GoalCandidate& goal, const Plan& plan, std::int64
   backing_out_ = backed_out_ = false;
   goal_ = goal.position;
   goal_approach_ = goal.approach;
+  goal_way_in_ = false;
   goal_missing_map_utime_ = -1;
   goal_frontier_ = goal.frontier_point;
   progress_goal_ = goal.frontier_point;

@@ -47,6 +47,7 @@
 // Stale inputs (pose, map or laser scans older than their timeout) stop the robot and set
 // `degraded` without changing the phase; the mission resumes when they are
 // fresh again. No clock, no I/O: time comes in with every call.
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -153,6 +154,12 @@ struct MissionOptions {
   // in a nook). The way it drove is the way it fits. Not again within 2 m of
   // where the last way back began. 0: off.
   double back_out_m = 20.0;
+  // A way in: after an approach point is reached, a goal at its frontier's
+  // own place that the plan with the full margin does not reach is planned
+  // and followed with this margin (at most clearance_margin_m; 0 as the tight
+  // fallback). Part of the margin is kept: such a way runs through a gap
+  // about the robot's width (docs/exploration.md, "The way in").
+  double way_in_margin_m = 0.025;
 };
 
 // How goals ended (counted over the mission).
@@ -285,6 +292,9 @@ class Mission {
   void select(const Plan& plan, std::int64_t now_utime);
   // Sets `goal` (a candidate of `plan`) as the goal to drive to: MOVING.
   void start_goal(const GoalCandidate& goal, const Plan& plan, std::int64_t now_utime);
+  double way_in_margin_m() const {
+    return std::min(options_.way_in_margin_m, options_.planner.cspace.clearance_margin_m);
+  }
   // Why a goal is given up; give_up_goal counts it in GoalOutcomes.
   // kNoProgress (the robot could not get closer: stuck) and kOverdue (never
   // reached) count toward FAILED; kBlocked (a newer map has no path to it)
@@ -370,6 +380,7 @@ class Mission {
   Point goal_frontier_;      // the frontier point the goal is for
   bool goal_tight_ = false;  // the goal was planned without the clearance margin
   bool goal_approach_ = false;  // the goal is an approach point (GoalCandidate::approach)
+  bool goal_way_in_ = false;    // the goal is a way in (through_frontier_), followed with way_in_margin_m()
   // An approach point was reached: the next select plan goes without the
   // margin and takes a way to this frontier's own place, if it has one.
   std::optional<Point> through_frontier_;

@@ -122,6 +122,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   m.tight_fallback = config.get<bool>("tight_fallback", m.tight_fallback);
   m.look_around = config.get<bool>("look_around", m.look_around);
   m.back_out_m = config.get<double>("back_out_m", m.back_out_m, in_range(0.0, 1000.0));
+  m.way_in_margin_m = config.get<double>("way_in_margin_m", m.way_in_margin_m, in_range(0.0, 1.0));
   m.look_around_max_us = static_cast<std::int64_t>(
       config.get<double>("look_around_max_s", static_cast<double>(m.look_around_max_us) * 1e-6, in_range(1.0, 600.0)) * 1e6);
   o.scan_guard = config.get<bool>("scan_guard", o.scan_guard);
