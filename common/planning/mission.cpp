@@ -334,7 +334,7 @@ MissionOutput Mission::output() const {
   out.plans = plans_;
   out.looks_around = looks_around_;
   out.backs_out = backs_out_;
-  out.ways_in_without_margin = ways_in_without_margin_;
+  out.ways_in = ways_in_;
   out.plan_stats = plan_stats_;
   return out;
 }
@@ -448,9 +448,9 @@ void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utim
     through_frontier_.reset();
     if (tight) {
       // The way to the frontier itself (not another approach point), if
-      // the plan without the margin has one (the request's focus had the
-      // paths of the candidates near the frontier searched); otherwise the
-      // usual plan with the margin.
+      // the plan with the way in's margin has one (the request's focus had
+      // the paths of the candidates near the frontier searched); otherwise
+      // the usual plan with the full margin.
       const GoalFocus focus{frontier, frontier, options_.goal_match_radius_m};
       const GoalCandidate* way_in = nullptr;
       bool still_there = false;
@@ -463,13 +463,13 @@ void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utim
       want_tight_ = false;
       if (!way_in) {
         last_request_utime_ = -1;
-        status_ = still_there ? "no way without the margin either to the frontier seen from its approach point"
+        status_ = still_there ? "no way in to the frontier seen from its approach point"
                               : "the frontier seen from its approach point is cleared";
         return;
       }
       start_goal(*way_in, plan, now_utime);
       goal_tight_ = goal_way_in_ = true;
-      ++ways_in_without_margin_;
+      ++ways_in_;
       status_ += format(" (a way in, clearance margin %.3f m: the frontier seen from its approach point)",
                         way_in_margin_m());
       return;
@@ -878,7 +878,8 @@ MissionOutput Mission::step(std::int64_t now_utime) {
         // the frontier still there, and the rest of the floor never entered,
         // although the plan without the margin went through; by the end of
         // the mission SLAM's corrections had closed it for both). Next: a
-        // plan without the margin, here and now, for that frontier only.
+        // plan with less margin (way_in_margin_m), here and now, for that
+        // frontier only.
         through_frontier_ = goal_frontier_;
         want_tight_ = true;
       }

@@ -224,9 +224,9 @@ struct MissionOutput {
   std::int64_t plans = 0;       // plan results used
   std::int64_t looks_around = 0;  // turns on the spot before DONE_WITH_UNREACHABLE (MissionOptions::look_around)
   std::int64_t backs_out = 0;     // drives back the way it came before DONE_WITH_UNREACHABLE (back_out_m)
-  // Goals taken without the margin to a frontier whose approach point was
-  // reached (Mission::through_frontier_).
-  std::int64_t ways_in_without_margin = 0;
+  // Ways in: goals taken with way_in_margin_m to a frontier whose approach
+  // point was reached (Mission::through_frontier_).
+  std::int64_t ways_in = 0;
   std::optional<PlanRequest> plan_request;  // run compute_plan() on it and call on_plan()
   PlanStats plan_stats;         // of the last plan
 };
@@ -360,7 +360,7 @@ class Mission {
   std::int64_t back_out_deadline_utime_ = 0;
   static constexpr double kBackOutAgainM = 2.0;
   std::int64_t backs_out_ = 0;
-  std::int64_t ways_in_without_margin_ = 0;
+  std::int64_t ways_in_ = 0;
   std::int64_t last_request_utime_ = -1;
   std::int64_t last_request_map_utime_ = -1;
   std::int64_t select_after_map_utime_ = -1;  // SELECTING waits for a map newer than this
@@ -381,8 +381,8 @@ class Mission {
   bool goal_tight_ = false;  // the goal was planned without the clearance margin
   bool goal_approach_ = false;  // the goal is an approach point (GoalCandidate::approach)
   bool goal_way_in_ = false;    // the goal is a way in (through_frontier_), followed with way_in_margin_m()
-  // An approach point was reached: the next select plan goes without the
-  // margin and takes a way to this frontier's own place, if it has one.
+  // An approach point was reached: the next select plan keeps only
+  // way_in_margin_m and takes a way to this frontier's own place, if it has one.
   std::optional<Point> through_frontier_;
   double best_remaining_m_ = 0.0;
   Point progress_goal_;  // where the goal's frontier point was at the last progress

@@ -95,7 +95,7 @@ class ExplorerNode {
     v.total("plans", last_.plans);
     v.total("looks_around", last_.looks_around);
     v.total("backs_out", last_.backs_out);
-    v.total("ways_in_without_margin", last_.ways_in_without_margin);
+    v.total("ways_in", last_.ways_in);
     v.total("goals_reached", last_.goals.reached);
     v.total("goals_seen", last_.goals.seen);
     v.total("goals_blocked", last_.goals.blocked);
