@@ -387,6 +387,11 @@ void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
   const Plan& plan = result.plan;
   plan_stats_ = plan.stats;
   if (!plan.ok) {
+    if (outstanding_purpose_ == Purpose::kSelect && through_frontier_) {
+      // A way in is tried on one plan only.
+      through_frontier_.reset();
+      want_tight_ = false;
+    }
     if (plan.robot_outside_cspace && outstanding_purpose_ == Purpose::kSelect && !outstanding_tight_ &&
         options_.tight_fallback && options_.planner.cspace.clearance_margin_m > 0.0) {
       // The robot stands where the margin leaves no room: a nook it reached

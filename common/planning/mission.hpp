@@ -158,7 +158,8 @@ struct MissionOptions {
   // own place that the plan with the full margin does not reach is planned
   // and followed with this margin (at most clearance_margin_m; 0 as the tight
   // fallback). Part of the margin is kept: such a way runs through a gap
-  // about the robot's width (docs/exploration.md, "The way in").
+  // about the robot's width (docs/exploration.md, "Frontiers seen through a
+  // door": the way in).
   double way_in_margin_m = 0.025;
 };
 
