@@ -131,6 +131,9 @@ TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
     EXPECT_EQ(o.mission.autostart, !on_robot) << files.back();
     EXPECT_EQ(runtime_options.clock, on_robot ? runtime::ClockSource::kSystem : runtime::ClockSource::kSim) << files.back();
     EXPECT_EQ(o.mission.scan_timeout_us, 500'000) << files.back();  // no driving blind, on the robot too
+    // A way in keeps half the margin (docs/exploration.md, "Frontiers seen through a door").
+    EXPECT_EQ(o.mission.way_in_margin_m, 0.025) << files.back();
+    EXPECT_EQ(o.mission.planner.cspace.clearance_margin_m, 0.05) << files.back();
   }
 }
 
@@ -138,7 +141,8 @@ TEST(ExplorerOptions, RejectsBadValues) {
   for (const char* text : {"pose_channel = \"MAP\"", "robot_radius_m = -1.0", "max_speed_mps = 0.0",
                            "turn_in_place_rad = 0.2\nturn_in_place_exit_rad = 0.5",
                            "robot_radius_m = 1.5\ncandidate_snap_distance_m = 1.0",
-                           "robot_radius_m = 0.3\nreach_past_frontier_m = 0.3", "reach_past_frontier_m = -0.01"}) {
+                           "robot_radius_m = 0.3\nreach_past_frontier_m = 0.3", "reach_past_frontier_m = -0.01",
+                           "way_in_margin_m = -0.01"}) {
     auto config = runtime::ConfigReader::from_string(text, "test.toml");
     EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
   }
