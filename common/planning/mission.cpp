@@ -393,7 +393,7 @@ void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
       want_tight_ = false;
     }
     if (plan.robot_outside_cspace && outstanding_purpose_ == Purpose::kSelect && !outstanding_tight_ &&
-        options_.tight_fallback && options_.planner.cspace.clearance_margin_m > 0.0) {
+        may_plan_tight()) {
       // The robot stands where the margin leaves no room: a nook it reached
       // on a plan without the margin, or a pose SLAM put a little into a
       // wall's band. Plan again at once without the margin, as the tight
@@ -480,8 +480,7 @@ void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utim
       return;
     }
   }
-  if (!plan.best_candidate() && !tight && options_.tight_fallback &&
-      options_.planner.cspace.clearance_margin_m > 0.0) {
+  if (!plan.best_candidate() && !tight && may_plan_tight()) {
     if (margin_may_block(plan)) {
       // Plan once more without the margin, right away, on the same map.
       want_tight_ = true;
@@ -874,8 +873,7 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       visited_.push_back(*goal_);
       blacklist_.push_back(*goal_);
       ++outcomes_.reached;
-      if (goal_approach_ && !goal_tight_ && options_.tight_fallback &&
-          options_.planner.cspace.clearance_margin_m > 0.0) {
+      if (goal_approach_ && !goal_tight_ && may_plan_tight()) {
         // An approach point: the robot sees the frontier from its own piece
         // of the C-space, the frontier's own place lies in another, and the
         // margin may be what cuts them apart (b41, an office floor: a 0.66 m

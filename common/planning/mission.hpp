@@ -293,6 +293,9 @@ class Mission {
   void select(const Plan& plan, std::int64_t now_utime);
   // Sets `goal` (a candidate of `plan`) as the goal to drive to: MOVING.
   void start_goal(const GoalCandidate& goal, const Plan& plan, std::int64_t now_utime);
+  // Plans with less than the clearance margin are allowed (the tight
+  // fallback, a way in) and would differ from the plan with it.
+  bool may_plan_tight() const { return options_.tight_fallback && options_.planner.cspace.clearance_margin_m > 0.0; }
   double way_in_margin_m() const {
     return std::min(options_.way_in_margin_m, options_.planner.cspace.clearance_margin_m);
   }
