@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <boost/function_output_iterator.hpp>
+
 #include "mapping/typed_ops.hpp"
 
 namespace pex::planning {
@@ -82,8 +84,64 @@ double polyline_length(const std::vector<Point>& points) {
   return length;
 }
 
+std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& cspace,
+                                                  const mapping::MultiPolygon& passages) {
+  auto outside = subtracted(passages, cspace);
+  if (!outside) return std::nullopt;
+  // The C-space's edges, each with the polygon it bounds. A part of the
+  // passages outside the C-space shares its border with the polygons it
+  // touches, up to the grid's rounding of the crossings (kTouchM).
+  constexpr double kTouchM = 1e-4;
+  struct BoundaryEdge {
+    Point a, b;
+    std::size_t polygon;
+  };
+  std::vector<BoundaryEdge> edges;
+  std::vector<std::pair<mapping::Box, std::size_t>> boxes;
+  for (std::size_t k = 0; k < cspace.size(); ++k) {
+    auto add_ring = [&](const mapping::Ring& ring) {
+      for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+        const Point& a = ring[i];
+        const Point& b = ring[i + 1];
+        boxes.emplace_back(mapping::Box(Point(std::min(a.x(), b.x()), std::min(a.y(), b.y())),
+                                        Point(std::max(a.x(), b.x()), std::max(a.y(), b.y()))),
+                           edges.size());
+        edges.push_back({a, b, k});
+      }
+    };
+    add_ring(cspace[k].outer());
+    for (const auto& hole : cspace[k].inners()) add_ring(hole);
+  }
+  const bgi::rtree<std::pair<mapping::Box, std::size_t>, bgi::rstar<16>> tree(boxes);
+
+  mapping::MultiPolygon bridges;
+  std::vector<std::size_t> touched;
+  auto touch_from = [&](const mapping::Ring& ring) {
+    for (const auto& v : ring) {
+      const mapping::Box near(Point(v.x() - kTouchM, v.y() - kTouchM), Point(v.x() + kTouchM, v.y() + kTouchM));
+      tree.query(bgi::intersects(near), boost::make_function_output_iterator([&](const auto& value) {
+                   const BoundaryEdge& e = edges[value.second];
+                   if (distance(v, closest_point_on_segment(v, e.a, e.b)) <= kTouchM &&
+                       std::find(touched.begin(), touched.end(), e.polygon) == touched.end())
+                     touched.push_back(e.polygon);
+                 }));
+      if (touched.size() >= 2) return;
+    }
+  };
+  for (auto& part : *outside) {
+    touched.clear();
+    touch_from(part.outer());
+    for (const auto& hole : part.inners())
+      if (touched.size() < 2) touch_from(hole);
+    if (touched.size() >= 2) bridges.push_back(std::move(part));
+  }
+  if (bridges.empty()) return cspace;
+  return united(cspace, bridges);
+}
+
 ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygon& free_space,
-                                                          const CSpaceOptions& options, OffsetTileCache* cache) {
+                                                          const CSpaceOptions& options, OffsetTileCache* cache,
+                                                          const mapping::MultiPolygon* passages) {
   options_ = options;
   polygons_.clear();
   edges_.clear();
@@ -125,6 +183,17 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
     polygons_ = free_space;
   }
   if (options.simplify_epsilon_m > 0.0) polygons_ = mapping::simplify_typed(polygons_, options.simplify_epsilon_m);
+  // After the simplification: a bridge's narrow corridor would keep the
+  // whole polygon it joins from being simplified (simplify_typed keeps a
+  // polygon whole when simplifying it would make it invalid).
+  if (passages && !passages->empty()) {
+    auto with_passages = with_bridges(mapping::geometry_of(polygons_), *passages);
+    if (!with_passages) {
+      result.error = "a passage has a coordinate not finite or beyond 1e9 m";
+      return result;
+    }
+    polygons_ = mapping::with_uniform_type(std::move(*with_passages), EdgeType::kObstacle);
+  }
 
   // Edges ring by ring, with repeated points dropped, linked to their neighbours.
   auto add_ring = [&](const mapping::Ring& ring, const std::vector<EdgeType>& types, std::uint32_t polygon) {

@@ -75,9 +75,14 @@ class ConfigurationSpace {
   // free space on the left of every edge) inward by the robot radius plus
   // margin. An empty result (the map is narrower than the robot) is ok: the
   // C-space is simply empty. `cache` (may be null) keeps offset tiles from
-  // one build to the next; the C-space does not depend on it.
+  // one build to the next; the C-space does not depend on it. `passages`
+  // (may be null or empty) are positions of the robot's centre known to be
+  // free whatever the map says (the corridor of the way it drove:
+  // driven_trail.hpp): those of their parts that join two pieces of the
+  // C-space are united into it after the offset (with_bridges); their
+  // edges are typed kObstacle.
   BuildResult build(const TypedMultiPolygon& free_space, const CSpaceOptions& options,
-                    OffsetTileCache* cache = nullptr);
+                    OffsetTileCache* cache = nullptr, const mapping::MultiPolygon* passages = nullptr);
 
   const TypedMultiPolygon& polygons() const { return polygons_; }
   const std::vector<Edge>& edges() const { return edges_; }
@@ -153,6 +158,15 @@ class ConfigurationSpace {
   std::vector<std::uint32_t> grid_edges_;
   mutable std::int64_t segment_tests_ = 0;
 };
+
+// `cspace` with the parts of `passages` outside it that join two or more of
+// its polygons united in: the bridges across gaps the map has shut. A part
+// that touches one polygon only (a trail running a little outside the
+// C-space along a wall, or into a nook) adds no place the robot can get to,
+// only vertices that every plan would pay for, and is left out. nullopt: a
+// coordinate not finite or beyond 1e9 m.
+std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& cspace,
+                                                  const mapping::MultiPolygon& passages);
 
 // Small geometry helpers shared by the planning code.
 double distance(const Point& a, const Point& b);

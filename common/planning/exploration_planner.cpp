@@ -171,13 +171,13 @@ struct Setup {
   Point start;
 };
 std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, const PlannerOptions& options,
-                            PlanCache* cache, Plan& plan) {
+                            PlanCache* cache, const mapping::MultiPolygon* passages, Plan& plan) {
   if (!std::isfinite(robot.x_m) || !std::isfinite(robot.y_m) || !std::isfinite(robot.theta_rad)) {
     plan.error = "robot pose is not finite";
     return std::nullopt;
   }
   Setup s;
-  const auto built = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr);
+  const auto built = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr, passages);
   if (!built.ok) {
     plan.error = built.error;
     return std::nullopt;
@@ -302,11 +302,11 @@ void choose_by_tour(PathMatrix& matrix, const TourOptions& options, Plan& plan) 
 
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable, const GoalFocus* focus,
-                      PlanCache* cache) {
+                      PlanCache* cache, const mapping::MultiPolygon* passages) {
   Plan plan;
   // 1. The C-space, the robot's own node, and the C-space piece it is in: a
   // polygon of the C-space is one connected piece, so only its points are reachable.
-  auto setup = set_up(passable ? *passable : map, robot, options, cache, plan);
+  auto setup = set_up(passable ? *passable : map, robot, options, cache, passages, plan);
   if (!setup) return plan;
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;
@@ -483,13 +483,13 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
 }
 
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
-                  const PlannerOptions& options, PlanCache* cache) {
+                  const PlannerOptions& options, PlanCache* cache, const mapping::MultiPolygon* passages) {
   Plan plan;
   if (!std::isfinite(target.x()) || !std::isfinite(target.y())) {
     plan.error = "target is not finite";
     return plan;
   }
-  auto setup = set_up(map, robot, options, cache, plan);
+  auto setup = set_up(map, robot, options, cache, passages, plan);
   if (!setup) return plan;
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;

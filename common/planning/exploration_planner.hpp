@@ -59,6 +59,12 @@ struct PlannerOptions {
   // frontier point in view (no obstacle edge of the map between them).
   // 0 = off. Well below the laser's range, so the robot sees the frontier from there.
   double approach_range_m = 8.0;
+  // Plans with less than the clearance margin (the mission's tight fallback,
+  // a way in, and the plans that follow their goals) also go along the way
+  // the robot drove (PlanRequest::trail): the C-space gets the corridor of
+  // this half-width about it (driven_trail.hpp). Where the robot's disk has
+  // been it fits, whatever a newer map makes of a gap it came through. 0: off.
+  double trail_corridor_m = 0.05;
   // Cost = path length + this times the turn the first leg needs (|rad|):
   // among nearly equal paths, prefer the one ahead.
   double turn_cost_m_per_rad = 0.1;
@@ -218,15 +224,19 @@ class PlanCache {
 // the tour needs them all. Deterministic: the plan is a function of the
 // arguments; `cache` (may be null) keeps the C-space's offset tiles and the
 // path graph's segment tests from one plan to the next and changes only the
-// time taken.
+// time taken. `passages` (may be null) are united into the C-space
+// (ConfigurationSpace::build): the corridor of the way the robot drove.
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable = nullptr,
-                      const GoalFocus* focus = nullptr, PlanCache* cache = nullptr);
+                      const GoalFocus* focus = nullptr, PlanCache* cache = nullptr,
+                      const mapping::MultiPolygon* passages = nullptr);
 
 // A path from `robot` to `target` (e.g. the mission's start pose) in the
-// C-space of `map`: the plan's one candidate is `target` moved into the
-// C-space (at most candidate_snap_distance_m), best when it is reachable.
+// C-space of `map` (with `passages` united in, as plan_exploration): the
+// plan's one candidate is `target` moved into the C-space (at most
+// candidate_snap_distance_m), best when it is reachable.
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
-                  const PlannerOptions& options, PlanCache* cache = nullptr);
+                  const PlannerOptions& options, PlanCache* cache = nullptr,
+                  const mapping::MultiPolygon* passages = nullptr);
 
 }  // namespace pex::planning

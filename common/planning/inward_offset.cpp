@@ -45,6 +45,24 @@ constexpr long long kMaxTiles = 1 << 16;
 // building's, or hostile) is offset whole, so the keys' size stays bounded.
 constexpr long double kMaxTilesPerEdge = 32;
 
+// Finite and within kMaxAbsCoordinateM: on Clipper's grid.
+bool on_grid(const mapping::Point& p) {
+  return std::abs(p.x()) <= kMaxAbsCoordinateM && std::abs(p.y()) <= kMaxAbsCoordinateM;
+}
+
+bool on_grid(const mapping::Ring& ring) {
+  return std::all_of(ring.begin(), ring.end(), [](const mapping::Point& p) { return on_grid(p); });
+}
+
+bool on_grid(const mapping::Polygon& polygon) {
+  return on_grid(polygon.outer()) &&
+         std::all_of(polygon.inners().begin(), polygon.inners().end(), [](const auto& r) { return on_grid(r); });
+}
+
+bool on_grid(const mapping::MultiPolygon& polygons) {
+  return std::all_of(polygons.begin(), polygons.end(), [](const mapping::Polygon& p) { return on_grid(p); });
+}
+
 Path to_clipper(const mapping::Ring& ring) {
   Path path;
   path.reserve(ring.size());
@@ -79,6 +97,15 @@ void append_polygons(const ClipperLib::PolyTree& tree, mapping::MultiPolygon& ou
     // y-up frame; correct() only closes and orders what needs it.
     bg::correct(polygon);
     out.push_back(std::move(polygon));
+  }
+}
+
+void add_rings(const mapping::MultiPolygon& polygons, ClipperLib::PolyType type, ClipperLib::Clipper& clipper) {
+  for (const auto& polygon : polygons) {
+    Paths rings{to_clipper(polygon.outer())};
+    for (const auto& hole : polygon.inners()) rings.push_back(to_clipper(hole));
+    std::erase_if(rings, [](const Path& ring) { return ring.size() < 3; });
+    clipper.AddPaths(rings, type, true);
   }
 }
 
@@ -429,14 +456,8 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
     ++eroder.cache->call;
   }
 
-  auto beyond_grid = [](const mapping::Ring& ring) {
-    return std::any_of(ring.begin(), ring.end(), [](const auto& p) {
-      return !(std::abs(p.x()) <= kMaxAbsCoordinateM && std::abs(p.y()) <= kMaxAbsCoordinateM);
-    });
-  };
   for (const auto& input : free_space)
-    if (beyond_grid(input.geometry.outer()) ||
-        std::any_of(input.geometry.inners().begin(), input.geometry.inners().end(), beyond_grid)) {
+    if (!on_grid(input.geometry)) {
       result.error = "a coordinate is not finite or beyond 1e9 m";
       return result;
     }
@@ -477,6 +498,57 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
       mapping::assign_types(geometry, index, how.distance_m + 1e-3, mapping::TypedOpOptions{}, &result.reassign);
   result.ok = true;
   return result;
+}
+
+
+mapping::MultiPolygon dilated_polyline(const std::vector<mapping::Point>& points, double radius_m) {
+  if (points.empty() || !(radius_m > 0.0) || radius_m > kMaxAbsCoordinateM ||
+      !std::all_of(points.begin(), points.end(), [](const auto& p) { return on_grid(p); }))
+    return {};
+  Path path;
+  path.reserve(points.size());
+  for (const auto& p : points) {
+    const IntPoint q(static_cast<cInt>(std::llround(p.x() * kUnitsPerM)),
+                     static_cast<cInt>(std::llround(p.y() * kUnitsPerM)));
+    if (path.empty() || !(path.back() == q)) path.push_back(q);
+  }
+  ClipperLib::ClipperOffset offset;
+  offset.ArcTolerance = std::min(radius_m, 1e-3) * kUnitsPerM;
+  // A single point is a closed path of one vertex to Clipper; an open path
+  // with round ends gives its disk.
+  offset.AddPath(path, ClipperLib::jtRound, ClipperLib::etOpenRound);
+  ClipperLib::PolyTree tree;
+  offset.Execute(tree, radius_m * kUnitsPerM);
+  mapping::MultiPolygon out;
+  append_polygons(tree, out);
+  return out;
+}
+
+namespace {
+
+std::optional<mapping::MultiPolygon> clipped(ClipperLib::ClipType operation, const mapping::MultiPolygon& a,
+                                             const mapping::MultiPolygon& b) {
+  if (!on_grid(a) || !on_grid(b)) return std::nullopt;
+  ClipperLib::Clipper clipper;
+  add_rings(a, ClipperLib::ptSubject, clipper);
+  add_rings(b, ClipperLib::ptClip, clipper);
+  ClipperLib::PolyTree tree;
+  // Non-zero winding: our outer rings and holes wind opposite ways, so the
+  // inside of a hole counts zero, as outside any polygon.
+  if (!clipper.Execute(operation, tree, ClipperLib::pftNonZero, ClipperLib::pftNonZero)) return std::nullopt;
+  mapping::MultiPolygon out;
+  append_polygons(tree, out);
+  return out;
+}
+
+}  // namespace
+
+std::optional<mapping::MultiPolygon> united(const mapping::MultiPolygon& a, const mapping::MultiPolygon& b) {
+  return clipped(ClipperLib::ctUnion, a, b);
+}
+
+std::optional<mapping::MultiPolygon> subtracted(const mapping::MultiPolygon& a, const mapping::MultiPolygon& b) {
+  return clipped(ClipperLib::ctDifference, a, b);
 }
 
 }  // namespace pex::planning

@@ -11,6 +11,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <vector>
 
 #include "mapping/typed_ops.hpp"
 #include "mapping/typed_polygon.hpp"
@@ -79,5 +81,16 @@ class OffsetTileCache {
 // Refused (ok false, error set): a coordinate not finite or beyond 1e9 m.
 mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_space, const InwardOffset& how,
                                      OffsetTileCache* cache = nullptr);
+
+// The places within radius_m of the polyline `points` (its Minkowski sum with
+// a disk: round ends and joins, chords within 1 mm of the arcs), on the same
+// 10 um grid. Empty for no points, radius_m <= 0, or a coordinate not finite
+// or beyond 1e9 m.
+mapping::MultiPolygon dilated_polyline(const std::vector<mapping::Point>& points, double radius_m);
+
+// a united with b, and a less b (each a set of polygons with holes), on the
+// same grid. Either side with a coordinate not finite or beyond 1e9 m: nullopt.
+std::optional<mapping::MultiPolygon> united(const mapping::MultiPolygon& a, const mapping::MultiPolygon& b);
+std::optional<mapping::MultiPolygon> subtracted(const mapping::MultiPolygon& a, const mapping::MultiPolygon& b);
 
 }  // namespace pex::planning

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <utility>
 
+#include "planning/driven_trail.hpp"
 #include "planning/live_view.hpp"
 
 namespace pex::planning {
@@ -64,11 +65,16 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   // The newest scan opens where the robot may drive; the frontiers stay the map's.
   const bool live = request.live_view && !request.live_view->empty();
   const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
+  // A tight plan also goes where the robot has driven.
+  const mapping::MultiPolygon corridor = request.tight && request.trail
+                                             ? trail_corridor(*request.trail, request.options.trail_corridor_m)
+                                             : mapping::MultiPolygon{};
+  const mapping::MultiPolygon* passages = corridor.empty() ? nullptr : &corridor;
   result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options,
-                                            cache)
+                                            cache, passages)
                              : plan_exploration(*request.map, request.pose, request.blacklist, request.options,
                                                 live ? &opened : nullptr, request.focus ? &*request.focus : nullptr,
-                                                cache);
+                                                cache, passages);
   return result;
 }
 

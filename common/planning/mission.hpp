@@ -196,6 +196,11 @@ struct PlanRequest {
   // `map` before planning; null or empty: the map alone. The mission leaves it
   // empty; the explorer adds it from the newest LIDAR_SCAN.
   std::shared_ptr<const TypedMultiPolygon> live_view;
+  // The way the robot drove, oldest point first, in the map's frame (the
+  // map's particle's trail: driven_trail.hpp). A tight plan unites its
+  // corridor (options.trail_corridor_m) into the C-space; null or empty:
+  // none. The mission leaves it empty; the explorer adds it to tight requests.
+  std::shared_ptr<const std::vector<Point>> trail;
 };
 
 struct PlanResult {

@@ -21,9 +21,51 @@ ExplorerNode::ExplorerNode(ExplorerOptions options, Planning planning)
   if (planning == Planning::kWorkerThread) worker_ = std::make_unique<PlanWorker>();
 }
 
+planning::TrailUpdate trail_update_of(const pex::slam_update_t& msg) {
+  if (msg.nparticles < 0 || static_cast<std::size_t>(msg.nparticles) != msg.particles.size())
+    throw std::invalid_argument("SLAM_UPDATE nparticles does not match its particles");
+  planning::TrailUpdate u;
+  u.epoch = msg.epoch;
+  u.generation = msg.generation;
+  u.republished = msg.republished;
+  u.best = msg.best;
+  u.particles.reserve(msg.particles.size());
+  for (const auto& p : msg.particles) u.particles.push_back({{p.x, p.y, p.theta}, p.parent});
+  return u;
+}
+
+TrailKeeper::TrailKeeper(planning::DrivenTrailOptions options) : slam_(options), poses_(options) {}
+
+planning::DrivenTrails::Result TrailKeeper::on_slam_update(const pex::slam_update_t& msg) {
+  auto result = slam_.update(trail_update_of(msg));
+  if (!result.ok) throw std::invalid_argument("SLAM_UPDATE refused for the trails: " + result.error);
+  return result;
+}
+
+void TrailKeeper::on_pose(const planning::Pose2& pose) {
+  // One particle, its own parent: the trail of the poses as they came.
+  planning::TrailUpdate u;
+  u.generation = pose_generation_++;
+  u.particles.push_back({pose, 0});
+  (void)poses_.update(u);  // finite (checked by the caller): never refused
+}
+
+void TrailKeeper::on_map(const pex::polygon_map_t& msg) {
+  map_particle_ = msg.particle;
+  map_generation_ = msg.generation;
+}
+
+std::shared_ptr<const std::vector<mapping::Point>> TrailKeeper::trail_for_map() const {
+  std::optional<std::vector<mapping::Point>> trail =
+      map_particle_ >= 0 ? slam_.trail(map_generation_, map_particle_) : poses_.best_trail();
+  if (!trail || trail->empty()) return nullptr;
+  return std::make_shared<const std::vector<mapping::Point>>(std::move(*trail));
+}
+
 void ExplorerNode::on_map(const pex::polygon_map_t& msg, std::int64_t now_utime) {
   DecodedMap decoded = decode_map(msg, options_.map);
   if (!decoded.ok) throw std::invalid_argument(decoded.error);
+  trails_.on_map(msg);
   counters_.maps_accepted++;
   counters_.map_polygons_dropped += decoded.polygons_dropped;
   counters_.map_rings_reoriented += decoded.rings_reoriented;
@@ -34,6 +76,21 @@ void ExplorerNode::on_pose(const pex::pose_t& msg, std::int64_t now_utime) {
   if (!std::isfinite(msg.x) || !std::isfinite(msg.y) || !std::isfinite(msg.theta))
     throw std::invalid_argument("non-finite pose");
   mission_.on_pose(planning::Pose2{msg.x, msg.y, msg.theta}, now_utime);
+  trails_.on_pose(planning::Pose2{msg.x, msg.y, msg.theta});
+}
+
+void ExplorerNode::on_slam_update(const pex::slam_update_t& msg) {
+  const auto result = trails_.on_slam_update(msg);
+  if (result.resynced) ++counters_.trail_resyncs;
+  if (result.new_epoch) ++counters_.trail_epochs;
+}
+
+void ExplorerNode::complete(planning::PlanRequest& request) {
+  request.live_view = live_view_at(request.pose);
+  if (request.tight && request.options.trail_corridor_m > 0.0) {
+    request.trail = trails_.trail_for_map();
+    if (!request.trail) ++counters_.tight_plans_without_trail;
+  }
 }
 
 std::string ExplorerNode::checkpoint_text() const { return planning::to_text(mission_.checkpoint()); }
@@ -94,13 +151,13 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   if (worker_) {
     last_ = mission_.step(now_utime);
     if (last_.plan_request) {
-      last_.plan_request->live_view = live_view_at(last_.plan_request->pose);
+      complete(*last_.plan_request);
       worker_->submit(std::move(*last_.plan_request));
     }
   } else {
     // Inline: the plan runs here (tests); its time is measured apart.
     last_ = planning::step_with_inline_planning(mission_, now_utime, [this](planning::PlanRequest request) {
-      request.live_view = live_view_at(request.pose);
+      complete(request);
       const auto plan_started = std::chrono::steady_clock::now();
       const double cpu_started = thread_cpu_ms();
       auto result = planning::compute_plan(request, &inline_cache_);

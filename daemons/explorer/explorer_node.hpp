@@ -15,11 +15,13 @@
 #include <pex/mission_cmd_t.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
+#include <pex/slam_update_t.hpp>
 #include <pex/velocity_cmd_t.hpp>
 
 #include "explorer_options.hpp"
 #include "latency_stats.hpp"
 #include "plan_worker.hpp"
+#include "planning/driven_trail.hpp"
 #include "planning/mission.hpp"
 
 namespace pex::explorer {
@@ -30,6 +32,13 @@ struct ExplorerCounters {
   std::int64_t map_polygons_dropped = 0;
   std::int64_t map_rings_reoriented = 0;
   std::int64_t commands_applied = 0;
+  // SLAM_UPDATEs that did not follow the last one (the best trail held stood
+  // in for every particle's), and new SLAM epochs (the trails started afresh).
+  std::int64_t trail_resyncs = 0;
+  std::int64_t trail_epochs = 0;
+  // Plans without the full margin sent with no trail: the map's particle
+  // and generation had none here (no SLAM_UPDATE of it seen).
+  std::int64_t tight_plans_without_trail = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -38,6 +47,9 @@ struct ExplorerCounters {
     v.total("guard_limited_steps", guard_limited_steps);
     v.total("map_polygons_dropped", map_polygons_dropped);
     v.total("commands_applied", commands_applied);
+    v.total("trail_resyncs", trail_resyncs);
+    v.total("trail_epochs", trail_epochs);
+    v.total("tight_plans_without_trail", tight_plans_without_trail);
   }
 };
 
@@ -46,6 +58,32 @@ struct ExplorerCounters {
 std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
                                                                const planning::Pose2& robot,
                                                                const planning::LiveViewOptions& options);
+
+// A SLAM_UPDATE as the driven trails take it (planning/driven_trail.hpp).
+planning::TrailUpdate trail_update_of(const pex::slam_update_t& msg);
+
+// The way the robot drove in the frame of a map: the trail of the map's
+// particle at the map's generation (MAP.particle, MAP.generation) from the
+// SLAM_UPDATEs, or, for a map not made from SLAM particles (particle -1), the
+// trail of the poses the explorer was given. One keeper for the explorer and
+// pex-plan, so a replayed log plans as the robot did.
+class TrailKeeper {
+ public:
+  explicit TrailKeeper(planning::DrivenTrailOptions options = {});
+  // Throws std::invalid_argument (nothing changed) for an update the trails refuse.
+  planning::DrivenTrails::Result on_slam_update(const pex::slam_update_t& msg);
+  void on_pose(const planning::Pose2& pose);
+  void on_map(const pex::polygon_map_t& msg);
+  // Null when the map's particle and generation have no trail here.
+  std::shared_ptr<const std::vector<mapping::Point>> trail_for_map() const;
+
+ private:
+  planning::DrivenTrails slam_;
+  planning::DrivenTrails poses_;
+  std::int64_t pose_generation_ = 0;
+  int map_particle_ = -1;
+  std::int64_t map_generation_ = 0;
+};
 
 class ExplorerNode {
  public:
@@ -56,6 +94,9 @@ class ExplorerNode {
   // std::invalid_argument with the reason, and changes nothing.
   void on_map(const pex::polygon_map_t& msg, std::int64_t now_utime);
   void on_pose(const pex::pose_t& msg, std::int64_t now_utime);
+  // A SLAM_UPDATE: every particle's pose, for the way the robot drove in
+  // each particle's map (tight plans go along it: PlanRequest::trail).
+  void on_slam_update(const pex::slam_update_t& msg);
   // A LIDAR_SCAN: the laser is alive (the mission stops without scans), and
   // its returns bound the command (the scan guard, planning/scan_guard.hpp).
   void on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime);
@@ -126,6 +167,9 @@ class ExplorerNode {
   // The newest scan's live view (planning/live_view.hpp) from `robot`; null
   // when off or without a scan.
   std::shared_ptr<const mapping::TypedMultiPolygon> live_view_at(const planning::Pose2& robot) const;
+  // What the mission's request leaves to the explorer: the live view, and
+  // for a tight plan the trail.
+  void complete(planning::PlanRequest& request);
 
   ExplorerOptions options_;
   planning::Mission mission_;
@@ -144,6 +188,7 @@ class ExplorerNode {
   std::vector<mapping::Point> scan_points_;
   std::optional<pex::laser_scan_t> last_scan_;  // for the live view of the next plan
   std::optional<std::int64_t> scan_utime_;
+  TrailKeeper trails_;
   planning::ScanGuard guard_;                  // with its model of the robot's speed
   std::optional<std::int64_t> last_step_utime_;  // the previous control step
 };

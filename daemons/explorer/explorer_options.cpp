@@ -56,6 +56,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("blacklist_radius_m", planner.blacklist_radius_m, non_negative<double>());
   planner.turn_cost_m_per_rad =
       config.get<double>("turn_cost_m_per_rad", planner.turn_cost_m_per_rad, non_negative<double>());
+  planner.trail_corridor_m = config.get<double>("trail_corridor_m", planner.trail_corridor_m, in_range(0.0, 0.5));
   planner.reach_past_frontier_m =
       config.get<double>("reach_past_frontier_m", planner.reach_past_frontier_m, in_range(0.0, 1.0));
   planner.min_enclosed_area_m2 =

@@ -134,6 +134,7 @@ TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
     // A way in keeps half the margin (docs/exploration.md, "Frontiers seen through a door").
     EXPECT_EQ(o.mission.way_in_margin_m, 0.025) << files.back();
     EXPECT_EQ(o.mission.planner.cspace.clearance_margin_m, 0.05) << files.back();
+    EXPECT_EQ(o.mission.planner.trail_corridor_m, 0.05) << files.back();  // tight plans go along the trail
   }
 }
 
@@ -142,7 +143,7 @@ TEST(ExplorerOptions, RejectsBadValues) {
                            "turn_in_place_rad = 0.2\nturn_in_place_exit_rad = 0.5",
                            "robot_radius_m = 1.5\ncandidate_snap_distance_m = 1.0",
                            "robot_radius_m = 0.3\nreach_past_frontier_m = 0.3", "reach_past_frontier_m = -0.01",
-                           "way_in_margin_m = -0.01"}) {
+                           "way_in_margin_m = -0.01", "trail_corridor_m = -0.01", "trail_corridor_m = 0.6"}) {
     auto config = runtime::ConfigReader::from_string(text, "test.toml");
     EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
   }
@@ -407,5 +408,79 @@ TEST(ExplorerNode, ItLooksAroundBeforeItCallsAFrontierUnreachable) {
   EXPECT_GT(goal->x(), 4.2);
   EXPECT_EQ(node.last_output().looks_around, 1);
 }
+
+pex::slam_update_t slam_update(std::int64_t generation, std::vector<std::pair<double, int>> x_and_parent,
+                               std::int32_t best = 0) {
+  pex::slam_update_t u{};
+  u.epoch = 1;
+  u.generation = generation;
+  u.best = best;
+  for (const auto& [x, parent] : x_and_parent) {
+    pex::particle_t p{};
+    p.x = x;
+    p.y = parent;  // tells the lineages apart
+    p.parent = parent;
+    u.particles.push_back(p);
+  }
+  u.nparticles = static_cast<std::int32_t>(u.particles.size());
+  return u;
+}
+
+// The trail a tight plan goes along is the one of the map's particle at the
+// map's generation: the particle whose poses built that map.
+TEST(TrailKeeper, GivesTheTrailOfTheMapsParticleAndGeneration) {
+  TrailKeeper keeper;
+  keeper.on_slam_update(slam_update(0, {{0.0, 0}, {0.0, 1}}));
+  keeper.on_slam_update(slam_update(1, {{1.0, 0}, {1.0, 1}}));
+  keeper.on_slam_update(slam_update(2, {{2.0, 1}, {2.0, 1}}, 1));
+  auto map = map_of({});
+  map.particle = 0;
+  map.generation = 1;  // the mapper is one update behind
+  keeper.on_map(map);
+  auto trail = keeper.trail_for_map();
+  ASSERT_NE(trail, nullptr);
+  ASSERT_EQ(trail->size(), 2u);
+  EXPECT_DOUBLE_EQ(trail->back().x(), 1.0);
+  EXPECT_DOUBLE_EQ(trail->back().y(), 0.0) << "particle 0's own lineage";
+  map.generation = 2;
+  keeper.on_map(map);
+  trail = keeper.trail_for_map();
+  ASSERT_NE(trail, nullptr);
+  EXPECT_DOUBLE_EQ(trail->front().y(), 1.0) << "at generation 2, particle 0 descends from particle 1";
+  map.generation = 9;
+  keeper.on_map(map);
+  EXPECT_EQ(keeper.trail_for_map(), nullptr) << "no update of that generation seen";
+
+  // A map not made from particles: the trail of the poses the explorer got.
+  keeper.on_pose({5, 5, 0});
+  keeper.on_pose({6, 5, 0});
+  map.particle = -1;
+  keeper.on_map(map);
+  trail = keeper.trail_for_map();
+  ASSERT_NE(trail, nullptr);
+  EXPECT_EQ(trail->size(), 2u);
+  EXPECT_DOUBLE_EQ(trail->back().x(), 6.0);
+}
+
+TEST(TrailKeeper, RefusesABadSlamUpdateAndKeepsItsTrails) {
+  TrailKeeper keeper;
+  keeper.on_slam_update(slam_update(0, {{0.0, 0}}));
+  auto bad = slam_update(1, {{1.0, 3}});  // parent out of range
+  EXPECT_THROW(keeper.on_slam_update(bad), std::invalid_argument);
+  auto lying = slam_update(1, {{1.0, 0}});
+  lying.nparticles = 5;
+  EXPECT_THROW(keeper.on_slam_update(lying), std::invalid_argument);
+  auto nan = slam_update(1, {{NAN, 0}});
+  EXPECT_THROW(keeper.on_slam_update(nan), std::invalid_argument);
+  keeper.on_slam_update(slam_update(1, {{1.0, 0}}));
+  auto map = map_of({});
+  map.particle = 0;
+  map.generation = 1;
+  keeper.on_map(map);
+  const auto trail = keeper.trail_for_map();
+  ASSERT_NE(trail, nullptr);
+  EXPECT_EQ(trail->size(), 2u);
+}
+
 }  // namespace
 }  // namespace pex::explorer

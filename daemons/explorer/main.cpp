@@ -53,6 +53,9 @@ int main(int argc, char** argv) {
         node.subscribe<pex::pose_t>(options.pose_channel, [&node, explorer](const pex::pose_t& msg) {
           explorer->on_pose(msg, node.now_utime());
         });
+        node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [explorer](const pex::slam_update_t& msg) {
+          explorer->on_slam_update(msg);
+        });
         node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [&node, explorer](const pex::laser_scan_t& msg) {
           explorer->on_scan(msg, node.now_utime());
         });

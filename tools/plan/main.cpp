@@ -13,6 +13,7 @@
 // CPU time per plan (p50 / p99 / max) and the slowest maps' utimes: the plan-time
 // benchmark on a real mission's maps (docs/exploration.md, "Planning time").
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <cstdio>
 #include <fstream>
@@ -29,6 +30,7 @@
 #include <pex/polygon_map_t.hpp>
 #include <pex/laser_scan_t.hpp>
 #include <pex/pose_t.hpp>
+#include <pex/slam_update_t.hpp>
 
 #include "explorer_node.hpp"
 #include "cli/command_line.hpp"
@@ -37,6 +39,7 @@
 #include "plan_report.hpp"
 #include "plan_worker.hpp"
 #include "planning/cspace.hpp"
+#include "planning/driven_trail.hpp"
 #include "planning/live_view.hpp"
 #include "planning/mission.hpp"
 #include "runtime/channels.hpp"
@@ -201,7 +204,7 @@ int main(int argc, char** argv) {
   app.add_option("--map-channel", map_channel, "channel of the pex.polygon_map_t messages");
   app.add_option("--pose-channel", pose_channel, "channel of the robot's pex.pose_t (SLAM_POSE, SIM_TRUTH)");
   app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
-  app.add_flag("--tight", tight, "plan without the clearance margin (the explorer's tight fallback)");
+  app.add_flag("--tight", tight, "plan without the clearance margin and along the way the robot drove (the explorer's tight fallback)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
   app.add_flag("--every-map", every_map, "plan on every MAP of the log and print the plan CPU time percentiles");
   app.add_flag("--no-cache,--no-offset-cache", no_cache,
@@ -234,8 +237,19 @@ int main(int argc, char** argv) {
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
   std::optional<pex::laser_scan_t> scan, scan_pending;  // the same for LIDAR_SCAN (the live view)
+  // The way the robot drove, as the explorer keeps it (a tight plan goes along it).
+  pex::explorer::TrailKeeper trails;
   for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-    if (e->channel == pex::runtime::channels::kLidarScan) {
+    if (e->channel == pex::runtime::channels::kSlamUpdate) {
+      pex::slam_update_t u;
+      if (u.decode(e->data, 0, e->datalen) < 0) continue;
+      if (at_utime >= 0 && u.utime > at_utime) continue;
+      try {
+        trails.on_slam_update(u);
+      } catch (const std::invalid_argument&) {
+        // refused as the explorer refuses it: the trails stay as they were
+      }
+    } else if (e->channel == pex::runtime::channels::kLidarScan) {
       pex::laser_scan_t s;
       if (s.decode(e->data, 0, e->datalen) < 0) continue;
       if (at_utime >= 0 && s.utime > at_utime) continue;
@@ -245,6 +259,7 @@ int main(int argc, char** argv) {
       if (p.decode(e->data, 0, e->datalen) < 0) continue;
       if (at_utime >= 0 && p.utime > at_utime) continue;
       pose_pending = p;
+      if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta)) trails.on_pose({p.x, p.y, p.theta});
     } else if (e->channel == map_channel) {
       pex::polygon_map_t m;
       if (m.decode(e->data, 0, e->datalen) < 0) continue;
@@ -268,11 +283,23 @@ int main(int argc, char** argv) {
   // As the explorer plans: the newest scan's live view united in (live_view_range_m).
   const auto live = scan ? pex::explorer::live_view_of(*scan, robot, options.live_view) : nullptr;
   const auto planned_on = live ? pex::planning::with_live_view(decoded.polygons, *live) : decoded.polygons;
-  const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner, live ? &planned_on : nullptr);
+  // A tight plan also goes along the way the robot drove (trail_corridor_m).
+  trails.on_map(*map);
+  const auto trail = tight ? trails.trail_for_map() : nullptr;
+  const auto corridor = trail ? pex::planning::trail_corridor(*trail, planner.trail_corridor_m)
+                              : pex::mapping::MultiPolygon{};
+  const auto* passages = corridor.empty() ? nullptr : &corridor;
+  const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner, live ? &planned_on : nullptr,
+                                                    nullptr, nullptr, passages);
   pex::planning::ConfigurationSpace cspace;
-  cspace.build(planned_on, planner.cspace);
+  cspace.build(planned_on, planner.cspace, nullptr, passages);
   std::printf("live view: %s\n", live ? "united into the map (newest LIDAR_SCAN)"
                                       : (scan ? "off (live_view_range_m = 0)" : "none (no LIDAR_SCAN)"));
+  if (tight)
+    std::printf("trail: %s\n", !trail ? "none for the map's particle and generation"
+                                       : (std::to_string(trail->size()) + " points, corridor " +
+                                          std::to_string(planner.trail_corridor_m) + " m either side")
+                                             .c_str());
   std::printf("%s", pex::plan_tool::describe(*map, *pose, cspace, plan).c_str());
   if (!svg_path.empty()) {
     std::ofstream svg(svg_path);

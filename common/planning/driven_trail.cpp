@@ -1,0 +1,127 @@
+#include "planning/driven_trail.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "planning/inward_offset.hpp"
+
+namespace pex::planning {
+
+// One point of a trail and the trail before it: a child shares its parent's
+// nodes, so resampling copies pointers, not points.
+struct DrivenTrails::Node {
+  mapping::Point point;
+  std::shared_ptr<const Node> before;
+
+  Node(mapping::Point p, std::shared_ptr<const Node> b) : point(p), before(std::move(b)) {}
+  // Released node by node: a trail of many thousand points destroyed by
+  // recursion through its shared pointers would run out of stack.
+  ~Node() {
+    std::shared_ptr<const Node> next = std::move(before);
+    while (next && next.use_count() == 1) {
+      std::shared_ptr<const Node> after = std::move(const_cast<Node&>(*next).before);
+      next = std::move(after);
+    }
+  }
+};
+
+DrivenTrails::DrivenTrails(DrivenTrailOptions options) : options_(options) {}
+DrivenTrails::~DrivenTrails() = default;
+
+DrivenTrails::Result DrivenTrails::update(const TrailUpdate& update) {
+  Result result;
+  const auto n = update.particles.size();
+  if (n == 0 || n > static_cast<std::size_t>(options_.max_particles)) {
+    result.error = "an update has " + std::to_string(n) + " particles (1.." +
+                   std::to_string(options_.max_particles) + " expected)";
+    return result;
+  }
+  if (update.best < 0 || static_cast<std::size_t>(update.best) >= n) {
+    result.error = "best particle " + std::to_string(update.best) + " out of range";
+    return result;
+  }
+  for (const auto& p : update.particles)
+    if (!std::isfinite(p.pose.x_m) || !std::isfinite(p.pose.y_m) || !std::isfinite(p.pose.theta_rad)) {
+      result.error = "a particle's pose is not finite";
+      return result;
+    }
+
+  const Generation* last = generations_.empty() ? nullptr : &generations_.back();
+  const bool same_epoch = epoch_ && *epoch_ == update.epoch;
+  const bool continues =
+      last && same_epoch && update.generation == last->generation + (update.republished ? 0 : 1);
+  if (continues) {
+    for (const auto& p : update.particles)
+      if (p.parent < 0 || static_cast<std::size_t>(p.parent) >= last->heads.size()) {
+        result.error = "a parent index " + std::to_string(p.parent) + " out of range";
+        return result;
+      }
+  }
+  // Where each particle's trail goes on from.
+  std::vector<std::shared_ptr<const Node>> from(n);
+  if (continues) {
+    for (std::size_t i = 0; i < n; ++i) from[i] = last->heads[static_cast<std::size_t>(update.particles[i].parent)];
+  } else if (last && same_epoch) {
+    // The parents index an update not seen here: the best trail held stands
+    // in for every particle's (as the mapper's best map does for the maps).
+    const auto& best = last->heads[static_cast<std::size_t>(last->best)];
+    std::fill(from.begin(), from.end(), best);
+    result.resynced = true;
+  } else {
+    result.new_epoch = last != nullptr;
+    generations_.clear();  // another frame, or the first update: start afresh
+  }
+
+  Generation next;
+  next.generation = update.generation;
+  next.best = update.best;
+  next.heads.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const mapping::Point p(update.particles[i].pose.x_m, update.particles[i].pose.y_m);
+    const auto& head = from[i];
+    const bool moved = !head || std::hypot(p.x() - head->point.x(), p.y() - head->point.y()) >= options_.min_spacing_m;
+    next.heads[i] = moved ? std::make_shared<const Node>(p, head) : head;
+  }
+  // A republish repeats its generation: it replaces it.
+  if (!generations_.empty() && generations_.back().generation == next.generation) generations_.pop_back();
+  generations_.push_back(std::move(next));
+  const auto kept = static_cast<std::size_t>(std::max(1, options_.kept_generations));
+  if (generations_.size() > kept) generations_.erase(generations_.begin(), generations_.end() - static_cast<long>(kept));
+  epoch_ = update.epoch;
+  result.ok = true;
+  return result;
+}
+
+std::vector<mapping::Point> DrivenTrails::flatten(const std::shared_ptr<const Node>& head) const {
+  std::vector<mapping::Point> points;
+  for (const Node* node = head.get(); node && points.size() < options_.max_points; node = node->before.get())
+    points.push_back(node->point);
+  std::reverse(points.begin(), points.end());
+  return points;
+}
+
+std::optional<std::vector<mapping::Point>> DrivenTrails::trail(std::int64_t generation, int particle) const {
+  const auto it = std::find_if(generations_.begin(), generations_.end(),
+                               [&](const Generation& g) { return g.generation == generation; });
+  if (it == generations_.end() || particle < 0 || static_cast<std::size_t>(particle) >= it->heads.size())
+    return std::nullopt;
+  return flatten(it->heads[static_cast<std::size_t>(particle)]);
+}
+
+std::vector<mapping::Point> DrivenTrails::best_trail() const {
+  if (generations_.empty()) return {};
+  const auto& g = generations_.back();
+  return flatten(g.heads[static_cast<std::size_t>(g.best)]);
+}
+
+std::optional<std::int64_t> DrivenTrails::newest_generation() const {
+  if (generations_.empty()) return std::nullopt;
+  return generations_.back().generation;
+}
+
+mapping::MultiPolygon trail_corridor(const std::vector<mapping::Point>& trail, double half_width_m) {
+  if (trail.empty() || !(half_width_m > 0.0)) return {};
+  return dilated_polyline(trail, half_width_m);
+}
+
+}  // namespace pex::planning
