@@ -462,6 +462,58 @@ TEST(TrailKeeper, GivesTheTrailOfTheMapsParticleAndGeneration) {
   EXPECT_DOUBLE_EQ(trail->back().x(), 6.0);
 }
 
+// The robot came from room A through the door into room B; the map now has
+// the door shut (a band across it), and room A's west side is still a
+// frontier. With the margin there is no path back; the tight fallback goes
+// along the way the robot drove, from the SLAM_UPDATEs of the map's particle.
+TEST(ExplorerNode, ItGoesBackThroughAGapTheMapShutAlongTheWayItCame) {
+  auto map = map_of({ring(0, false, {{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {0, 0, 0, 1}),
+                     ring(1, false, {{4.2, 0}, {8.2, 0}, {8.2, 4}, {4.2, 4}})});
+  auto goal_after_a_while = [&](double trail_corridor_m) {
+    ExplorerOptions options;
+    options.mission.planner.approach_range_m = 0.0;
+    options.mission.planner.trail_corridor_m = trail_corridor_m;
+    options.mission.look_around = false;
+    options.mission.back_out_m = 0.0;  // the trail alone, not the mission's own way back
+    ExplorerNode node(options);
+    std::int64_t generation = 0;
+    for (double x = 2.0; x <= 6.0; x += 0.2) {  // the drive from room A into room B
+      pex::slam_update_t u{};
+      u.epoch = 1;
+      u.generation = generation++;
+      pex::particle_t p{};
+      p.x = x;
+      p.y = 2.0;
+      p.parent = 0;
+      u.particles.push_back(p);
+      u.nparticles = 1;
+      EXPECT_NO_THROW(node.on_slam_update(u));
+    }
+    map.particle = 0;
+    map.generation = generation - 1;
+    pex::pose_t pose{};
+    pose.x = 6.0;
+    pose.y = 2.0;
+    std::optional<Point> goal;
+    for (std::int64_t t = 0; t <= 10'000'000 && !goal; t += 100'000) {
+      if (t % 1'000'000 == 0) EXPECT_NO_THROW(node.on_map(map, t));
+      pose.utime = t;
+      EXPECT_NO_THROW(node.on_pose(pose, t));
+      node.step(t);
+      goal = node.last_output().goal;
+      if (planning::is_finished(node.last_output().phase)) break;
+    }
+    EXPECT_EQ(node.counters().tight_plans_without_trail, 0);
+    return std::make_pair(goal, node.last_output().phase);
+  };
+  const auto [with, with_phase] = goal_after_a_while(0.05);
+  ASSERT_TRUE(with.has_value());
+  EXPECT_LT(with->x(), 1.0) << "room A's frontier, back through the door";
+  const auto [without, phase] = goal_after_a_while(0.0);
+  EXPECT_FALSE(without.has_value());
+  EXPECT_EQ(phase, planning::Phase::kDoneWithUnreachable);
+}
+
 TEST(TrailKeeper, RefusesABadSlamUpdateAndKeepsItsTrails) {
   TrailKeeper keeper;
   keeper.on_slam_update(slam_update(0, {{0.0, 0}}));
