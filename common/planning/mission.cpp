@@ -204,6 +204,7 @@ void Mission::restore(const MissionCheckpoint& c) {
         break;
       }
       enter(Phase::kHoming, "restored: going home");
+      home_tight_ = false;
       last_request_utime_ = -1;
       break;
     default:
@@ -311,6 +312,7 @@ std::string Mission::on_command(MissionCommand command, std::int64_t now_utime) 
       outstanding_id_ = 0;
       end_utime_ = -1;
       enter(Phase::kHoming, format("going home to (%.2f, %.2f)", home_->x_m, home_->y_m));
+      home_tight_ = false;
       last_request_utime_ = -1;
       return {};
     case MissionCommand::kStop:
@@ -398,6 +400,12 @@ void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
       through_frontier_.reset();
       want_tight_ = false;
     }
+    if (plan.robot_outside_cspace && outstanding_purpose_ == Purpose::kHome && !outstanding_tight_ &&
+        may_plan_tight()) {
+      home_tight_ = true;  // as below: the way home starts where the margin leaves no room
+      last_request_utime_ = -1;
+      return;
+    }
     if (plan.robot_outside_cspace && outstanding_purpose_ == Purpose::kSelect && !outstanding_tight_ &&
         may_plan_tight()) {
       // The robot stands where the margin leaves no room: a nook it reached
@@ -427,7 +435,7 @@ void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
       if (phase_ == Phase::kMoving) on_follow_plan(plan, now_utime);
       break;
     case Purpose::kHome:
-      if (phase_ == Phase::kHoming) on_home_plan(plan);
+      if (phase_ == Phase::kHoming) on_home_plan(plan, outstanding_tight_);
       break;
   }
 }
@@ -748,8 +756,17 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   }
 }
 
-void Mission::on_home_plan(const Plan& plan) {
+void Mission::on_home_plan(const Plan& plan, bool tight) {
   const GoalCandidate* home = plan.best_candidate();
+  if (!home && !tight && may_plan_tight() && margin_may_block(plan)) {
+    // The way the robot came is a way home, whatever a newer map makes of a
+    // gap on it: plan again without the margin and along the trail
+    // (PlanRequest::trail), and go on so until home.
+    home_tight_ = true;
+    last_request_utime_ = -1;
+    status_ = "no path home with the clearance margin: planning without it, along the way the robot drove";
+    return;
+  }
   if (!home) {
     finish(Phase::kFailed, "cannot go home: no path to the start pose", now_utime_);
     return;
@@ -917,7 +934,7 @@ MissionOutput Mission::step(std::int64_t now_utime) {
       finish(Phase::kHome, format("home: back at (%.2f, %.2f)", home_->x_m, home_->y_m), now_utime);
       return stopped();
     }
-    if (plan_due(now_utime)) request_plan(now_utime, Purpose::kHome, false);
+    if (plan_due(now_utime)) request_plan(now_utime, Purpose::kHome, home_tight_);
   }
 
   MissionOutput out = output();

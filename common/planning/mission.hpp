@@ -34,7 +34,9 @@
 //                  failed in a row; goals blocked by a newer map are given up
 //                  and blacklisted but are no failure of the robot
 //   PAUSED         `pause`: wheels stopped, goal and state kept; `resume` goes on
-//   HOMING / HOME  `home`: back to the pose the mission started at, then stopped
+//   HOMING / HOME  `home`: back to the pose the mission started at, then stopped;
+//                  with no path home with the margin, planned without it and
+//                  along the way the robot drove (PlanRequest::trail)
 //   STOPPED        `stop`: wheels stopped until `start`
 //
 // Planning never runs inside step(): step() asks for a plan (MissionOutput::
@@ -134,8 +136,9 @@ struct MissionOptions {
   // Pose jumps longer than this (a SLAM correction) do not count as travel.
   double max_travel_step_m = 1.0;
   // When no candidate is reachable but some have no path or no C-space point
-  // near them, plan once more without planner.cspace.clearance_margin_m: a
-  // door that looks narrower on a newer map may still let the robot through.
+  // near them, plan once more without planner.cspace.clearance_margin_m, and
+  // along the way the robot drove (PlanRequest::trail): a door that looks
+  // narrower on a newer map may still let the robot through.
   bool tight_fallback = true;
   // Before it ends DONE_WITH_UNREACHABLE the robot turns once on the spot,
   // planning as it turns (the explorer unites the newest scan into each plan:
@@ -294,7 +297,7 @@ class Mission {
   bool plan_due(std::int64_t now_utime) const;
   void on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime);
   void on_follow_plan(const Plan& plan, std::int64_t now_utime);
-  void on_home_plan(const Plan& plan);
+  void on_home_plan(const Plan& plan, bool tight);
   void select(const Plan& plan, std::int64_t now_utime);
   // Sets `goal` (a candidate of `plan`) as the goal to drive to: MOVING.
   void start_goal(const GoalCandidate& goal, const Plan& plan, std::int64_t now_utime);
@@ -348,6 +351,7 @@ class Mission {
   std::int64_t outstanding_utime_ = 0;
   std::optional<PlanRequest> pending_request_;  // made, not yet handed out
   bool want_tight_ = false;                     // the next select plan goes without the margin
+  bool home_tight_ = false;                     // the way home is planned without the margin (and along the trail)
   bool given_up_retried_ = false;               // this leg's goals given up had their second try
   // The look around before DONE_WITH_UNREACHABLE (MissionOptions::look_around).
   bool looking_around_ = false;

@@ -1049,6 +1049,46 @@ TEST(Mission, HomeDrivesBackToTheStartPoseAndStopsThere) {
   EXPECT_EQ(step_with_inline_planning(m, 31 * kSecond + 100'000).phase, Phase::kMoving);
 }
 
+// The robot started in room A and drove through the door into room B; the
+// newest map has the door shut (a slit narrower than the robot). With the
+// margin there is no way home; without it and along the way the robot drove
+// (the trail the explorer adds to tight requests) there is.
+TEST(Mission, HomeGoesBackAlongTheWayTheRobotCameThroughAGapTheMapShut) {
+  const std::vector<Point> drove{{8, 2}, {10.5, 2}, {13, 2}};
+  auto home_after_a_while = [&](bool with_trail) {
+    Mission m(test_options());
+    auto planner = [&](PlanRequest request) {
+      if (with_trail && request.tight) request.trail = std::make_shared<const std::vector<Point>>(drove);
+      return compute_plan(request);
+    };
+    m.on_map(testing::a_room_cut_off_behind_a_slit(), 0);
+    m.on_pose(Pose2{8, 2, 0}, 0);
+    step_with_inline_planning(m, 0, planner);  // the start pose: (8, 2)
+    EXPECT_EQ(m.on_command(MissionCommand::kHome, 10'000), "");
+    MissionOutput out;
+    int steps_with_goal = 0;  // a few: the speed ramps up from 0
+    for (std::int64_t t = 100'000; t <= 5 * kSecond && steps_with_goal < 3; t += 100'000) {
+      m.on_pose(Pose2{13, 2, std::numbers::pi}, t);
+      if (t % kSecond == 0) m.on_map(testing::a_room_cut_off_behind_a_slit(), t);
+      out = step_with_inline_planning(m, t, planner);
+      if (out.phase != Phase::kHoming) break;
+      if (out.goal) ++steps_with_goal;
+    }
+    return out;
+  };
+  const auto out = home_after_a_while(true);
+  ASSERT_EQ(out.phase, Phase::kHoming) << out.status;
+  ASSERT_TRUE(out.goal.has_value());
+  EXPECT_NEAR(out.goal->x(), 8.0, 1e-6);
+  ASSERT_GE(out.path.size(), 2u);
+  for (const auto& p : out.path) EXPECT_NEAR(p.y(), 2.0, 0.06) << "along the trail, through the slit";
+  EXPECT_GT(out.command.v_mps, 0.0);
+
+  const auto without = home_after_a_while(false);
+  EXPECT_EQ(without.phase, Phase::kFailed) << without.status;
+  EXPECT_NE(without.status.find("cannot go home"), std::string::npos);
+}
+
 TEST(Mission, StopEndsTheMissionAndFreezesItsClock) {
   Mission m(test_options());
   m.on_map(corridor(false, true), 0);
