@@ -11,7 +11,8 @@ namespace pex::planning {
 // nodes, so resampling copies pointers, not points.
 struct DrivenTrails::Node {
   mapping::Point point;
-  std::shared_ptr<const Node> before;
+  // Mutable only so that the destructor can unlink a chain it owns alone.
+  mutable std::shared_ptr<const Node> before;
 
   Node(mapping::Point p, std::shared_ptr<const Node> b) : point(p), before(std::move(b)) {}
   // Released node by node: a trail of many thousand points destroyed by
@@ -19,7 +20,7 @@ struct DrivenTrails::Node {
   ~Node() {
     std::shared_ptr<const Node> next = std::move(before);
     while (next && next.use_count() == 1) {
-      std::shared_ptr<const Node> after = std::move(const_cast<Node&>(*next).before);
+      std::shared_ptr<const Node> after = std::move(next->before);
       next = std::move(after);
     }
   }

@@ -141,15 +141,15 @@ TEST(DrivenTrails, ALongTrailIsCappedAndReleasedWithoutRecursion) {
   options.kept_generations = 1;
   {
     DrivenTrails trails(options);
-    // 12 km at 6 cm, 4 particles sharing it: released node by node at the
-    // end (recursion through 200,000 shared pointers overflows the stack).
-    for (int g = 0; g < 200'000; ++g) {
+    // 120 km at 6 cm, 4 particles sharing it: released node by node at the
+    // end (recursion through 2,000,000 shared pointers overflows the stack).
+    for (int g = 0; g < 2'000'000; ++g) {
       std::vector<TrailParticle> particles(4, TrailParticle{{g * 0.06, 0.0, 0.0}, 0});
       ASSERT_TRUE(trails.update(update_of(g, std::move(particles))).ok);
     }
     const auto t = trails.best_trail();
     ASSERT_EQ(t.size(), 1000u);
-    EXPECT_DOUBLE_EQ(t.back().x(), 199'999 * 0.06) << "the newest points";
+    EXPECT_DOUBLE_EQ(t.back().x(), 1'999'999 * 0.06) << "the newest points";
   }
 }
 
