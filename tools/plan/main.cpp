@@ -289,12 +289,15 @@ int main(int argc, char** argv) {
   const auto corridor = trail ? pex::planning::trail_corridor(*trail, planner.trail_corridor_m)
                               : pex::mapping::MultiPolygon{};
   const auto* passages = corridor.empty() ? nullptr : &corridor;
+  const double plan_started_ms = pex::explorer::thread_cpu_ms();
   const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner, live ? &planned_on : nullptr,
                                                     nullptr, nullptr, passages);
+  const double plan_cpu_ms = pex::explorer::thread_cpu_ms() - plan_started_ms;
   pex::planning::ConfigurationSpace cspace;
   cspace.build(planned_on, planner.cspace, nullptr, passages);
   std::printf("live view: %s\n", live ? "united into the map (newest LIDAR_SCAN)"
                                       : (scan ? "off (live_view_range_m = 0)" : "none (no LIDAR_SCAN)"));
+  std::printf("plan: %.1f ms CPU (no cache, as a first plan)\n", plan_cpu_ms);
   if (tight)
     std::printf("trail: %s\n", !trail ? "none for the map's particle and generation"
                                        : (std::to_string(trail->size()) + " points, corridor " +
