@@ -496,7 +496,9 @@ TEST(ExplorerNode, ItGoesBackThroughAGapTheMapShutAlongTheWayItCame) {
     pose.y = 2.0;
     std::optional<Point> goal;
     for (std::int64_t t = 0; t <= 10'000'000 && !goal; t += 100'000) {
-      if (t % 1'000'000 == 0) EXPECT_NO_THROW(node.on_map(map, t));
+      if (t % 1'000'000 == 0) {
+        EXPECT_NO_THROW(node.on_map(map, t));
+      }
       pose.utime = t;
       EXPECT_NO_THROW(node.on_pose(pose, t));
       node.step(t);
