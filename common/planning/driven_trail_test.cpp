@@ -163,6 +163,11 @@ TEST(TrailCorridor, IsTheBandOfItsHalfWidthAboutTheTrail) {
   EXPECT_NEAR(bg::area(corridor), expected, 0.003);
   EXPECT_TRUE(bg::covered_by(mapping::Point(2, 0.04), corridor));
   EXPECT_FALSE(bg::covered_by(mapping::Point(2, 0.06), corridor));
+  // A robot that has not moved: the disk about where it stands (chords
+  // within 1 mm of the circle: at most 2 pi r x 1 mm less).
+  const double disk = bg::area(trail_corridor({{1, 1}}, 0.05));
+  EXPECT_LE(disk, std::numbers::pi * 0.05 * 0.05);
+  EXPECT_GE(disk, std::numbers::pi * 0.05 * 0.05 - 2 * std::numbers::pi * 0.05 * 1e-3);
   EXPECT_TRUE(trail_corridor({}, 0.05).empty());
   EXPECT_TRUE(trail_corridor(trail, 0.0).empty());
   EXPECT_TRUE(trail_corridor({{NAN, 0}, {1, 0}}, 0.05).empty()) << "refused, not half drawn";
