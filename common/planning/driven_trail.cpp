@@ -65,9 +65,13 @@ DrivenTrails::Result DrivenTrails::update(const TrailUpdate& update) {
   } else if (last && same_epoch) {
     // The parents index an update not seen here: the best trail held stands
     // in for every particle's (as the mapper's best map does for the maps).
-    const auto& best = last->heads[static_cast<std::size_t>(last->best)];
+    const auto best = last->heads[static_cast<std::size_t>(last->best)];
     std::fill(from.begin(), from.end(), best);
     result.resynced = true;
+    // The generations held belong to the lineage before the break (a SLAM
+    // restored from an older checkpoint counts them again): none is this one's.
+    generations_.clear();
+    last = nullptr;
   } else {
     result.new_epoch = last != nullptr;
     generations_.clear();  // another frame, or the first update: start afresh
@@ -102,9 +106,9 @@ std::vector<mapping::Point> DrivenTrails::flatten(const std::shared_ptr<const No
 }
 
 std::optional<std::vector<mapping::Point>> DrivenTrails::trail(std::int64_t generation, int particle) const {
-  const auto it = std::find_if(generations_.begin(), generations_.end(),
+  const auto it = std::find_if(generations_.rbegin(), generations_.rend(),
                                [&](const Generation& g) { return g.generation == generation; });
-  if (it == generations_.end() || particle < 0 || static_cast<std::size_t>(particle) >= it->heads.size())
+  if (it == generations_.rend() || particle < 0 || static_cast<std::size_t>(particle) >= it->heads.size())
     return std::nullopt;
   return flatten(it->heads[static_cast<std::size_t>(particle)]);
 }

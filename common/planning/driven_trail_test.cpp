@@ -76,6 +76,21 @@ TEST(DrivenTrails, AMissedUpdateGivesEveryParticleTheBestTrail) {
   }
 }
 
+TEST(DrivenTrails, ASlamRestoredFromAnOlderCheckpointCountsItsGenerationsAgain) {
+  DrivenTrails trails;
+  for (int g = 0; g <= 5; ++g) ASSERT_TRUE(trails.update(update_of(g, {{{g * 1.0, 0, 0}, 0}})).ok);
+  // The same epoch, back at generation 3 (its checkpoint), on another path.
+  const auto r = trails.update(update_of(3, {{{5, 1, 0}, 0}}));
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_TRUE(r.resynced);
+  ASSERT_TRUE(trails.update(update_of(4, {{{5, 2, 0}, 0}})).ok);
+  const auto t = trails.trail(4, 0);
+  ASSERT_TRUE(t);
+  EXPECT_DOUBLE_EQ(t->back().y(), 2.0) << "generation 4 of the lineage after the restore, not the one before";
+  EXPECT_EQ(t->size(), 8u) << "the best trail held, then the restored lineage's points";
+  EXPECT_FALSE(trails.trail(5, 0)) << "the old lineage's generations are gone";
+}
+
 TEST(DrivenTrails, AnotherEpochStartsAfresh) {
   DrivenTrails trails;
   ASSERT_TRUE(trails.update(update_of(0, {{{0, 0, 0}}})).ok);
