@@ -125,8 +125,7 @@ std::optional<std::int64_t> DrivenTrails::newest_generation() const {
 }
 
 mapping::MultiPolygon trail_corridor(const std::vector<mapping::Point>& trail, double half_width_m) {
-  if (trail.empty() || !(half_width_m > 0.0)) return {};
-  return dilated_polyline(trail, half_width_m);
+  return dilated_polyline(trail, half_width_m);  // empty for an empty trail or a half-width <= 0
 }
 
 }  // namespace pex::planning

@@ -400,20 +400,14 @@ void Mission::on_plan(const PlanResult& result, std::int64_t now_utime) {
       through_frontier_.reset();
       want_tight_ = false;
     }
-    if (plan.robot_outside_cspace && outstanding_purpose_ == Purpose::kHome && !outstanding_tight_ &&
-        may_plan_tight()) {
-      home_tight_ = true;  // as below: the way home starts where the margin leaves no room
-      last_request_utime_ = -1;
-      return;
-    }
-    if (plan.robot_outside_cspace && outstanding_purpose_ == Purpose::kSelect && !outstanding_tight_ &&
-        may_plan_tight()) {
+    if (plan.robot_outside_cspace && !outstanding_tight_ && may_plan_tight() &&
+        (outstanding_purpose_ == Purpose::kSelect || outstanding_purpose_ == Purpose::kHome)) {
       // The robot stands where the margin leaves no room: a nook it reached
       // on a plan without the margin, or a pose SLAM put a little into a
       // wall's band. Plan again at once without the margin, as the tight
       // fallback does (intel: FAILED five plans later, in a nook whose
-      // tight C-space had 41 candidates).
-      want_tight_ = true;
+      // tight C-space had 41 candidates); the way home likewise.
+      (outstanding_purpose_ == Purpose::kHome ? home_tight_ : want_tight_) = true;
       last_request_utime_ = -1;
       return;
     }
