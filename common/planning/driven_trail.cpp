@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "archive/byte_archive.hpp"
 #include "planning/inward_offset.hpp"
 
 namespace pex::planning {
@@ -49,8 +50,10 @@ DrivenTrails::Result DrivenTrails::update(const TrailUpdate& update) {
 
   const Generation* last = generations_.empty() ? nullptr : &generations_.back();
   const bool same_epoch = epoch_ && *epoch_ == update.epoch;
-  const bool continues =
-      last && same_epoch && update.generation == last->generation + (update.republished ? 0 : 1);
+  // A restored trail stands in for particles it does not know: no parent
+  // index refers to it.
+  const bool continues = last && !last->stand_in && same_epoch &&
+                         update.generation == last->generation + (update.republished ? 0 : 1);
   if (continues) {
     for (const auto& p : update.particles)
       if (p.parent < 0 || static_cast<std::size_t>(p.parent) >= last->heads.size()) {
@@ -108,8 +111,9 @@ std::vector<mapping::Point> DrivenTrails::flatten(const std::shared_ptr<const No
 std::optional<std::vector<mapping::Point>> DrivenTrails::trail(std::int64_t generation, int particle) const {
   const auto it = std::find_if(generations_.rbegin(), generations_.rend(),
                                [&](const Generation& g) { return g.generation == generation; });
-  if (it == generations_.rend() || particle < 0 || static_cast<std::size_t>(particle) >= it->heads.size())
-    return std::nullopt;
+  if (it == generations_.rend() || particle < 0) return std::nullopt;
+  if (it->stand_in) return flatten(it->heads[static_cast<std::size_t>(it->best)]);
+  if (static_cast<std::size_t>(particle) >= it->heads.size()) return std::nullopt;
   return flatten(it->heads[static_cast<std::size_t>(particle)]);
 }
 
@@ -122,6 +126,57 @@ std::vector<mapping::Point> DrivenTrails::best_trail() const {
 std::optional<std::int64_t> DrivenTrails::newest_generation() const {
   if (generations_.empty()) return std::nullopt;
   return generations_.back().generation;
+}
+
+namespace {
+constexpr char kTrailsMagic[] = "PEXTRAIL";
+constexpr std::uint32_t kTrailsVersion = 1;
+}  // namespace
+
+std::string DrivenTrails::checkpoint() const {
+  if (!epoch_ || generations_.empty()) return {};
+  const auto& g = generations_.back();
+  const auto points = flatten(g.heads[static_cast<std::size_t>(g.best)]);
+  archive::ByteWriter w;
+  w.put<std::int64_t>(*epoch_);
+  w.put<std::int64_t>(g.generation);
+  w.put<std::uint64_t>(points.size());
+  for (const auto& p : points) {
+    w.put<double>(p.x());
+    w.put<double>(p.y());
+  }
+  return archive::seal(kTrailsMagic, kTrailsVersion, w.bytes());
+}
+
+std::string DrivenTrails::restore(std::string_view checkpoint) {
+  Generation restored;
+  std::int64_t epoch = 0;
+  try {
+    const std::string payload = archive::unseal(kTrailsMagic, kTrailsVersion, checkpoint);
+    archive::ByteReader r(payload);
+    epoch = r.get<std::int64_t>();
+    restored.generation = r.get<std::int64_t>();
+    const auto n = r.get_count(2 * sizeof(double));
+    if (n > options_.max_points)
+      return "a trail of " + std::to_string(n) + " points (at most " + std::to_string(options_.max_points) + ")";
+    std::shared_ptr<const Node> head;
+    for (std::uint64_t i = 0; i < n; ++i) {
+      const double x = r.get<double>();
+      const double y = r.get<double>();
+      if (!std::isfinite(x) || !std::isfinite(y)) return "a trail point is not finite";
+      head = std::make_shared<const Node>(mapping::Point(x, y), std::move(head));
+    }
+    r.expect_end();
+    restored.heads.push_back(std::move(head));
+  } catch (const archive::ArchiveError& e) {
+    return e.what();
+  }
+  restored.best = 0;
+  restored.stand_in = true;
+  generations_.clear();
+  generations_.push_back(std::move(restored));
+  epoch_ = epoch;
+  return {};
 }
 
 mapping::MultiPolygon trail_corridor(const std::vector<mapping::Point>& trail, double half_width_m) {

@@ -18,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "geometry/pose2.hpp"
@@ -82,6 +83,18 @@ class DrivenTrails {
   std::vector<mapping::Point> best_trail() const;
   std::optional<std::int64_t> newest_generation() const;
 
+  // The trails across a restart of whoever keeps them (the explorer's
+  // checkpoint): the best particle's newest trail (at most max_points, the
+  // newest), its epoch and generation, as a sealed archive ("" when nothing is
+  // held). Why only the best: it is the trail a resync hands every particle.
+  std::string checkpoint() const;
+  // Takes a checkpoint up: its trail stands in for every particle's at its
+  // generation (what trail() gives for any particle there) until the next
+  // update, which resyncs on it if it is of the same epoch (the particles'
+  // parents index an update not seen here) and starts afresh if not. Returns
+  // "" when taken up, else why not (nothing changed).
+  std::string restore(std::string_view checkpoint);
+
   struct Node;  // driven_trail.cpp
 
  private:
@@ -89,6 +102,7 @@ class DrivenTrails {
     std::int64_t generation = 0;
     int best = 0;
     std::vector<std::shared_ptr<const Node>> heads;  // per particle; null: no point yet
+    bool stand_in = false;  // restored: one trail for every particle (restore())
   };
   std::vector<mapping::Point> flatten(const std::shared_ptr<const Node>& head) const;
 

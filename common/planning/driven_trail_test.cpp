@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "archive/byte_archive.hpp"
 #include "planning/cspace.hpp"
 #include "planning/mission.hpp"
 #include "planning/test_maps.hpp"
@@ -89,6 +90,77 @@ TEST(DrivenTrails, ASlamRestoredFromAnOlderCheckpointCountsItsGenerationsAgain) 
   EXPECT_DOUBLE_EQ(t->back().y(), 2.0) << "generation 4 of the lineage after the restore, not the one before";
   EXPECT_EQ(t->size(), 8u) << "the best trail held, then the restored lineage's points";
   EXPECT_FALSE(trails.trail(5, 0)) << "the old lineage's generations are gone";
+}
+
+TEST(DrivenTrails, ACheckpointCarriesTheBestTrailAcrossARestart) {
+  DrivenTrails before;
+  EXPECT_EQ(before.checkpoint(), "") << "nothing held, nothing to write";
+  ASSERT_TRUE(before.update(update_of(0, {{{0, 0, 0}}, {{0, 5, 0}}})).ok);
+  ASSERT_TRUE(before.update(update_of(1, {{{1, 0, 0}, 0}, {{1, 5, 0}, 1}}, 1)).ok);
+  const std::string bytes = before.checkpoint();
+  ASSERT_FALSE(bytes.empty());
+
+  DrivenTrails after;
+  ASSERT_EQ(after.restore(bytes), "");
+  EXPECT_EQ(after.newest_generation(), std::optional<std::int64_t>(1));
+  // The best trail (particle 1's) stands in for every particle's at its generation.
+  for (int particle : {0, 1, 29}) {
+    const auto t = after.trail(1, particle);
+    ASSERT_TRUE(t) << particle;
+    EXPECT_EQ(xs(*t), (std::vector<double>{0, 1}));
+    EXPECT_DOUBLE_EQ(t->back().y(), 5.0);
+  }
+  // SLAM goes on with three particles, whose parents index particles unknown
+  // here: a resync on the restored trail, not a refusal.
+  const auto r = after.update(update_of(2, {{{2, 5, 0}, 1}, {{2, 6, 0}, 1}, {{2, 7, 0}, 0}}, 2));
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_TRUE(r.resynced);
+  for (int particle = 0; particle < 3; ++particle) {
+    const auto t = after.trail(2, particle);
+    ASSERT_TRUE(t);
+    EXPECT_EQ(xs(*t), (std::vector<double>{0, 1, 2}));
+    EXPECT_DOUBLE_EQ((*t)[1].y(), 5.0) << "the restored best trail, then the particle's own point";
+  }
+  EXPECT_DOUBLE_EQ(after.best_trail().back().y(), 7.0);
+
+  // A SLAM of another epoch: the restored trail is of another frame.
+  DrivenTrails other;
+  ASSERT_EQ(other.restore(bytes), "");
+  const auto r2 = other.update(update_of(0, {{{9, 9, 0}}}, 0, /*epoch=*/8));
+  ASSERT_TRUE(r2.ok);
+  EXPECT_TRUE(r2.new_epoch);
+  EXPECT_EQ(other.best_trail().size(), 1u);
+}
+
+TEST(DrivenTrails, ABadCheckpointIsRefusedAndChangesNothing) {
+  DrivenTrails source;
+  ASSERT_TRUE(source.update(update_of(0, {{{0, 0, 0}}})).ok);
+  ASSERT_TRUE(source.update(update_of(1, {{{1, 0, 0}, 0}})).ok);
+  const std::string good = source.checkpoint();
+
+  DrivenTrails trails;
+  ASSERT_TRUE(trails.update(update_of(4, {{{4, 4, 0}}})).ok);
+  auto nan_point = [] {
+    archive::ByteWriter w;
+    w.put<std::int64_t>(7);
+    w.put<std::int64_t>(1);
+    w.put<std::uint64_t>(1);
+    w.put<double>(std::nan(""));
+    w.put<double>(0.0);
+    return archive::seal("PEXTRAIL", 1, w.bytes());
+  };
+  std::string flipped = good;
+  flipped[flipped.size() / 2] ^= 0x10;
+  for (const std::string& bad : {std::string(), good.substr(0, good.size() - 3), flipped, nan_point(),
+                                 std::string("polyexplore-mission 1\nend\n")}) {
+    EXPECT_NE(trails.restore(bad), "");
+    EXPECT_EQ(trails.newest_generation(), std::optional<std::int64_t>(4));
+    EXPECT_EQ(xs(trails.best_trail()), (std::vector<double>{4}));
+  }
+  DrivenTrailOptions small;
+  small.max_points = 1;
+  DrivenTrails capped(small);
+  EXPECT_NE(capped.restore(good), "") << "more points than this keeper gives out";
 }
 
 TEST(DrivenTrails, AnotherEpochStartsAfresh) {

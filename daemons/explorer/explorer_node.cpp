@@ -1,5 +1,7 @@
 #include "explorer_node.hpp"
 
+#include "archive/byte_archive.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -34,7 +36,7 @@ planning::TrailUpdate trail_update_of(const pex::slam_update_t& msg) {
   return u;
 }
 
-TrailKeeper::TrailKeeper(planning::DrivenTrailOptions options) : slam_(options), poses_(options) {}
+TrailKeeper::TrailKeeper(planning::DrivenTrailOptions options) : options_(options), slam_(options), poses_(options) {}
 
 planning::DrivenTrails::Result TrailKeeper::on_slam_update(const pex::slam_update_t& msg) {
   auto result = slam_.update(trail_update_of(msg));
@@ -60,6 +62,44 @@ std::shared_ptr<const std::vector<mapping::Point>> TrailKeeper::trail_for_map() 
       map_particle_ >= 0 ? slam_.trail(map_generation_, map_particle_) : poses_.best_trail();
   if (!trail || trail->empty()) return nullptr;
   return std::make_shared<const std::vector<mapping::Point>>(std::move(*trail));
+}
+
+namespace {
+constexpr char kTrailKeeperMagic[] = "PEXTKEEP";
+constexpr std::uint32_t kTrailKeeperVersion = 1;
+}  // namespace
+
+std::string TrailKeeper::checkpoint() const {
+  archive::ByteWriter w;
+  w.put_string(slam_.checkpoint());
+  w.put_string(poses_.checkpoint());
+  return archive::seal(kTrailKeeperMagic, kTrailKeeperVersion, w.bytes());
+}
+
+std::string TrailKeeper::restore(std::string_view checkpoint) {
+  std::string slam, poses;
+  try {
+    const std::string payload = archive::unseal(kTrailKeeperMagic, kTrailKeeperVersion, checkpoint);
+    archive::ByteReader r(payload);
+    slam = r.get_string();
+    poses = r.get_string();
+    r.expect_end();
+  } catch (const archive::ArchiveError& e) {
+    return e.what();
+  }
+  // Each part may be empty (nothing held when it was written). Both are
+  // checked before either is taken up.
+  planning::DrivenTrails slam_restored(options_), poses_restored(options_);
+  if (!slam.empty())
+    if (auto why = slam_restored.restore(slam); !why.empty()) return "SLAM's trail: " + why;
+  if (!poses.empty())
+    if (auto why = poses_restored.restore(poses); !why.empty()) return "the poses' trail: " + why;
+  if (!slam.empty()) (void)slam_.restore(slam);
+  if (!poses.empty()) {
+    (void)poses_.restore(poses);
+    pose_generation_ = *poses_.newest_generation() + 1;
+  }
+  return {};
 }
 
 void ExplorerNode::on_map(const pex::polygon_map_t& msg, std::int64_t now_utime) {

@@ -76,8 +76,13 @@ class TrailKeeper {
   void on_map(const pex::polygon_map_t& msg);
   // Null when the map's particle and generation have no trail here.
   std::shared_ptr<const std::vector<mapping::Point>> trail_for_map() const;
+  // Both trails (SLAM's best, the poses') across a restart, as bytes; taking
+  // them up: "" when done, else why not (nothing changed). DrivenTrails::restore.
+  std::string checkpoint() const;
+  std::string restore(std::string_view checkpoint);
 
  private:
+  planning::DrivenTrailOptions options_;
   planning::DrivenTrails slam_;
   planning::DrivenTrails poses_;
   std::int64_t pose_generation_ = 0;
@@ -113,6 +118,11 @@ class ExplorerNode {
   // step): "" when restored, else why not (the mission then starts afresh).
   std::string checkpoint_text() const;
   std::string restore(const std::string& checkpoint_text);
+  // The way the robot drove, likewise (a file of its own, trail_checkpoint_file):
+  // a restarted explorer can still take the robot back through a gap the map
+  // has shut since it drove through.
+  std::string trail_checkpoint() const { return trails_.checkpoint(); }
+  std::string restore_trails(const std::string& checkpoint) { return trails_.restore(checkpoint); }
 
   // One control step: the command to publish now. Never waits for a plan.
   pex::velocity_cmd_t step(std::int64_t now_utime);

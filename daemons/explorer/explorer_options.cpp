@@ -29,6 +29,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.cmd_rate_hz = config.get<double>("cmd_rate_hz", o.cmd_rate_hz, in_range(1.0, 100.0));
   o.state_rate_hz = config.get<double>("state_rate_hz", o.state_rate_hz, in_range(0.1, 100.0));
   o.checkpoint_file = config.get_path("checkpoint_file", o.checkpoint_file, /*must_exist=*/false);
+  o.trail_checkpoint_file = config.get_path("trail_checkpoint_file", o.trail_checkpoint_file, /*must_exist=*/false);
   o.checkpoint_period_s = config.get<double>("checkpoint_period_s", o.checkpoint_period_s, in_range(0.1, 3600.0));
   o.map.max_vertices = config.get<std::int64_t>("max_map_vertices", o.map.max_vertices, positive<std::int64_t>());
 

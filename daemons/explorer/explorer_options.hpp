@@ -22,6 +22,10 @@ struct ExplorerOptions {
   // checkpoint_period_s and on stop, read at start: "" = none.
   std::string checkpoint_file;
   double checkpoint_period_s = 2.0;
+  // The way the robot drove (TrailKeeper's checkpoint), written with the same
+  // period: "" = none, and a restarted explorer's tight plans have no trail
+  // until the robot has driven again.
+  std::string trail_checkpoint_file;
   MapDecodeOptions map;
   planning::MissionOptions mission;
   // The live scan bounds the forward speed (planning/scan_guard.hpp); off: the map alone.

@@ -469,13 +469,17 @@ TEST(TrailKeeper, GivesTheTrailOfTheMapsParticleAndGeneration) {
 TEST(ExplorerNode, ItGoesBackThroughAGapTheMapShutAlongTheWayItCame) {
   auto map = map_of({ring(0, false, {{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {0, 0, 0, 1}),
                      ring(1, false, {{4.2, 0}, {8.2, 0}, {8.2, 4}, {4.2, 4}})});
-  auto goal_after_a_while = [&](double trail_corridor_m) {
+  // `restart`: the explorer is restarted in room B, before any plan,
+  // from the trail checkpoint its first run wrote (or from none).
+  enum class Restart { kNo, kFromCheckpoint, kWithoutCheckpoint };
+  auto goal_after_a_while = [&](double trail_corridor_m, Restart restart = Restart::kNo) {
     ExplorerOptions options;
     options.mission.planner.approach_range_m = 0.0;
     options.mission.planner.trail_corridor_m = trail_corridor_m;
     options.mission.look_around = false;
     options.mission.back_out_m = 0.0;  // the trail alone, not the mission's own way back
-    ExplorerNode node(options);
+    auto first = std::make_unique<ExplorerNode>(options);
+    ExplorerNode* node_ptr = first.get();
     std::int64_t generation = 0;
     for (double x = 2.0; x <= 6.0; x += 0.2) {  // the drive from room A into room B
       pex::slam_update_t u{};
@@ -487,8 +491,18 @@ TEST(ExplorerNode, ItGoesBackThroughAGapTheMapShutAlongTheWayItCame) {
       p.parent = 0;
       u.particles.push_back(p);
       u.nparticles = 1;
-      EXPECT_NO_THROW(node.on_slam_update(u));
+      EXPECT_NO_THROW(node_ptr->on_slam_update(u));
     }
+    std::unique_ptr<ExplorerNode> restarted;
+    if (restart != Restart::kNo) {
+      restarted = std::make_unique<ExplorerNode>(options);
+      if (restart == Restart::kFromCheckpoint) {
+        EXPECT_EQ(restarted->restore_trails(first->trail_checkpoint()), "");
+      }
+      first.reset();
+      node_ptr = restarted.get();
+    }
+    ExplorerNode& node = *node_ptr;
     map.particle = 0;
     map.generation = generation - 1;
     pex::pose_t pose{};
@@ -505,7 +519,7 @@ TEST(ExplorerNode, ItGoesBackThroughAGapTheMapShutAlongTheWayItCame) {
       goal = node.last_output().goal;
       if (planning::is_finished(node.last_output().phase)) break;
     }
-    EXPECT_EQ(node.counters().tight_plans_without_trail, 0);
+    EXPECT_EQ(node.counters().tight_plans_without_trail == 0, restart != Restart::kWithoutCheckpoint);
     return std::make_pair(goal, node.last_output().phase);
   };
   const auto [with, with_phase] = goal_after_a_while(0.05);
@@ -514,6 +528,63 @@ TEST(ExplorerNode, ItGoesBackThroughAGapTheMapShutAlongTheWayItCame) {
   const auto [without, phase] = goal_after_a_while(0.0);
   EXPECT_FALSE(without.has_value());
   EXPECT_EQ(phase, planning::Phase::kDoneWithUnreachable);
+
+  // The way it came survives a restart of the explorer with its checkpoint,
+  // and only with it.
+  const auto [restored, restored_phase] = goal_after_a_while(0.05, Restart::kFromCheckpoint);
+  ASSERT_TRUE(restored.has_value()) << planning::to_string(restored_phase);
+  EXPECT_LT(restored->x(), 1.0);
+  const auto [forgotten, forgotten_phase] = goal_after_a_while(0.05, Restart::kWithoutCheckpoint);
+  EXPECT_FALSE(forgotten.has_value());
+  EXPECT_EQ(forgotten_phase, planning::Phase::kDoneWithUnreachable);
+}
+
+TEST(TrailKeeper, BothTrailsSurviveARestartAndABadCheckpointChangesNothing) {
+  TrailKeeper before;
+  before.on_slam_update(slam_update(0, {{0.0, 0}, {0.0, 1}}));
+  before.on_slam_update(slam_update(1, {{1.0, 1}, {1.0, 1}}, 1));
+  before.on_pose({5, 5, 0});
+  before.on_pose({6, 5, 0});
+  const std::string bytes = before.checkpoint();
+
+  TrailKeeper after;
+  ASSERT_EQ(after.restore(bytes), "");
+  auto map = map_of({});
+  map.particle = 0;  // any particle of the restored generation has the best trail
+  map.generation = 1;
+  after.on_map(map);
+  auto trail = after.trail_for_map();
+  ASSERT_NE(trail, nullptr);
+  ASSERT_EQ(trail->size(), 2u);
+  EXPECT_DOUBLE_EQ(trail->front().y(), 1.0) << "particle 1's lineage, the best";
+  // SLAM goes on: a resync on the restored trail.
+  const auto r = after.on_slam_update(slam_update(2, {{2.0, 0}, {2.0, 1}}));
+  EXPECT_TRUE(r.resynced);
+  map.generation = 2;
+  after.on_map(map);
+  trail = after.trail_for_map();
+  ASSERT_NE(trail, nullptr);
+  EXPECT_EQ(trail->size(), 3u);
+  // The poses' trail goes on from where it was.
+  after.on_pose({7, 5, 0});
+  map.particle = -1;
+  after.on_map(map);
+  trail = after.trail_for_map();
+  ASSERT_NE(trail, nullptr);
+  EXPECT_EQ(trail->size(), 3u);
+  EXPECT_DOUBLE_EQ(trail->front().x(), 5.0);
+
+  // Cut short, or another kind of file: refused, the trails held kept.
+  for (const std::string& bad : {bytes.substr(0, bytes.size() / 2), std::string("polyexplore-mission 1\nend\n")}) {
+    EXPECT_NE(after.restore(bad), "");
+    trail = after.trail_for_map();
+    ASSERT_NE(trail, nullptr);
+    EXPECT_EQ(trail->size(), 3u);
+  }
+  // A fresh keeper's checkpoint (nothing held) restores to nothing held.
+  TrailKeeper empty;
+  ASSERT_EQ(empty.restore(TrailKeeper().checkpoint()), "");
+  EXPECT_EQ(empty.trail_for_map(), nullptr);
 }
 
 TEST(TrailKeeper, RefusesABadSlamUpdateAndKeepsItsTrails) {

@@ -45,6 +45,11 @@ int main(int argc, char** argv) {
         pex::runtime::keep_checkpoint(node, {options.checkpoint_file, options.checkpoint_period_s, "mission",
                                              [explorer](const std::string& text) { return explorer->restore(text); },
                                              [explorer] { return explorer->checkpoint_text(); }});
+        // So does the way the robot drove, which tight plans and the way home follow.
+        pex::runtime::keep_checkpoint(
+            node, {options.trail_checkpoint_file, options.checkpoint_period_s, "trails",
+                   [explorer](const std::string& bytes) { return explorer->restore_trails(bytes); },
+                   [explorer] { return explorer->trail_checkpoint(); }});
 
         // Inputs the explorer refuses (std::invalid_argument) the node counts, logs and drops.
         node.subscribe<pex::polygon_map_t>(ch::kMap, [&node, explorer](const pex::polygon_map_t& msg) {

@@ -261,9 +261,12 @@ TEST(Faults, RestartedBaseDriverResetsOdometryAndSlamDoesNotJump) {
 }
 
 TEST(Faults, KilledExplorerTakesItsMissionUpFromTheCheckpoint) {
-  const std::string checkpoint = make_temp_dir("faults-explorer-state") + "/mission.txt";
-  ExplorationSet set("faults-explorer",
-                     {.explorer_keys = {{"checkpoint_file", "\"" + checkpoint + "\""}, {"checkpoint_period_s", "0.5"}}});
+  const std::string dir = make_temp_dir("faults-explorer-state");
+  const std::string checkpoint = dir + "/mission.txt";
+  const std::string trails = dir + "/trails.bin";
+  ExplorationSet set("faults-explorer", {.explorer_keys = {{"checkpoint_file", "\"" + checkpoint + "\""},
+                                                           {"trail_checkpoint_file", "\"" + trails + "\""},
+                                                           {"checkpoint_period_s", "0.5"}}});
   // Mid-mission: the robot some metres on its way to a goal, a checkpoint
   // written meanwhile. (Progress is measured in metres, not goals: a goal
   // whose frontier the laser explores before the robot gets there is left as
@@ -291,10 +294,14 @@ TEST(Faults, KilledExplorerTakesItsMissionUpFromTheCheckpoint) {
   EXPECT_GE(after.goals_reached, before.goals_reached) << "visited goals lost in the restart";
   EXPECT_GE(after.distance_travelled_m, before.distance_travelled_m - 0.5) << "the travelled distance restarted";
   EXPECT_GE(after.mission_time_s, before.mission_time_s) << "the mission clock restarted";
+  // And the way the robot drove, which tight plans and the way home follow.
+  EXPECT_NE(set.process("explorer")->output().find("trails restored from " + trails), std::string::npos)
+      << set.process("explorer")->output();
   expect_done_with_the_world_mapped(set);
   EXPECT_GT(set.bus().status().at("explorer").ncounters, 0);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
+  if (!::testing::Test::HasFailure()) std::filesystem::remove_all(dir);
 }
 
 TEST(Faults, KilledMapperPublishesItsMapFromTheCheckpointAndGoesOnWithSlam) {
