@@ -124,6 +124,13 @@ TEST(SlamFaults, KilledSlamGoesOnFromItsCheckpointWithTheSameEpochAndNoJump) {
   EXPECT_EQ(other_epoch, 0) << "updates of another epoch after the restart";
   const auto& mapper = set.bus().status().at("polygon_mapper");
   EXPECT_EQ(counter_of(mapper, "slam_epoch_changes"), 0) << "the mapper dropped its maps for a new SLAM";
+  // The explorer's trails (the way the robot drove, for tight plans and the
+  // way home) go on in the same frame: kept, not started afresh; resynced on
+  // the best trail once if the restarted SLAM counted generations again.
+  const auto& explorer = set.bus().status().at("explorer");
+  EXPECT_EQ(counter_of(explorer, "trail_epochs"), 0) << "the explorer started its trails afresh";
+  const bool follows = first_update.generation == last_update.generation + (first_update.republished ? 0 : 1);
+  EXPECT_EQ(counter_of(explorer, "trail_resyncs"), follows ? 0 : 1);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
   if (!::testing::Test::HasFailure()) std::filesystem::remove_all(std::filesystem::path(checkpoint).parent_path());
