@@ -29,6 +29,8 @@ struct DrivenTrails::Node {
 
 DrivenTrails::DrivenTrails(DrivenTrailOptions options) : options_(options) {}
 DrivenTrails::~DrivenTrails() = default;
+DrivenTrails::DrivenTrails(DrivenTrails&&) noexcept = default;
+DrivenTrails& DrivenTrails::operator=(DrivenTrails&&) noexcept = default;
 
 DrivenTrails::Result DrivenTrails::update(const TrailUpdate& update) {
   Result result;

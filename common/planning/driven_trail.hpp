@@ -63,6 +63,8 @@ class DrivenTrails {
   ~DrivenTrails();
   DrivenTrails(const DrivenTrails&) = delete;
   DrivenTrails& operator=(const DrivenTrails&) = delete;
+  DrivenTrails(DrivenTrails&&) noexcept;
+  DrivenTrails& operator=(DrivenTrails&&) noexcept;
 
   struct Result {
     bool ok = false;

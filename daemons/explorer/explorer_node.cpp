@@ -1,12 +1,12 @@
 #include "explorer_node.hpp"
 
-#include "archive/byte_archive.hpp"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
+
+#include "archive/byte_archive.hpp"
 
 namespace pex::explorer {
 
@@ -88,15 +88,15 @@ std::string TrailKeeper::restore(std::string_view checkpoint) {
     return e.what();
   }
   // Each part may be empty (nothing held when it was written). Both are
-  // checked before either is taken up.
+  // taken up, or neither.
   planning::DrivenTrails slam_restored(options_), poses_restored(options_);
   if (!slam.empty())
     if (auto why = slam_restored.restore(slam); !why.empty()) return "SLAM's trail: " + why;
   if (!poses.empty())
     if (auto why = poses_restored.restore(poses); !why.empty()) return "the poses' trail: " + why;
-  if (!slam.empty()) (void)slam_.restore(slam);
+  if (!slam.empty()) slam_ = std::move(slam_restored);
   if (!poses.empty()) {
-    (void)poses_.restore(poses);
+    poses_ = std::move(poses_restored);
     pose_generation_ = *poses_.newest_generation() + 1;
   }
   return {};
