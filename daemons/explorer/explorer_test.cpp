@@ -426,6 +426,17 @@ pex::slam_update_t slam_update(std::int64_t generation, std::vector<std::pair<do
   return u;
 }
 
+// The trail the keeper gives a tight plan on a map made by `particle` at
+// `generation` (particle -1: a map not made from SLAM particles).
+std::shared_ptr<const std::vector<Point>> trail_for_map_of(TrailKeeper& keeper, int particle,
+                                                           std::int64_t generation = 0) {
+  auto map = map_of({});
+  map.particle = particle;
+  map.generation = generation;
+  keeper.on_map(map);
+  return keeper.trail_for_map();
+}
+
 // The trail a tight plan goes along is the one of the map's particle at the
 // map's generation: the particle whose poses built that map.
 TEST(TrailKeeper, GivesTheTrailOfTheMapsParticleAndGeneration) {
@@ -433,30 +444,20 @@ TEST(TrailKeeper, GivesTheTrailOfTheMapsParticleAndGeneration) {
   keeper.on_slam_update(slam_update(0, {{0.0, 0}, {0.0, 1}}));
   keeper.on_slam_update(slam_update(1, {{1.0, 0}, {1.0, 1}}));
   keeper.on_slam_update(slam_update(2, {{2.0, 1}, {2.0, 1}}, 1));
-  auto map = map_of({});
-  map.particle = 0;
-  map.generation = 1;  // the mapper is one update behind
-  keeper.on_map(map);
-  auto trail = keeper.trail_for_map();
+  auto trail = trail_for_map_of(keeper, 0, 1);  // the mapper is one update behind
   ASSERT_NE(trail, nullptr);
   ASSERT_EQ(trail->size(), 2u);
   EXPECT_DOUBLE_EQ(trail->back().x(), 1.0);
   EXPECT_DOUBLE_EQ(trail->back().y(), 0.0) << "particle 0's own lineage";
-  map.generation = 2;
-  keeper.on_map(map);
-  trail = keeper.trail_for_map();
+  trail = trail_for_map_of(keeper, 0, 2);
   ASSERT_NE(trail, nullptr);
   EXPECT_DOUBLE_EQ(trail->front().y(), 1.0) << "at generation 2, particle 0 descends from particle 1";
-  map.generation = 9;
-  keeper.on_map(map);
-  EXPECT_EQ(keeper.trail_for_map(), nullptr) << "no update of that generation seen";
+  EXPECT_EQ(trail_for_map_of(keeper, 0, 9), nullptr) << "no update of that generation seen";
 
   // A map not made from particles: the trail of the poses the explorer got.
   keeper.on_pose({5, 5, 0});
   keeper.on_pose({6, 5, 0});
-  map.particle = -1;
-  keeper.on_map(map);
-  trail = keeper.trail_for_map();
+  trail = trail_for_map_of(keeper, -1);
   ASSERT_NE(trail, nullptr);
   EXPECT_EQ(trail->size(), 2u);
   EXPECT_DOUBLE_EQ(trail->back().x(), 6.0);
@@ -549,27 +550,19 @@ TEST(TrailKeeper, BothTrailsSurviveARestartAndABadCheckpointChangesNothing) {
 
   TrailKeeper after;
   ASSERT_EQ(after.restore(bytes), "");
-  auto map = map_of({});
-  map.particle = 0;  // any particle of the restored generation has the best trail
-  map.generation = 1;
-  after.on_map(map);
-  auto trail = after.trail_for_map();
+  auto trail = trail_for_map_of(after, 0, 1);  // any particle of the restored generation has the best trail
   ASSERT_NE(trail, nullptr);
   ASSERT_EQ(trail->size(), 2u);
   EXPECT_DOUBLE_EQ(trail->front().y(), 1.0) << "particle 1's lineage, the best";
   // SLAM goes on: a resync on the restored trail.
   const auto r = after.on_slam_update(slam_update(2, {{2.0, 0}, {2.0, 1}}));
   EXPECT_TRUE(r.resynced);
-  map.generation = 2;
-  after.on_map(map);
-  trail = after.trail_for_map();
+  trail = trail_for_map_of(after, 0, 2);
   ASSERT_NE(trail, nullptr);
   EXPECT_EQ(trail->size(), 3u);
   // The poses' trail goes on from where it was.
   after.on_pose({7, 5, 0});
-  map.particle = -1;
-  after.on_map(map);
-  trail = after.trail_for_map();
+  trail = trail_for_map_of(after, -1);
   ASSERT_NE(trail, nullptr);
   EXPECT_EQ(trail->size(), 3u);
   EXPECT_DOUBLE_EQ(trail->front().x(), 5.0);
@@ -598,11 +591,7 @@ TEST(TrailKeeper, RefusesABadSlamUpdateAndKeepsItsTrails) {
   auto nan = slam_update(1, {{NAN, 0}});
   EXPECT_THROW(keeper.on_slam_update(nan), std::invalid_argument);
   keeper.on_slam_update(slam_update(1, {{1.0, 0}}));
-  auto map = map_of({});
-  map.particle = 0;
-  map.generation = 1;
-  keeper.on_map(map);
-  const auto trail = keeper.trail_for_map();
+  const auto trail = trail_for_map_of(keeper, 0, 1);
   ASSERT_NE(trail, nullptr);
   EXPECT_EQ(trail->size(), 2u);
 }
