@@ -1,15 +1,24 @@
 #include "planning/scan_guard.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
+#include <optional>
 
 #include "geometry/angle.hpp"
+#include "geometry/point.hpp"
 
 namespace pex::planning {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+// Two walls' directions this close (sine of 3 deg) are one straight wall.
+constexpr double kStraightSine = 0.05;
+// A wall's line must pass this much short of the next return for a bend.
+constexpr double kBendM = 0.001;
 // Below this curvature (a radius of 1000 km) the arc is a straight line: the
 // circle's formulas lose their digits there.
 constexpr double kStraightCurvature = 1e-6;
@@ -47,7 +56,130 @@ double arc_free_distance(double x, double y, double kappa, double r) {
   return std::max(0.0, to_point - half_width) * abs_radius;
 }
 
+// The unit direction of a wall at its end `last`, pointing out of the wall
+// (away from its other returns): the principal axis of the returns in
+// `wall`, or none when they are too few to have one.
+std::optional<std::array<double, 2>> wall_direction(std::span<const mapping::Point> wall,
+                                                    const mapping::Point& last) {
+  if (wall.size() < 3) return std::nullopt;
+  double mx = 0.0, my = 0.0;
+  for (const auto& p : wall) mx += p.x(), my += p.y();
+  mx /= static_cast<double>(wall.size());
+  my /= static_cast<double>(wall.size());
+  double sxx = 0.0, sxy = 0.0, syy = 0.0;
+  for (const auto& p : wall) {
+    const double dx = p.x() - mx, dy = p.y() - my;
+    sxx += dx * dx, sxy += dx * dy, syy += dy * dy;
+  }
+  const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  double ux = std::cos(angle), uy = std::sin(angle);
+  if (ux * (last.x() - mx) + uy * (last.y() - my) < 0.0) ux = -ux, uy = -uy;
+  return std::array<double, 2>{ux, uy};
+}
+
 }  // namespace
+
+std::vector<mapping::Point> guard_points(std::span<const float> ranges, double angle_min, double angle_increment,
+                                         double range_min, double range_max, const geometry::Pose2& sensor_on_robot,
+                                         const GuardScanOptions& options) {
+  const auto n = static_cast<std::ptrdiff_t>(ranges.size());
+  const auto range = [&](std::ptrdiff_t i) { return static_cast<double>(ranges[static_cast<std::size_t>(i)]); };
+  const auto has_return = [&](std::ptrdiff_t i) {
+    const double r = range(i);
+    return std::isfinite(r) && r >= range_min && r < range_max;
+  };
+  // Every return in the sensor's frame (NaN where a beam has none).
+  std::vector<mapping::Point> beam(ranges.size(), mapping::Point(kNan, kNan));
+  std::vector<mapping::Point> points;
+  points.reserve(ranges.size());
+  const auto angle = [&](std::ptrdiff_t i) { return angle_min + static_cast<double>(i) * angle_increment; };
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    if (!has_return(i)) continue;
+    auto& p = beam[static_cast<std::size_t>(i)];
+    p = mapping::Point(range(i) * std::cos(angle(i)), range(i) * std::sin(angle(i)));
+    points.push_back(p);
+  }
+  const double reach = options.wall_end_reach_m, step = options.wall_end_step_m;
+  if (reach > 0.0 && step > 0.0) {
+    const auto same_wall = [&](std::ptrdiff_t i, std::ptrdiff_t j) {
+      return j >= 0 && j < n && has_return(i) && has_return(j) && std::abs(range(j) - range(i)) <= options.wall_end_jump_m;
+    };
+    // The direction of the wall whose returns run up to beam i from the
+    // side opposite to `side`, pointing on past i (none: too few returns).
+    std::vector<mapping::Point> wall;
+    const auto wall_toward = [&](std::ptrdiff_t i, std::ptrdiff_t side) {
+      const auto& last = beam[static_cast<std::size_t>(i)];
+      wall.assign(1, last);
+      for (std::ptrdiff_t k = i - side; same_wall(k + side, k); k -= side) {
+        const auto& p = beam[static_cast<std::size_t>(k)];
+        if (std::hypot(p.x() - last.x(), p.y() - last.y()) > options.wall_fit_m) break;
+        wall.push_back(p);
+      }
+      return wall_direction(wall, last);
+    };
+    // Points from p along u, every step_m, and at `length`.
+    const auto extend = [&](const mapping::Point& p, const std::array<double, 2>& u, double length) {
+      for (double t = step; t < length; t += step) points.emplace_back(p.x() + t * u[0], p.y() + t * u[1]);
+      points.emplace_back(p.x() + length * u[0], p.y() + length * u[1]);
+    };
+    for (std::ptrdiff_t i = 1; i + 1 < n; ++i) {
+      if (!has_return(i)) continue;
+      const auto& here = beam[static_cast<std::size_t>(i)];
+      for (const std::ptrdiff_t side : {-1, +1}) {
+        // A wall's end: the beam beside it has no return, or one a step deeper.
+        if (has_return(i + side) && range(i + side) - range(i) <= options.wall_end_jump_m) continue;
+        auto direction = wall_toward(i, side);
+        if (!direction) {
+          // Too few returns for a direction: across the beam, toward the gap.
+          const double toward = (angle_increment >= 0.0 ? 1.0 : -1.0) * static_cast<double>(side);
+          direction = std::array<double, 2>{-std::sin(angle(i)) * toward, std::cos(angle(i)) * toward};
+        }
+        extend(here, *direction, reach);
+      }
+      // A convex corner between this return and the next of the same wall:
+      // the laser's rays cut it, the returns on either side lie behind it.
+      // Where both walls have a direction, the corner is where their lines
+      // meet; where one has, it lies between the two beams, so no farther
+      // along that wall than where its line crosses the other beam's ray
+      // (and short of that beam's return, or the walls bend away). Each wall
+      // goes on to the corner, up to the reach.
+      if (!same_wall(i, i + 1)) continue;
+      const auto& next = beam[static_cast<std::size_t>(i + 1)];
+      const auto u = wall_toward(i, +1), w = wall_toward(i + 1, -1);
+      if (u && w) {
+        const double across = (*u)[0] * (*w)[1] - (*u)[1] * (*w)[0];
+        if (std::abs(across) < kStraightSine) continue;  // one straight wall
+        // here + t u = next + s w.
+        const double dx = next.x() - here.x(), dy = next.y() - here.y();
+        const double t = (dx * (*w)[1] - dy * (*w)[0]) / across;
+        const double s = (dx * (*u)[1] - dy * (*u)[0]) / across;
+        if (!(t > 0.0) || !(s > 0.0)) continue;
+        const double cx = here.x() + t * (*u)[0], cy = here.y() + t * (*u)[1];
+        const double corner_side = dx * (cy - here.y()) - dy * (cx - here.x());
+        const double laser_side = dx * (0.0 - here.y()) - dy * (0.0 - here.x());
+        if (corner_side * laser_side <= 0.0) continue;  // concave: the walls lie beyond the returns' line
+        extend(here, *u, std::min(t, reach));
+        extend(next, *w, std::min(s, reach));
+        continue;
+      }
+      for (const std::ptrdiff_t side : {-1, +1}) {
+        const std::ptrdiff_t from = side > 0 ? i : i + 1, to = from + side;
+        const auto& direction = side > 0 ? u : w;
+        if (!direction) continue;
+        const auto& p = beam[static_cast<std::size_t>(from)];
+        const double dx = std::cos(angle(to)), dy = std::sin(angle(to));
+        const double across = dx * (*direction)[1] - dy * (*direction)[0];
+        if (std::abs(across) < 1e-9) continue;  // along the ray
+        const double t = -(dx * p.y() - dy * p.x()) / across;
+        const double at_range = dx * (p.x() + t * (*direction)[0]) + dy * (p.y() + t * (*direction)[1]);
+        if (t > 0.0 && at_range > 0.0 && at_range < range(to) - kBendM) extend(p, *direction, std::min(t, reach));
+      }
+    }
+  }
+  const geometry::PoseTransform to_robot(sensor_on_robot);
+  for (auto& p : points) p = to_robot(p);
+  return points;
+}
 
 double free_distance_along_arc(std::span<const mapping::Point> points_robot_frame, double curvature_per_m,
                                double body_radius_m) {

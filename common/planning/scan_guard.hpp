@@ -10,7 +10,9 @@
 // no I/O.
 #include <algorithm>
 #include <span>
+#include <vector>
 
+#include "geometry/pose2.hpp"
 #include "mapping/typed_polygon.hpp"
 
 namespace pex::planning {
@@ -39,6 +41,47 @@ struct ScanGuardOptions {
   // max_decel_mps2 would have stopped the robot.
   double start_speed_mps = 0.0;
 };
+
+// How the guard reads a scan. A wall does not end or turn where its returns
+// do: the laser samples a wall seen at a grazing angle some millimetres apart
+// along it (0.5 deg at 0.3 m and 20 deg: 7.5 mm), and each return is a
+// centimetre off in range, which at a grazing angle is along the wall. A
+// robot turning round a door's jamb passes its end tangentially, and a
+// generated floor with 0.70-0.75 m doors had it touch the jamb 3 mm deep
+// (docs/exploration.md, "Scan guard"); a convex corner between two returns
+// lies in front of both, up to a beam spacing along the flatter wall.
+struct GuardScanOptions {
+  // How far beyond the last return of a wall its end (or a corner) may lie:
+  // one beam spacing at a grazing angle and twice the LMS1xx's 12 mm range
+  // noise. The guard checks points along the wall up to here (0: the
+  // returns only).
+  double wall_end_reach_m = 0.03;
+  double wall_end_step_m = 0.005;  // spacing of those points
+  // A return ends a wall where its neighbouring beam has no return or one
+  // this much farther (a step in depth, not the noise between two returns
+  // of one wall: 4 sigma of it).
+  double wall_end_jump_m = 0.07;
+  // A wall's direction: the principal axis of its returns within this of
+  // the one it is taken at (fewer than 3: at an end, across the beam toward
+  // the gap; at a corner, none).
+  double wall_fit_m = 0.10;
+};
+
+// The points the guard checks, in the robot's frame: every return of the
+// scan (beam i at angle_min + i * angle_increment in the sensor's frame;
+// readings that are not finite, below range_min or at/beyond range_max are
+// no return), then points along each wall past its returns, up to
+// wall_end_reach_m: beyond a wall's end (a neighbour without a return or a
+// step deeper), and on to a convex corner between two returns of one wall
+// (where the two walls' lines meet in front of the line between the returns;
+// with one wall's direction only, where its line crosses the other beam's
+// ray in front of that beam's return). The two beams at the scan's edges end
+// nothing: what lies beyond them is not known to be a gap. Noise-free, the
+// free distance read from these points is never more than what the walls
+// allow (GuardPoints.TheBodyTurningRoundAJambsEnd...).
+std::vector<mapping::Point> guard_points(std::span<const float> ranges, double angle_min, double angle_increment,
+                                         double range_min, double range_max, const geometry::Pose2& sensor_on_robot,
+                                         const GuardScanOptions& options);
 
 // The arc length the robot (a disk of body_radius_m centred at the origin,
 // heading along +x) can drive forward on the circle of signed curvature

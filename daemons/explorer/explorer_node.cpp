@@ -150,17 +150,8 @@ void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime)
       !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
     throw std::invalid_argument("scan geometry is not finite");
   // Returns in the robot's frame (the laser's mounting), for the guard.
-  auto& points = scan_points_;
-  points.clear();
-  points.reserve(msg.ranges.size());
-  const double c = std::cos(msg.sensor_theta), s = std::sin(msg.sensor_theta);
-  for (std::size_t i = 0; i < msg.ranges.size(); ++i) {
-    const double r = msg.ranges[i];
-    if (!std::isfinite(r) || r < msg.range_min || r >= msg.range_max) continue;  // no return
-    const double a = msg.angle_min + static_cast<double>(i) * msg.angle_increment;
-    const double x = r * std::cos(a), y = r * std::sin(a);
-    points.emplace_back(msg.sensor_x + c * x - s * y, msg.sensor_y + s * x + c * y);
-  }
+  scan_points_ = planning::guard_points(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max,
+                                        {msg.sensor_x, msg.sensor_y, msg.sensor_theta}, options_.guard_scan);
   scan_utime_ = now_utime;
   last_scan_ = msg;
   mission_.on_scan(now_utime);

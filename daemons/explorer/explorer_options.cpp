@@ -134,6 +134,10 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.guard.creep_speed_mps = config.get<double>("guard_creep_speed_mps", o.guard.creep_speed_mps, in_range(0.0, 5.0));
   o.guard.max_decel_mps2 = config.get<double>("guard_decel_mps2", o.guard.max_decel_mps2, in_range(0.01, 20.0));
   o.guard.latency_s = config.get<double>("guard_latency_ms", o.guard.latency_s * 1e3, in_range(0.0, 2000.0)) * 1e-3;
+  o.guard_scan.wall_end_reach_m =
+      config.get<double>("guard_wall_end_reach_m", o.guard_scan.wall_end_reach_m, in_range(0.0, 0.5));
+  o.guard_scan.wall_end_jump_m =
+      config.get<double>("guard_wall_end_jump_m", o.guard_scan.wall_end_jump_m, in_range(0.001, 10.0));
   // A restarted explorer may find the base still driving its predecessor's
   // last command: the guard starts from the top speed the explorer commands.
   o.guard.start_speed_mps = o.mission.follower.max_speed_mps;

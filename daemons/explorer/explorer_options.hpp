@@ -31,6 +31,7 @@ struct ExplorerOptions {
   // The live scan bounds the forward speed (planning/scan_guard.hpp); off: the map alone.
   bool scan_guard = true;
   planning::ScanGuardOptions guard;
+  planning::GuardScanOptions guard_scan;  // how the guard reads a scan (wall ends)
   // The newest scan opens the planning map near the robot (planning/live_view.hpp).
   planning::LiveViewOptions live_view;
 };
