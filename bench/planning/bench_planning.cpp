@@ -45,6 +45,7 @@
 #include "planning/frontier_goals.hpp"
 #include "planning/goal_tour.hpp"
 #include "planning/path_matrix.hpp"
+#include "planning/scan_guard.hpp"
 #include "planning/test_maps.hpp"
 #include "planning/visibility_graph.hpp"
 
@@ -505,6 +506,78 @@ void BM_PlanMission(benchmark::State& state) {
   state.counters["max_ms"] = percentile(ms, 1.0);
 }
 
+// The scan guard's reading of one scan (guard_points: the returns and the
+// points past wall ends and on to convex corners) and its check of one arc
+// on them, which the explorer runs on its one LCM thread for every
+// LIDAR_SCAN (25 Hz) and every control step (10 Hz): 200 noisy LMS1xx scans
+// (the simulator's laser, seed 5) from random poses in worlds/office.wkt
+// with at least 0.3 m to every wall; reach 0 is the returns alone.
+struct GuardScans {
+  std::vector<std::vector<float>> scans;
+  pex::sim::LaserOptions laser;
+};
+
+const GuardScans* guard_scans(benchmark::State& state) {
+  static const std::optional<GuardScans> scans = []() -> std::optional<GuardScans> {
+    std::string error;
+    const auto world = pex::bench::read_world(std::string(PEX_SOURCE_DIR) + "/worlds/office.wkt", error);
+    if (!world) return std::nullopt;
+    GuardScans out;
+    const pex::sim::RayCaster caster(*world);
+    pex::sim::Laser laser(out.laser, 5);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> x(world->min_x, world->max_x), y(world->min_y, world->max_y),
+        heading(-3.14159, 3.14159);
+    while (out.scans.size() < 200) {
+      const pex::sim::Pose2 pose{x(rng), y(rng), heading(rng)};
+      if (caster.clearance(pose.x_m, pose.y_m, 1.0) < 0.3) continue;
+      out.scans.push_back(laser.scan(caster, pose));
+    }
+    return out;
+  }();
+  if (!scans) state.SkipWithError("worlds/office.wkt cannot be read");
+  return scans ? &*scans : nullptr;
+}
+
+void BM_GuardPoints(benchmark::State& state) {
+  const GuardScans* scans = guard_scans(state);
+  if (!scans) return;
+  pex::planning::GuardScanOptions options;
+  options.wall_end_reach_m = static_cast<double>(state.range(0)) * 1e-3;
+  const auto& laser = scans->laser;
+  std::size_t i = 0, points = 0, returns = 0;
+  for (auto _ : state) {
+    const auto& ranges = scans->scans[i++ % scans->scans.size()];
+    const auto guard = pex::planning::guard_points(ranges, laser.first_angle_rad(), laser.step_deg * M_PI / 180.0,
+                                                   laser.min_range_m, laser.max_range_m, {}, options);
+    benchmark::DoNotOptimize(guard.data());
+    points += guard.size();
+    returns += static_cast<std::size_t>(
+        std::count_if(ranges.begin(), ranges.end(), [&](float r) { return r < laser.max_range_m; }));
+  }
+  state.counters["points_per_scan"] = static_cast<double>(points) / static_cast<double>(state.iterations());
+  state.counters["returns_per_scan"] = static_cast<double>(returns) / static_cast<double>(state.iterations());
+}
+
+void BM_GuardArc(benchmark::State& state) {
+  const GuardScans* scans = guard_scans(state);
+  if (!scans) return;
+  pex::planning::GuardScanOptions options;
+  options.wall_end_reach_m = static_cast<double>(state.range(0)) * 1e-3;
+  const auto& laser = scans->laser;
+  std::vector<std::vector<pex::mapping::Point>> guards;
+  for (const auto& ranges : scans->scans)
+    guards.push_back(pex::planning::guard_points(ranges, laser.first_angle_rad(), laser.step_deg * M_PI / 180.0,
+                                                 laser.min_range_m, laser.max_range_m, {}, options));
+  std::size_t i = 0;
+  for (auto _ : state) {
+    // The guard's two checks of a step: the body and the body with its side margin.
+    const auto& guard = guards[i++ % guards.size()];
+    benchmark::DoNotOptimize(pex::planning::free_distance_along_arc(guard, 0.8, 0.25));
+    benchmark::DoNotOptimize(pex::planning::free_distance_along_arc(guard, 0.8, 0.28));
+  }
+}
+
 void missions(benchmark::internal::Benchmark* b) {
   b->ArgNames({"world", "strategy"});
   for (const int w : {0, 1})
@@ -546,6 +619,10 @@ BENCHMARK(BM_PlanHostile)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
 BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_GuardPoints)->ArgName("reach_mm")->Arg(0)->Arg(30)->Unit(benchmark::kMicrosecond)->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_GuardArc)->ArgName("reach_mm")->Arg(0)->Arg(30)->Unit(benchmark::kMicrosecond)->Repetitions(5)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PlanTour)->Apply(maps_and_counts)->Unit(benchmark::kMillisecond)->Repetitions(5)
     ->ReportAggregatesOnly(true);

@@ -107,12 +107,14 @@ std::vector<mapping::Point> guard_points(std::span<const float> ranges, double a
     // The direction of the wall whose returns run up to beam i from the
     // side opposite to `side`, pointing on past i (none: too few returns).
     std::vector<mapping::Point> wall;
+    const double fit_squared = options.wall_fit_m * options.wall_fit_m;
     const auto wall_toward = [&](std::ptrdiff_t i, std::ptrdiff_t side) {
       const auto& last = beam[static_cast<std::size_t>(i)];
       wall.assign(1, last);
       for (std::ptrdiff_t k = i - side; same_wall(k + side, k); k -= side) {
         const auto& p = beam[static_cast<std::size_t>(k)];
-        if (std::hypot(p.x() - last.x(), p.y() - last.y()) > options.wall_fit_m) break;
+        const double dx = p.x() - last.x(), dy = p.y() - last.y();
+        if (dx * dx + dy * dy > fit_squared) break;
         wall.push_back(p);
       }
       return wall_direction(wall, last);
