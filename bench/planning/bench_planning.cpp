@@ -539,21 +539,28 @@ const GuardScans* guard_scans(benchmark::State& state) {
   return scans ? &*scans : nullptr;
 }
 
+// guard_points on scan i with the reach of the benchmark's argument (mm).
+std::vector<pex::mapping::Point> guard_of(const GuardScans& scans, std::size_t i, const benchmark::State& state) {
+  pex::planning::GuardScanOptions options;
+  options.wall_end_reach_m = static_cast<double>(state.range(0)) * 1e-3;
+  const auto& laser = scans.laser;
+  return pex::planning::guard_points(scans.scans[i], laser.first_angle_rad(), laser.step_deg * M_PI / 180.0,
+                                     laser.min_range_m, laser.max_range_m, {}, options);
+}
+
 void BM_GuardPoints(benchmark::State& state) {
   const GuardScans* scans = guard_scans(state);
   if (!scans) return;
-  pex::planning::GuardScanOptions options;
-  options.wall_end_reach_m = static_cast<double>(state.range(0)) * 1e-3;
-  const auto& laser = scans->laser;
+  const float max_range = static_cast<float>(scans->laser.max_range_m);
   std::size_t i = 0, points = 0, returns = 0;
   for (auto _ : state) {
-    const auto& ranges = scans->scans[i++ % scans->scans.size()];
-    const auto guard = pex::planning::guard_points(ranges, laser.first_angle_rad(), laser.step_deg * M_PI / 180.0,
-                                                   laser.min_range_m, laser.max_range_m, {}, options);
+    const std::size_t scan = i++ % scans->scans.size();
+    const auto guard = guard_of(*scans, scan, state);
     benchmark::DoNotOptimize(guard.data());
+    const auto& ranges = scans->scans[scan];
     points += guard.size();
     returns += static_cast<std::size_t>(
-        std::count_if(ranges.begin(), ranges.end(), [&](float r) { return r < laser.max_range_m; }));
+        std::count_if(ranges.begin(), ranges.end(), [&](float r) { return r < max_range; }));
   }
   state.counters["points_per_scan"] = static_cast<double>(points) / static_cast<double>(state.iterations());
   state.counters["returns_per_scan"] = static_cast<double>(returns) / static_cast<double>(state.iterations());
@@ -562,13 +569,8 @@ void BM_GuardPoints(benchmark::State& state) {
 void BM_GuardArc(benchmark::State& state) {
   const GuardScans* scans = guard_scans(state);
   if (!scans) return;
-  pex::planning::GuardScanOptions options;
-  options.wall_end_reach_m = static_cast<double>(state.range(0)) * 1e-3;
-  const auto& laser = scans->laser;
   std::vector<std::vector<pex::mapping::Point>> guards;
-  for (const auto& ranges : scans->scans)
-    guards.push_back(pex::planning::guard_points(ranges, laser.first_angle_rad(), laser.step_deg * M_PI / 180.0,
-                                                 laser.min_range_m, laser.max_range_m, {}, options));
+  for (std::size_t scan = 0; scan < scans->scans.size(); ++scan) guards.push_back(guard_of(*scans, scan, state));
   std::size_t i = 0;
   for (auto _ : state) {
     // The guard's two checks of a step: the body and the body with its side margin.

@@ -146,6 +146,9 @@ std::string ExplorerNode::restore(const std::string& text) {
 void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime) {
   if (msg.nranges <= 0 || static_cast<std::size_t>(msg.nranges) != msg.ranges.size())
     throw std::invalid_argument("scan without ranges");
+  if (msg.ranges.size() > options_.max_beams)
+    throw std::invalid_argument("scan has " + std::to_string(msg.ranges.size()) + " beams, more than max_beams " +
+                                std::to_string(options_.max_beams));
   if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) || !std::isfinite(msg.sensor_x) ||
       !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
     throw std::invalid_argument("scan geometry is not finite");

@@ -138,6 +138,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("guard_wall_end_reach_m", o.guard_scan.wall_end_reach_m, in_range(0.0, 0.5));
   o.guard_scan.wall_end_jump_m =
       config.get<double>("guard_wall_end_jump_m", o.guard_scan.wall_end_jump_m, in_range(0.001, 10.0));
+  o.max_beams = static_cast<std::size_t>(
+      config.get<int>("max_beams", static_cast<int>(o.max_beams), in_range(1, 1 << 20)));
   // A restarted explorer may find the base still driving its predecessor's
   // last command: the guard starts from the top speed the explorer commands.
   o.guard.start_speed_mps = o.mission.follower.max_speed_mps;

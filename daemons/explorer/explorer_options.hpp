@@ -1,6 +1,7 @@
 #pragma once
 // The explorer daemon's options: every key of config/explorer.toml, read in
 // one place into the planning library's option structs.
+#include <cstddef>
 #include <string>
 
 #include "map_message.hpp"
@@ -31,7 +32,8 @@ struct ExplorerOptions {
   // The live scan bounds the forward speed (planning/scan_guard.hpp); off: the map alone.
   bool scan_guard = true;
   planning::ScanGuardOptions guard;
-  planning::GuardScanOptions guard_scan;  // how the guard reads a scan (wall ends)
+  planning::GuardScanOptions guard_scan;  // how the guard reads a scan (wall ends, corners)
+  std::size_t max_beams = 8192;           // a LIDAR_SCAN with more beams is refused as bad input
   // The newest scan opens the planning map near the robot (planning/live_view.hpp).
   planning::LiveViewOptions live_view;
 };

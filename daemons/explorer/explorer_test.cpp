@@ -135,6 +135,10 @@ TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
     EXPECT_EQ(o.mission.way_in_margin_m, 0.025) << files.back();
     EXPECT_EQ(o.mission.planner.cspace.clearance_margin_m, 0.05) << files.back();
     EXPECT_EQ(o.mission.planner.trail_corridor_m, 0.05) << files.back();  // tight plans go along the trail
+    // The guard reads wall ends and corners, on the robot too ("Scan guard").
+    EXPECT_EQ(o.guard.body_radius_m, 0.25) << files.back();
+    EXPECT_EQ(o.guard_scan.wall_end_reach_m, 0.03) << files.back();
+    EXPECT_EQ(o.guard_scan.wall_end_jump_m, 0.07) << files.back();
   }
 }
 
@@ -143,7 +147,9 @@ TEST(ExplorerOptions, RejectsBadValues) {
                            "turn_in_place_rad = 0.2\nturn_in_place_exit_rad = 0.5",
                            "robot_radius_m = 1.5\ncandidate_snap_distance_m = 1.0",
                            "robot_radius_m = 0.3\nreach_past_frontier_m = 0.3", "reach_past_frontier_m = -0.01",
-                           "way_in_margin_m = -0.01", "trail_corridor_m = -0.01", "trail_corridor_m = 0.6"}) {
+                           "way_in_margin_m = -0.01", "trail_corridor_m = -0.01", "trail_corridor_m = 0.6",
+                           "guard_wall_end_reach_m = -0.01", "guard_wall_end_reach_m = 0.6",
+                           "guard_wall_end_jump_m = 0.0"}) {
     auto config = runtime::ConfigReader::from_string(text, "test.toml");
     EXPECT_THROW(load_options(config), runtime::ConfigError) << text;
   }
@@ -248,8 +254,8 @@ TEST(ExplorerNode, CountsPathGraphTestsKeptAndNew) {
   EXPECT_EQ(second.at("graph_tests_retested"), 0);
 }
 
-// The laser's scans keep the mission going; a scan without ranges is refused
-// and does not count as the laser being alive.
+// The laser's scans keep the mission going; a scan without ranges, or with
+// more than max_beams, is refused and does not count as the laser being alive.
 TEST(ExplorerNode, StopsWithoutLaserScans) {
   ExplorerOptions options;
   options.mission.scan_timeout_us = 500'000;
@@ -261,10 +267,14 @@ TEST(ExplorerNode, StopsWithoutLaserScans) {
   scan.nranges = 3;
   scan.ranges = {1.0f, 1.0f, 1.0f};
   pex::laser_scan_t empty{};
+  pex::laser_scan_t oversized{};
+  oversized.ranges.assign(options.max_beams + 1, 1.0f);
+  oversized.nranges = static_cast<std::int32_t>(oversized.ranges.size());
   ASSERT_NO_THROW(node.on_map(corridor(), 0));
   for (std::int64_t t = 0; t <= 200'000; t += 100'000) {
     ASSERT_NO_THROW(node.on_pose(pose, t));
     EXPECT_THROW(node.on_scan(empty, t), std::invalid_argument);
+    EXPECT_THROW(node.on_scan(oversized, t), std::invalid_argument);
     node.step(t);
   }
   EXPECT_TRUE(node.last_output().degraded);
@@ -279,6 +289,24 @@ TEST(ExplorerNode, StopsWithoutLaserScans) {
 
 // Something the map does not show (or SLAM puts elsewhere) right in front of
 // the robot: the scan guard holds the forward speed to what can stop before it.
+// The robot held in the corridor at (10, 1.5) for 2 s of control steps with
+// the same scan every step: the last command's speed and the steps the
+// guard limited.
+std::pair<double, std::int64_t> guarded_drive(const ExplorerOptions& options, const pex::laser_scan_t& scan) {
+  ExplorerNode node(options);
+  pex::pose_t pose{};
+  pose.x = 10;
+  pose.y = 1.5;
+  EXPECT_NO_THROW(node.on_map(corridor(), 0));
+  double v = 0.0;
+  for (std::int64_t t = 0; t <= 2'000'000; t += 100'000) {
+    EXPECT_NO_THROW(node.on_pose(pose, t));
+    EXPECT_NO_THROW(node.on_scan(scan, t));
+    v = node.step(t).v;
+  }
+  return {v, node.counters().guard_limited_steps};
+}
+
 TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
   auto scan_of_wall_ahead = [](double distance_m) {
     pex::laser_scan_t scan{};
@@ -293,19 +321,8 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
     scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
     return scan;
   };
-  auto drive = [&](ExplorerOptions options, double wall_m) {
-    ExplorerNode node(options);
-    pex::pose_t pose{};
-    pose.x = 10;
-    pose.y = 1.5;
-    EXPECT_NO_THROW(node.on_map(corridor(), 0));
-    double v = 0.0;
-    for (std::int64_t t = 0; t <= 2'000'000; t += 100'000) {
-      EXPECT_NO_THROW(node.on_pose(pose, t));
-      EXPECT_NO_THROW(node.on_scan(scan_of_wall_ahead(wall_m), t));
-      v = node.step(t).v;
-    }
-    return std::pair{v, node.counters().guard_limited_steps};
+  auto drive = [&](const ExplorerOptions& options, double wall_m) {
+    return guarded_drive(options, scan_of_wall_ahead(wall_m));
   };
   ExplorerOptions options;
   const auto [far_v, far_limited] = drive(options, 5.0);
@@ -318,6 +335,42 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
   EXPECT_EQ(touch_v, 0.0);
   options.scan_guard = false;
   EXPECT_GT(drive(options, 0.26).first, 0.0);  // the map alone would drive on
+}
+
+// A wall's end just inside the band the body sweeps, its last return just
+// outside it (the next beam passes the end): the returns alone let the robot
+// on at full speed, the guard's points past the wall's end hold it back
+// (planning::guard_points; "Scan guard" in docs/exploration.md).
+TEST(ExplorerNode, TheScanGuardKeepsClearOfAWallsEndItsLastReturnFallsShortOf) {
+  // A wall across the way 0.2 m ahead, from y = -1 to its end at y = -0.248
+  // (the body: |y| < 0.25), beams 0.01 rad apart with one at y = -0.2510;
+  // the next, at y = -0.2459, passes the end and meets a wall 5 m away.
+  constexpr double kWallX = 0.2, kEndY = -0.248;
+  pex::laser_scan_t scan{};
+  scan.angle_increment = 0.01f;
+  scan.angle_min = static_cast<float>(std::atan2(-0.2510, kWallX) - 40 * 0.01);
+  scan.range_min = 0.05f;
+  scan.range_max = 20.0f;
+  int on_wall = 0;
+  for (int i = 0; i <= 100; ++i) {
+    const double a = static_cast<double>(scan.angle_min) + i * static_cast<double>(scan.angle_increment);
+    const double y_at_wall = kWallX * std::tan(a);
+    const bool hits = std::cos(a) > 0.0 && y_at_wall >= -1.0 && y_at_wall <= kEndY;
+    on_wall += hits;
+    scan.ranges.push_back(static_cast<float>(hits ? kWallX / std::cos(a) : 5.0));
+  }
+  scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
+  ASSERT_GT(on_wall, 20);
+  ExplorerOptions options;
+  options.guard.side_margin_m = 0.0;  // the crawl beside a return would hold both alike
+  options.guard_scan.wall_end_reach_m = 0.0;
+  const auto [returns_v, returns_limited] = guarded_drive(options, scan);
+  EXPECT_GT(returns_v, 0.3);  // every return outside the band: full speed
+  EXPECT_EQ(returns_limited, 0);
+  options.guard_scan = {};
+  const auto [ends_v, ends_limited] = guarded_drive(options, scan);
+  EXPECT_LT(ends_v, 0.2);  // braking room to the wall's end: at most 0.2 - 0.03 - 0.045 m
+  EXPECT_GT(ends_limited, 0);
 }
 
 // A band left across a door (a scan at a bad pose, a person in the doorway)
