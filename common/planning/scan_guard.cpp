@@ -128,12 +128,15 @@ std::vector<mapping::Point> guard_points(std::span<const float> ranges, double a
       for (double t = step; t < length; t += step) points.emplace_back(p.x() + t * u[0], p.y() + t * u[1]);
       points.emplace_back(p.x() + length * u[0], p.y() + length * u[1]);
     };
-    for (std::ptrdiff_t i = 1; i + 1 < n; ++i) {
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
       if (!has_return(i)) continue;
       const auto& here = beam[static_cast<std::size_t>(i)];
       for (const std::ptrdiff_t side : {-1, +1}) {
-        // A wall's end: the beam beside it has no return, or one a step deeper.
-        if (has_return(i + side) && range(i + side) - range(i) <= options.wall_end_jump_m) continue;
+        // A wall's end: the beam beside it has no return, or one a step
+        // deeper. Beyond the scan's first and last beams nothing is known.
+        const std::ptrdiff_t beside = i + side;
+        if (beside < 0 || beside >= n) continue;
+        if (has_return(beside) && range(beside) - range(i) <= options.wall_end_jump_m) continue;
         auto direction = wall_toward(i, side);
         if (!direction) {
           // Too few returns for a direction: across the beam, toward the gap.
@@ -149,7 +152,7 @@ std::vector<mapping::Point> guard_points(std::span<const float> ranges, double a
       // along that wall than where its line crosses the other beam's ray
       // (and short of that beam's return, or the walls bend away). Each wall
       // goes on to the corner, up to the reach.
-      if (!same_wall(i, i + 1)) continue;
+      if (i + 1 >= n || !same_wall(i, i + 1)) continue;
       const auto& next = beam[static_cast<std::size_t>(i + 1)];
       const auto u = wall_toward(i, +1), w = wall_toward(i + 1, -1);
       if (u && w) {

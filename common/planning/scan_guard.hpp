@@ -75,8 +75,8 @@ struct GuardScanOptions {
 // step deeper), and on to a convex corner between two returns of one wall
 // (where the two walls' lines meet in front of the line between the returns;
 // with one wall's direction only, where its line crosses the other beam's
-// ray in front of that beam's return). The two beams at the scan's edges end
-// nothing: what lies beyond them is not known to be a gap. Noise-free, the
+// ray in front of that beam's return). Beyond the scan's first and last
+// beams nothing is known: no wall ends there. Noise-free, the
 // free distance read from these points is never more than what the walls
 // allow (GuardPoints.TheBodyTurningRoundAJambsEnd...).
 std::vector<mapping::Point> guard_points(std::span<const float> ranges, double angle_min, double angle_increment,

@@ -438,6 +438,14 @@ TEST(GuardPoints, OneWallRoundTheWholeScanHasNoEndAndTheScansEdgesAreNone) {
   const auto ranges = scan_of({{p0, p1}, {p1, p2}, {p2, p3}, {p3, p0}});
   ASSERT_EQ(returns_in(ranges), kBeams);
   EXPECT_EQ(static_cast<int>(guard_points(ranges, kFirstBeamRad, kBeamRad, 0.05, 30.0, {}, {}).size()), kBeams);
+  // A beam without a return next to the first: the first beam's return ends
+  // a wall on that side (and the third's on the other), its own edge nothing.
+  auto gap = ranges;
+  gap[1] = std::numeric_limits<float>::quiet_NaN();
+  const GuardScanOptions o;
+  const int per_end = static_cast<int>(std::round(o.wall_end_reach_m / o.wall_end_step_m));
+  EXPECT_EQ(static_cast<int>(guard_points(gap, kFirstBeamRad, kBeamRad, 0.05, 30.0, {}, o).size()),
+            kBeams - 1 + 2 * per_end);
 }
 
 TEST(GuardPoints, ANearerWallEndsBeforeAFartherOneButTheFartherDoesNotEndThere) {
