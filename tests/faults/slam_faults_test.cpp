@@ -107,7 +107,10 @@ TEST(SlamFaults, KilledSlamGoesOnFromItsCheckpointWithTheSameEpochAndNoJump) {
   EXPECT_LT(std::abs(slam_moved.theta_rad - truth_moved.theta_rad), 0.03)
       << "SLAM turned " << slam_moved.theta_rad << " rad over the restart, the robot " << truth_moved.theta_rad;
   // The same lineage: the same epoch, generations going on from the checkpoint's.
-  const pex::slam_update_t& first_update = updates[updates_before];
+  // A copy: `updates` grows while the mission goes on below, and a reference
+  // into it dangles once it reallocates (the `follows` check read freed
+  // memory and failed at random).
+  const pex::slam_update_t first_update = updates[updates_before];
   EXPECT_EQ(first_update.epoch, last_update.epoch) << "the restarted SLAM is a new filter";
   // At most the updates of one checkpoint period (0.5 s) are lost: a few
   // while the robot turns (an update per 0.25 rad).
