@@ -115,13 +115,19 @@ TEST(CowGridMap, ClonesShareTilesAndCopyOnWrite) {
   EXPECT_TRUE(map.cell_at(0.0, 0.0) == nullptr || map.cell_at(0.0, 0.0)->hits == 0);
 }
 
-TEST(ScanMatcher, RecoversAKnownOffset) {
-  // A map from scans at known poses along a short path, as the filter builds it.
+// The room mapped from scans at known poses along a short path, as the
+// filter builds it.
+CowGridMap room_mapped_along_a_short_path() {
   CowGridMap map({});
   for (int i = 0; i < 6; ++i) {
     const Pose2 known{0.2 + 0.1 * i, -0.5 + 0.02 * i, 0.3 + 0.01 * i};
     map.insert(known, to_scan_points(scan_from(known), {}));
   }
+  return map;
+}
+
+TEST(ScanMatcher, RecoversAKnownOffset) {
+  const CowGridMap map = room_mapped_along_a_short_path();
   // A scan from a nearby pose, matched from a guess off by 12 cm / 3°.
   const Pose2 moved{0.8, -0.4, 0.35};
   const ScanPoints points = to_scan_points(scan_from(moved), {});
@@ -138,11 +144,7 @@ TEST(ScanMatcher, RecoversAKnownOffset) {
 // 0.25 rad turn of odometry 1 % off brings (up to ±3.75 mrad), in the room
 // mapped from a few known poses: what the climb's last step leaves.
 double mean_heading_error_of_matches(int refinements) {
-  CowGridMap map({});
-  for (int i = 0; i < 6; ++i) {
-    const Pose2 known{0.2 + 0.1 * i, -0.5 + 0.02 * i, 0.3 + 0.01 * i};
-    map.insert(known, to_scan_points(scan_from(known), {}));
-  }
+  const CowGridMap map = room_mapped_along_a_short_path();
   MatcherOptions options;
   options.refinements = refinements;
   double sum = 0.0;
