@@ -55,6 +55,22 @@ const char* to_string(MissionCommand command) {
   return "?";
 }
 
+PlanKind plan_kind(const PlanRequest& request) {
+  if (request.home) return PlanKind::kHome;
+  if (request.tight) return PlanKind::kTight;
+  return request.focus ? PlanKind::kFollow : PlanKind::kSelect;
+}
+
+const char* to_string(PlanKind kind) {
+  switch (kind) {
+    case PlanKind::kSelect: return "select";
+    case PlanKind::kFollow: return "follow";
+    case PlanKind::kTight: return "tight";
+    case PlanKind::kHome: return "home";
+  }
+  return "?";
+}
+
 PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   PlanResult result;
   result.id = request.id;

@@ -206,6 +206,15 @@ struct PlanRequest {
   std::shared_ptr<const std::vector<Point>> trail;
 };
 
+// What a request is for, as the explorer counts plan cost by it: a path
+// home; a plan without (part of) the clearance margin, along the driven
+// trail (tight fallbacks and ways in, whose C-space is not the cached one);
+// one that follows the goal in hand; one that selects a goal.
+enum class PlanKind : std::int8_t { kSelect, kFollow, kTight, kHome };
+inline constexpr int kPlanKinds = 4;
+PlanKind plan_kind(const PlanRequest& request);
+const char* to_string(PlanKind kind);
+
 struct PlanResult {
   std::uint64_t id = 0;  // the request's
   Plan plan;

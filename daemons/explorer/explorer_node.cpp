@@ -172,12 +172,19 @@ std::string ExplorerNode::on_command(const pex::mission_cmd_t& msg, std::int64_t
 void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
   if (!worker_) return;
   if (auto timed = worker_->take_result()) {
-    plan_ms_.add(timed->compute_ms);
-    plan_cpu_ms_.add(timed->compute_cpu_ms);
+    add_plan_time(timed->kind, timed->compute_ms, timed->compute_cpu_ms);
     offset_tiles_ = timed->offset_tiles;
     graph_tests_ = timed->graph_tests;
     mission_.on_plan(timed->result, now_utime);
   }
+}
+
+void ExplorerNode::add_plan_time(planning::PlanKind kind, double wall_ms, double cpu_ms) {
+  plan_ms_.add(wall_ms);
+  plan_cpu_ms_.add(cpu_ms);
+  auto& of_kind = plan_cpu_ms_by_kind_[static_cast<std::size_t>(kind)];
+  of_kind.add(cpu_ms);
+  ++plans_by_kind_[static_cast<std::size_t>(kind)];
 }
 
 pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
@@ -195,8 +202,7 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
       const auto plan_started = std::chrono::steady_clock::now();
       const double cpu_started = thread_cpu_ms();
       auto result = planning::compute_plan(request, &inline_cache_);
-      plan_ms_.add(ms_since(plan_started));
-      plan_cpu_ms_.add(thread_cpu_ms() - cpu_started);
+      add_plan_time(planning::plan_kind(request), ms_since(plan_started), thread_cpu_ms() - cpu_started);
       offset_tiles_ = inline_cache_.offsets.counters();
       graph_tests_ = inline_cache_.visibility_counters();
       return result;

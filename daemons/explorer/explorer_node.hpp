@@ -3,6 +3,7 @@
 // (planning/mission.hpp): checked inputs in, BASE_CMD and EXPLORE_STATE out,
 // plans on a worker thread (or inline, for tests). No LCM calls here, so
 // tests can drive it without a bus.
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -159,6 +160,14 @@ class ExplorerNode {
     v.total("plan_us_max", us(plan_ms_.quantile(1.0)));
     v.total("plan_cpu_us_p50", us(plan_cpu_ms_.quantile(0.5)));
     v.total("plan_cpu_us_p99", us(plan_cpu_ms_.quantile(0.99)));
+    // The planner's CPU by what the plan was for (planning::PlanKind): which
+    // kind of plan makes the p99 above.
+    for (int k = 0; k < planning::kPlanKinds; ++k) {
+      const std::string kind = planning::to_string(static_cast<planning::PlanKind>(k));
+      v.total("plans_" + kind, plans_by_kind_[k]);
+      v.total("plan_cpu_us_p99_" + kind, us(plan_cpu_ms_by_kind_[k].quantile(0.99)));
+      v.total("plan_cpu_us_max_" + kind, us(plan_cpu_ms_by_kind_[k].quantile(1.0)));
+    }
     v.total("control_us_p99", us(control_ms_.quantile(0.99)));
     v.total("control_us_max", us(control_ms_.quantile(1.0)));
     // The C-space's offset tiles (planning/inward_offset.hpp): taken from the
@@ -180,6 +189,8 @@ class ExplorerNode {
   // What the mission's request leaves to the explorer: the live view, and
   // for a tight plan the trail.
   void complete(planning::PlanRequest& request);
+  // A finished plan's wall and CPU time, in the totals and in its kind's.
+  void add_plan_time(planning::PlanKind kind, double wall_ms, double cpu_ms);
 
   ExplorerOptions options_;
   planning::Mission mission_;
@@ -191,6 +202,8 @@ class ExplorerNode {
   ExplorerCounters counters_;
   LatencyStats plan_ms_;
   LatencyStats plan_cpu_ms_;
+  std::array<LatencyStats, planning::kPlanKinds> plan_cpu_ms_by_kind_;
+  std::array<std::int64_t, planning::kPlanKinds> plans_by_kind_{};
   LatencyStats control_ms_;
   // The newest scan's returns in the robot's frame and when it came; none
   // yet: no bound (the mission itself stands without scans when

@@ -254,6 +254,25 @@ TEST(ExplorerNode, CountsPathGraphTestsKeptAndNew) {
   EXPECT_EQ(second.at("graph_tests_retested"), 0);
 }
 
+// DAEMON_STATUS says which kind of plan costs what: the first plan selects
+// a goal, the replan while driving to it follows that goal; each counts in
+// its own kind and only there.
+TEST(ExplorerNode, CountsPlanTimeByKind) {
+  const auto [first, second] = status_after_plan_and_replan(ExplorerOptions{}, corridor(), 10, 1.5);
+  ASSERT_EQ(first.at("plans"), 1);
+  EXPECT_EQ(first.at("plans_select"), 1);
+  EXPECT_GT(first.at("plan_cpu_us_max_select"), 0);
+  for (const char* kind : {"follow", "tight", "home"}) {
+    EXPECT_EQ(first.at(std::string("plans_") + kind), 0) << kind;
+    EXPECT_EQ(first.at(std::string("plan_cpu_us_max_") + kind), 0) << kind;
+  }
+  ASSERT_EQ(second.at("plans"), 2);
+  EXPECT_EQ(second.at("plans_select"), 1);
+  EXPECT_EQ(second.at("plans_follow"), 1);
+  EXPECT_GT(second.at("plan_cpu_us_max_follow"), 0);
+  EXPECT_EQ(second.at("plan_cpu_us_max_select"), first.at("plan_cpu_us_max_select"));
+}
+
 // The laser's scans keep the mission going; a scan without ranges, or with
 // more than max_beams, is refused and does not count as the laser being alive.
 TEST(ExplorerNode, StopsWithoutLaserScans) {

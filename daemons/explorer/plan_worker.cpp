@@ -62,6 +62,7 @@ void PlanWorker::run() {
     const auto started = std::chrono::steady_clock::now();
     const double cpu_started = thread_cpu_ms();
     TimedPlanResult timed;
+    timed.kind = planning::plan_kind(request);
     try {
       timed.result = planning::compute_plan(request, &cache_);
     } catch (const std::exception& e) {

@@ -15,6 +15,7 @@ namespace pex::explorer {
 
 struct TimedPlanResult {
   planning::PlanResult result;
+  planning::PlanKind kind = planning::PlanKind::kSelect;  // the request's (planning::plan_kind)
   double compute_ms = 0.0;      // wall time of compute_plan (steady clock): the plan's latency
   double compute_cpu_ms = 0.0;  // CPU time of the thread that ran it: the planner's own cost,
                                 // which a loaded machine does not inflate

@@ -176,7 +176,7 @@ class Node {
       void event(const char* name, int64_t value) {
         if (value != 0) node.counter(name) = value;
       }
-      void total(const char* name, int64_t value) { node.counter(name) = value; }
+      void total(const std::string& name, int64_t value) { node.counter(name) = value; }
     } shown{*this};
     counters.visit_counters(shown);
   }
