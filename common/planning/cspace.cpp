@@ -300,6 +300,14 @@ double ConfigurationSpace::distance_to_boundary(const Point& p) const {
   return best;
 }
 
+std::vector<std::uint32_t> ConfigurationSpace::edges_near(const Point& p, double radius_m) const {
+  std::vector<std::uint32_t> near;
+  if (!tree_ || tree_->empty() || !std::isfinite(p.x()) || !std::isfinite(p.y()) || !(radius_m >= 0.0)) return near;
+  const mapping::Box window(Point(p.x() - radius_m, p.y() - radius_m), Point(p.x() + radius_m, p.y() + radius_m));
+  for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) near.push_back(it->second);
+  return near;
+}
+
 bool ConfigurationSpace::boundary_within(const Point& p, double radius_m) const {
   if (!tree_ || tree_->empty()) return false;
   // A small window (the nodes' and candidates' millimetre tests) looks at the

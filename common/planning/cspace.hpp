@@ -101,6 +101,11 @@ class ConfigurationSpace {
   // distance_to_boundary(p) < radius_m, from the edges near p only (no
   // nearest-edge search: the nodes' and candidates' interior test).
   bool boundary_within(const Point& p, double radius_m) const;
+  // The boundary edges (indices into edges()) whose bounding boxes meet the
+  // square of half-width radius_m around p, in no particular order: every
+  // edge within radius_m of p is among them. From the edges' index, not the
+  // rings: what is near a point of a big map costs about what is there.
+  std::vector<std::uint32_t> edges_near(const Point& p, double radius_m) const;
   // True if the segment a-b crosses or touches no boundary edge. With both
   // ends in the C-space's interior this means the whole segment is in it.
   bool segment_free(const Point& a, const Point& b) const;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <numbers>
 #include <random>
@@ -488,6 +489,38 @@ TEST(ConfigurationSpace, BoundaryWithinAgreesWithTheDistance) {
   }
   EXPECT_GT(near, 500);
   EXPECT_GT(far, 500);
+}
+
+// edges_near() holds every edge within the radius (a test of every edge),
+// each once, on scanned maps: the approach points search only those.
+TEST(ConfigurationSpace, EdgesNearHoldEveryEdgeWithinTheRadius) {
+  CSpaceOptions options;
+  options.robot_radius_m = 0.27;
+  std::mt19937_64 rng(12);
+  std::size_t listed = 0, within = 0;
+  for (const auto& map : oracle_maps()) {
+    ConfigurationSpace cs;
+    ASSERT_TRUE(cs.build(map, options).ok);
+    PointSampler sample(map);
+    for (int k = 0; k < 500; ++k) {
+      const Point p = sample(rng);
+      const double radius = k % 2 == 0 ? 0.3 : 3.0;
+      auto near = cs.edges_near(p, radius);
+      std::sort(near.begin(), near.end());
+      ASSERT_EQ(std::adjacent_find(near.begin(), near.end()), near.end()) << "an edge listed twice";
+      listed += near.size();
+      for (std::uint32_t i = 0; i < cs.edges().size(); ++i) {
+        const auto& e = cs.edges()[i];
+        if (distance(p, closest_point_on_segment(p, e.a, e.b)) > radius) continue;
+        ++within;
+        ASSERT_TRUE(std::binary_search(near.begin(), near.end(), i))
+            << "edge " << i << " within " << radius << " m of " << p.x() << "," << p.y() << " is not listed";
+      }
+    }
+  }
+  EXPECT_GT(within, 1000u);
+  EXPECT_GE(listed, within);
+  EXPECT_TRUE(ConfigurationSpace().edges_near(Point(0, 0), 1.0).empty());
 }
 
 // segment_free() (a grid walk) against a test of every boundary edge, on

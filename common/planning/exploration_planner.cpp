@@ -64,28 +64,28 @@ class ObstacleEdges {
 // Points along the piece's boundary every kStep are tried nearest first.
 std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_index, const Point& f,
                                     double range_m, const ObstacleEdges& obstacles) {
-  const mapping::TypedPolygon& piece = cspace.polygons()[static_cast<std::size_t>(piece_index)];
   constexpr double kStep = 0.25;       // m between tried points along the boundary
   constexpr std::size_t kTries = 48;   // line-of-sight tests at most
   std::vector<std::pair<double, Point>> near;
-  auto scan_ring = [&](const mapping::Ring& ring) {
-    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
-      const Point& a = ring[i];
-      const Point& b = ring[i + 1];
-      if (distance(f, closest_point_on_segment(f, a, b)) > range_m) continue;
-      const double length = distance(a, b);
-      const int n = std::max(1, static_cast<int>(std::ceil(length / kStep)));
-      for (int k = 0; k < n; ++k) {
-        const double t = (k + 0.5) / n;
-        const Point q(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y()));
-        const double d = distance(f, q);
-        if (d <= range_m) near.emplace_back(d, q);
-      }
+  // The piece's boundary edges within range_m of f, from the C-space's edge
+  // index: scanning the piece's rings cost every edge of the map per
+  // candidate, a fifth of a plan on campus.
+  for (const std::uint32_t index : cspace.edges_near(f, range_m)) {
+    const ConfigurationSpace::Edge& e = cspace.edges()[index];
+    if (e.polygon != static_cast<std::uint32_t>(piece_index)) continue;
+    const Point& a = e.a;
+    const Point& b = e.b;
+    if (distance(f, closest_point_on_segment(f, a, b)) > range_m) continue;
+    const double length = distance(a, b);
+    const int n = std::max(1, static_cast<int>(std::ceil(length / kStep)));
+    for (int k = 0; k < n; ++k) {
+      const double t = (k + 0.5) / n;
+      const Point q(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y()));
+      const double d = distance(f, q);
+      if (d <= range_m) near.emplace_back(d, q);
     }
-  };
-  scan_ring(piece.geometry.outer());
-  for (const auto& hole : piece.geometry.inners()) scan_ring(hole);
-  // Ties by coordinates: the answer does not depend on the ring order.
+  }
+  // Ties by coordinates: the answer does not depend on the edges' order.
   std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
     if (a.first != b.first) return a.first < b.first;
     if (a.second.x() != b.second.x()) return a.second.x() < b.second.x();
@@ -93,8 +93,10 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
   });
   for (std::size_t i = 0; i < near.size() && i < kTries; ++i) {
     const auto inside = cspace.nearest_interior_point(near[i].second, 0.05);
-    if (!inside || cspace.piece_of(*inside) != piece_index) continue;
-    if (obstacles.in_view(*inside, f)) return inside;
+    // The line of sight first: most tries fail it, and piece_of's ray
+    // crosses the whole map.
+    if (!inside || !obstacles.in_view(*inside, f)) continue;
+    if (cspace.piece_of(*inside) == piece_index) return inside;
   }
   return std::nullopt;
 }

@@ -40,7 +40,8 @@ for t in $tools; do
     pex-plan)
       expect 66 "$t: no such log" "$bin/$t" --log "$tmp/none.lcm"
       expect 65 "$t: a log without MAP, every map" "$bin/$t" --log "$tmp/empty.lcm" --every-map
-      expect 64 "$t: an unknown strategy" "$bin/$t" --log "$tmp/empty.lcm" --every-map --strategy nearest ;;
+      expect 64 "$t: an unknown strategy" "$bin/$t" --log "$tmp/empty.lcm" --every-map --strategy nearest
+      expect 73 "$t: a plans CSV it cannot write" "$bin/$t" --log "$tmp/empty.lcm" --every-map --plans-csv "$tmp/no/such/dir.csv" ;;
     pex-map)
       printf '%s' '{"type":"FeatureCollection","pex_map_format":1,"frame":"map","utime":0,"scan_utime":0,"particle":-1,
         "generation":0,"scans_inserted":0,"vertex_count":3,"free_area_m2":0.5,"obstacle_length_m":3.4,"frontier_length_m":0,

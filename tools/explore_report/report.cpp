@@ -14,6 +14,7 @@
 
 #include "geometry/rigid_fit.hpp"
 #include "map_message.hpp"
+#include "planning/mission.hpp"
 #include "runtime/channels.hpp"
 
 namespace pex::explore_report {
@@ -183,6 +184,11 @@ Report make_report(const std::string& world_name, const LogContents& log, const 
     r.control_ms_p99 = us_to_ms(counter(*st, "control_us_p99"));
     r.plan_cpu_ms_p50 = us_to_ms(counter(*st, "plan_cpu_us_p50"));
     r.plan_cpu_ms_p99 = us_to_ms(counter(*st, "plan_cpu_us_p99"));
+    for (int k = 0; k < planning::kPlanKinds; ++k) {
+      const std::string kind = planning::to_string(static_cast<planning::PlanKind>(k));
+      const auto plans = counter(*st, "plans_" + kind);
+      if (plans) r.plans_by_kind.push_back({kind, plans, us_to_ms(counter(*st, "plan_cpu_us_p99_" + kind))});
+    }
     r.goals_seen = counter(*st, "goals_seen");
     const auto blocked = counter(*st, "goals_blocked"), no_progress = counter(*st, "goals_no_progress");
     // goals_overdue and goals_came_back are newer: before the first,
@@ -297,6 +303,10 @@ std::string to_json(const Report& r) {
   j.number("control_ms_p99", r.control_ms_p99, 3);
   j.number("plan_cpu_ms_p50", r.plan_cpu_ms_p50, 3);
   j.number("plan_cpu_ms_p99", r.plan_cpu_ms_p99, 3);
+  for (const auto& k : r.plans_by_kind) {
+    j.integer(("plans_" + k.kind).c_str(), k.plans);
+    j.number(("plan_cpu_ms_p99_" + k.kind).c_str(), k.cpu_ms_p99, 3);
+  }
   j.number("map_outside_free_m2", r.map_outside_free_m2, 3);
   j.number("map_unreachable_free_m2", r.map_unreachable_free_m2, 3);
   j.number("slam_error_mean_m", r.slam_error_mean_m, 3);

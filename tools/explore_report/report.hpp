@@ -88,6 +88,15 @@ struct Report {
   std::optional<std::int64_t> goals_seen, goals_given_up;
   std::optional<double> plan_ms_p50, plan_ms_p99, control_ms_p99;
   std::optional<double> plan_cpu_ms_p50, plan_cpu_ms_p99;  // the planner thread's CPU time
+  // The same p99 and the count of plans by what each was for (select,
+  // follow, tight, home: planning::PlanKind); empty when the log's explorer
+  // did not count them.
+  struct PlansOfKind {
+    std::string kind;
+    std::optional<std::int64_t> plans;
+    std::optional<double> cpu_ms_p99;
+  };
+  std::vector<PlansOfKind> plans_by_kind;
   // Where the map's free space that is not reachable lies (with world_free):
   // outside the world's free region holding the start (beyond a wall, inside
   // a solid: the map is wrong there), or inside it where the robot's disk

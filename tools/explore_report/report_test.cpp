@@ -106,6 +106,10 @@ TEST(ExploreReport, FullLogGivesEveryField) {
           status("explorer", {{"plan_us_p50", 1500},
                               {"plan_us_p99", 12000},
                               {"plan_cpu_us_p99", 9000},
+                              {"plans_select", 5},
+                              {"plan_cpu_us_p99_select", 9000},
+                              {"plans_tight", 2},
+                              {"plan_cpu_us_p99_tight", 4000},
                               {"goals_seen", 9},
                               {"goals_blocked", 1},
                               {"goals_no_progress", 2},
@@ -146,6 +150,14 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   EXPECT_FALSE(r.control_ms_p99);  // the counter is absent
   EXPECT_EQ(r.goals_seen, 9);
   EXPECT_EQ(r.goals_given_up, 7);  // blocked, no progress, overdue and came back
+  // Plans by kind: the kinds the explorer counted, in planning::PlanKind's order.
+  ASSERT_EQ(r.plans_by_kind.size(), 2u);
+  EXPECT_EQ(r.plans_by_kind[0].kind, "select");
+  EXPECT_EQ(r.plans_by_kind[0].plans, 5);
+  EXPECT_DOUBLE_EQ(*r.plans_by_kind[0].cpu_ms_p99, 9.0);
+  EXPECT_EQ(r.plans_by_kind[1].kind, "tight");
+  EXPECT_EQ(r.plans_by_kind[1].plans, 2);
+  EXPECT_DOUBLE_EQ(*r.plans_by_kind[1].cpu_ms_p99, 4.0);
 
   const std::string json = to_json(r);
   EXPECT_EQ(json.rfind("{\"world\":\"room\",\"strategy\":\"greedy\",\"phase\":\"done_with_unreachable\","
@@ -156,6 +168,8 @@ TEST(ExploreReport, FullLogGivesEveryField) {
   EXPECT_NE(json.find("\"coverage\":0.50000,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"collisions\":1,\"goals\":4,\"plans\":7,\"plan_ms_p50\":1.500,\"plan_ms_p99\":12.000,"
                       "\"control_ms_p99\":null,\"plan_cpu_ms_p50\":null,\"plan_cpu_ms_p99\":9.000,"
+                      "\"plans_select\":5,\"plan_cpu_ms_p99_select\":9.000,\"plans_tight\":2,"
+                      "\"plan_cpu_ms_p99_tight\":4.000,"
                       "\"map_outside_free_m2\":null,\"map_unreachable_free_m2\":null,\"slam_error_mean_m\":null,"
                       "\"slam_error_max_m\":null,\"slam_heading_error_mean_deg\":null,\"slam_error_aligned_mean_m\":null,\"scored_map\":\"MAP\","
                       "\"goals_seen\":9,\"goals_given_up\":7}"),

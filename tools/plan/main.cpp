@@ -57,7 +57,7 @@ namespace {
 // fallback is a second plan.
 int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::string& map_channel,
                    const std::string& pose_channel, const pex::explorer::ExplorerOptions& options,
-                   const pex::planning::PlannerOptions& planner, bool use_cache) {
+                   const pex::planning::PlannerOptions& planner, bool use_cache, const std::string& csv_path) {
   // As the explorer's worker keeps it: the C-space's offset tiles and the
   // path graph's segment tests between plans.
   pex::planning::PlanCache cache;
@@ -85,6 +85,19 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   };
   auto mix = [&](double v) { mix_into(digest, v); };
   bool logged_goals = false;  // EXPLORE_STATE seen: its goal is the focus
+  // --plans-csv: one line per plan, what it cost and what it had to do, to
+  // see what the slow plans have in common.
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> csv(nullptr, &std::fclose);
+  if (!csv_path.empty()) {
+    csv.reset(std::fopen(csv_path.c_str(), "w"));
+    if (!csv) {
+      std::fprintf(stderr, "pex-plan: cannot write %s\n", csv_path.c_str());
+      return EX_CANTCREAT;
+    }
+    std::fprintf(csv.get(), "utime,cpu_ms,map_vertices,cspace_vertices,reflex_nodes,candidates,approach_candidates,"
+                            "segment_tests,offset_tiles_computed,graph_tests_new,graph_tests_retested,focus,"
+                            "best_path_m,focus_path_m\n");
+  }
   for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
     if (e->channel == pex::runtime::channels::kLidarScan) {
       pex::laser_scan_t s;
@@ -119,10 +132,28 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
       request.options = planner;
       if (scan) request.live_view = pex::explorer::live_view_of(*scan, robot, options.live_view);
       request.focus = focus;
+      const auto tiles_before = cache.offsets.counters();
+      const auto tests_before = cache.visibility_counters();
       // Timed as the explorer times its worker: the thread's CPU, live view union included.
       const double started = pex::explorer::thread_cpu_ms();
       const auto result = pex::planning::compute_plan(request, use_cache ? &cache : nullptr);
       const double cpu_ms = pex::explorer::thread_cpu_ms() - started;
+      if (csv) {
+        const auto tiles = cache.offsets.counters();
+        const auto tests = cache.visibility_counters();
+        const auto& stats = result.plan.stats;
+        double focus_path_m = -1.0;
+        for (const auto& c : result.plan.candidates)
+          if (focus && focus->matches(c) && c.reachable && !c.path.empty()) focus_path_m = c.path_length_m;
+        const auto* best = result.plan.best_candidate();
+        std::fprintf(csv.get(), "%lld,%.3f,%zu,%d,%d,%zu,%d,%lld,%lld,%lld,%lld,%d,%.2f,%.2f\n",
+                     static_cast<long long>(m.utime), cpu_ms, pex::mapping::vertex_count(decoded.polygons),
+                     stats.cspace_vertices, stats.reflex_nodes, result.plan.candidates.size(), stats.approach_candidates,
+                     static_cast<long long>(stats.segment_tests), static_cast<long long>(tiles.misses - tiles_before.misses),
+                     static_cast<long long>(tests.new_pairs - tests_before.new_pairs),
+                     static_cast<long long>(tests.retested - tests_before.retested), focus ? 1 : 0,
+                     best ? best->path_length_m : -1.0, focus_path_m);
+      }
       if (!result.plan.ok) ++failed;
       for (const auto& c : result.plan.candidates) {
         mix(c.position.x());
@@ -195,7 +226,8 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
 
 int main(int argc, char** argv) {
   CLI::App app{"Run the explorer's planner on a logged MAP and show why it chose what it chose"};
-  std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path;
+  std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path,
+      csv_path;
   std::int64_t at_utime = -1;
   bool tight = false, every_map = false, no_cache = false;
   std::string strategy;
@@ -207,6 +239,8 @@ int main(int argc, char** argv) {
   app.add_flag("--tight", tight, "plan without the clearance margin and along the way the robot drove (the explorer's tight fallback)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
   app.add_flag("--every-map", every_map, "plan on every MAP of the log and print the plan CPU time percentiles");
+  app.add_option("--plans-csv", csv_path, "with --every-map: one CSV line per plan (its CPU, map size, candidates, "
+                 "segment tests, offset tiles computed, path lengths)");
   app.add_flag("--no-cache,--no-offset-cache", no_cache,
                "with --every-map: compute every offset tile and every segment test of the path graph afresh (the "
                "plans must not change)");
@@ -232,7 +266,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-plan: cannot read %s\n", log_path.c_str());
     return EX_NOINPUT;
   }
-  if (every_map) return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_cache);
+  if (every_map) return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_cache, csv_path);
   std::optional<pex::polygon_map_t> map;
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
