@@ -3,6 +3,7 @@
 #include "planning/path_matrix.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -43,6 +44,18 @@ class ObstacleEdges {
     const Point short_of_f(f.x() + (from.x() - f.x()) * 0.01 / d, f.y() + (from.y() - f.y()) * 0.01 / d);
     return !blocks(from, short_of_f);
   }
+  // The obstacle edges whose boxes meet `window`, as a.x a.y b.x b.y each,
+  // sorted: what a line-of-sight test inside the window can meet.
+  std::vector<double> near(const mapping::Box& window) const {
+    std::vector<std::array<double, 4>> found;
+    for (auto it = tree_.qbegin(bgi::intersects(window)); it != tree_.qend(); ++it)
+      found.push_back({it->first.first.x(), it->first.first.y(), it->first.second.x(), it->first.second.y()});
+    std::sort(found.begin(), found.end());
+    std::vector<double> flat;
+    flat.reserve(4 * found.size());
+    for (const auto& e : found) flat.insert(flat.end(), e.begin(), e.end());
+    return flat;
+  }
   // True if no obstacle edge comes within `clearance` of the segment a-b:
   // a disk of that radius moves along it touching no wall.
   bool clear_of(const Point& a, const Point& b, double clearance) const {
@@ -62,15 +75,43 @@ class ObstacleEdges {
 // The nearest point of `piece` (a C-space polygon) within `range_m` of the
 // frontier point `f` from which f is in view, moved into the interior.
 // Points along the piece's boundary every kStep are tried nearest first.
+// With `cache`, the tries of an earlier plan whose edges near f were the same
+// are taken from it (ApproachCache): the answer is the same either way.
 std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_index, const Point& f,
-                                    double range_m, const ObstacleEdges& obstacles) {
+                                    double range_m, const ObstacleEdges& obstacles, ApproachCache* cache) {
   constexpr double kStep = 0.25;       // m between tried points along the boundary
   constexpr std::size_t kTries = 48;   // line-of-sight tests at most
+  // What a try depends on lies within range_m of f plus the few millimetres
+  // nearest_interior_point moves it; a metre more is ample.
+  const double window_m = range_m + 1.0;
+  std::vector<std::uint32_t> window_edges = cspace.edges_near(f, window_m);
+  std::sort(window_edges.begin(), window_edges.end());  // by index: ties resolve as they did
+  ApproachCache::Memo* memo = nullptr;
+  if (cache) {
+    std::vector<double> edges;
+    edges.reserve(5 * window_edges.size());
+    for (const std::uint32_t index : window_edges) {
+      const ConfigurationSpace::Edge& e = cspace.edges()[index];
+      edges.insert(edges.end(), {e.a.x(), e.a.y(), e.b.x(), e.b.y(),
+                                 e.polygon == static_cast<std::uint32_t>(piece_index) ? 1.0 : 0.0});
+    }
+    std::vector<double> walls =
+        obstacles.near(mapping::Box(Point(f.x() - window_m, f.y() - window_m), Point(f.x() + window_m, f.y() + window_m)));
+    const CSpaceOptions& o = cspace.options();
+    memo = &cache->memo(f, o.robot_radius_m + o.clearance_margin_m, range_m);
+    const bool same = memo->tried > 0 && memo->cspace_edges == edges && memo->obstacle_edges == walls;
+    cache->count(same);
+    if (!same) {
+      memo->cspace_edges = std::move(edges);
+      memo->obstacle_edges = std::move(walls);
+      memo->tried = 0;
+      memo->seen_from.clear();
+    }
+    for (const Point& inside : memo->seen_from)
+      if (cspace.piece_of(inside) == piece_index) return inside;
+  }
   std::vector<std::pair<double, Point>> near;
-  // The piece's boundary edges within range_m of f, from the C-space's edge
-  // index: scanning the piece's rings cost every edge of the map per
-  // candidate, a fifth of a plan on campus.
-  for (const std::uint32_t index : cspace.edges_near(f, range_m)) {
+  for (const std::uint32_t index : window_edges) {
     const ConfigurationSpace::Edge& e = cspace.edges()[index];
     if (e.polygon != static_cast<std::uint32_t>(piece_index)) continue;
     const Point& a = e.a;
@@ -91,13 +132,17 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
     if (a.second.x() != b.second.x()) return a.second.x() < b.second.x();
     return a.second.y() < b.second.y();
   });
-  for (std::size_t i = 0; i < near.size() && i < kTries; ++i) {
+  const std::size_t tries = std::min(near.size(), kTries);
+  for (std::size_t i = memo ? memo->tried : 0; i < tries; ++i) {
     const auto inside = cspace.nearest_interior_point(near[i].second, 0.05);
+    if (memo) memo->tried = i + 1;
     // The line of sight first: most tries fail it, and piece_of's ray
     // crosses the whole map.
     if (!inside || !obstacles.in_view(*inside, f)) continue;
+    if (memo) memo->seen_from.push_back(*inside);
     if (cspace.piece_of(*inside) == piece_index) return inside;
   }
+  if (memo) memo->tried = std::max<std::size_t>(memo->tried, 1);  // searched: even without a single try
   return std::nullopt;
 }
 
@@ -199,6 +244,20 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
 }
 
 }  // namespace
+
+void ApproachCache::begin_plan() {
+  ++plan_;
+  // A frontier point asked about in none of the last few plans is gone (the
+  // map moved on) or rare: its memo is not worth its memory.
+  constexpr std::int64_t kPlansKept = 4;
+  std::erase_if(memos_, [&](const auto& entry) { return entry.second.last_plan < plan_ - kPlansKept; });
+}
+
+ApproachCache::Memo& ApproachCache::memo(const Point& f, double clearance_m, double range_m) {
+  Memo& m = memos_[{f.x(), f.y(), clearance_m, range_m}];
+  m.last_plan = plan_;
+  return m;
+}
 
 VisibilityCache& PlanCache::visibility(const CSpaceOptions& cspace) {
   const double clearance_m = cspace.robot_radius_m + cspace.clearance_margin_m;
@@ -306,6 +365,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
                       const PlannerOptions& options, const TypedMultiPolygon* passable, const GoalFocus* focus,
                       PlanCache* cache, const mapping::MultiPolygon* passages) {
   Plan plan;
+  if (cache) cache->approaches.begin_plan();
   // 1. The C-space, the robot's own node, and the C-space piece it is in: a
   // polygon of the C-space is one connected piece, so only its points are reachable.
   auto setup = set_up(passable ? *passable : map, robot, options, cache, passages, plan);
@@ -354,7 +414,8 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     bool approach = false;
     int piece = position ? cspace.piece_of(*position) : -1;
     if (own_piece >= 0 && options.approach_range_m > 0.0 && piece != own_piece) {
-      if (auto a = approach_point(cspace, own_piece, fp.point, options.approach_range_m, obstacles)) {
+      if (auto a = approach_point(cspace, own_piece, fp.point, options.approach_range_m, obstacles,
+                                  cache ? &cache->approaches : nullptr)) {
         position = a;
         piece = own_piece;  // an approach point lies in the robot's piece by construction
         approach = true;

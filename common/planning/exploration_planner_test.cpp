@@ -493,6 +493,57 @@ TEST(PlanPathTo, FindsThePathHomeOrSaysItIsUnreachable) {
   EXPECT_EQ(room.best_candidate(), nullptr);  // behind the 0.5 m neck
 }
 
+// The corridor with the room seen through its door, the door's west side
+// moved to x = door_west_x (the neck stays narrower than the robot for x > 14.86).
+mapping::TypedMultiPolygon corridor_with_a_room_seen_through_a_door_at(double door_west_x) {
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(20, 0), Point(20, 3), Point(15.5, 3), Point(15.5, 4), Point(18, 4), Point(18, 7),
+       Point(14, 7), Point(14, 4), Point(door_west_x, 4), Point(door_west_x, 3), Point(0, 3)},
+      {E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kFrontier,
+       E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}})};
+}
+
+void expect_same_candidates(const Plan& a, const Plan& b) {
+  ASSERT_TRUE(a.ok && b.ok) << a.error << b.error;
+  ASSERT_EQ(a.candidates.size(), b.candidates.size());
+  for (std::size_t i = 0; i < a.candidates.size(); ++i) {
+    EXPECT_TRUE(boost::geometry::equals(a.candidates[i].position, b.candidates[i].position)) << i;
+    EXPECT_EQ(a.candidates[i].approach, b.candidates[i].approach) << i;
+    EXPECT_EQ(a.candidates[i].reachable, b.candidates[i].reachable) << i;
+  }
+  EXPECT_EQ(a.best, b.best);
+  EXPECT_EQ(a.stats.approach_candidates, b.stats.approach_candidates);
+}
+
+// The approach points' tries are kept from one plan to the next while the
+// edges near their frontier point stay the same, and searched afresh when
+// those change: plans are the same with the cache and without.
+TEST(PlanCache, ApproachTriesAreKeptWhileTheFrontiersSurroundingsStayTheSame) {
+  PlanCache cache;
+  const Pose2 robot{2, 1.5, 0};
+  const auto door = corridor_with_a_room_seen_through_a_door_at(15.0);
+  const Plan first = plan_exploration(door, robot, {}, options(), nullptr, nullptr, &cache);
+  expect_same_candidates(first, plan_exploration(door, robot, {}, options()));
+  ASSERT_GE(first.stats.approach_candidates, 1);
+  const auto searched = cache.approaches.counters().searched;
+  EXPECT_GE(searched, 1);
+  EXPECT_EQ(cache.approaches.counters().kept, 0);
+
+  // The same map again (the robot moved on): every search answered from the tries.
+  const Pose2 moved{4, 1.5, 0};
+  expect_same_candidates(plan_exploration(door, moved, {}, options(), nullptr, nullptr, &cache),
+                         plan_exploration(door, moved, {}, options()));
+  EXPECT_EQ(cache.approaches.counters().kept, searched);
+  EXPECT_EQ(cache.approaches.counters().searched, searched);
+
+  // The door's side moved (still too narrow for the robot): the walls near
+  // the room's frontier changed, so it is searched again.
+  const auto narrower = corridor_with_a_room_seen_through_a_door_at(15.1);
+  expect_same_candidates(plan_exploration(narrower, moved, {}, options(), nullptr, nullptr, &cache),
+                         plan_exploration(narrower, moved, {}, options()));
+  EXPECT_GT(cache.approaches.counters().searched, searched);
+}
+
 // The plan cache keeps one visibility cache per clearance, the last two
 // asked for: the normal and the tight plans of a mission do not evict each
 // other's, a third clearance evicts the one used longest ago, and the

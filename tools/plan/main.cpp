@@ -208,6 +208,9 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
   std::printf("offset tiles: %lld kept from an earlier plan, %lld computed%s\n",
               static_cast<long long>(cache.offsets.counters().hits), static_cast<long long>(cache.offsets.counters().misses),
               use_cache ? "" : " (cache off: --no-cache)");
+  std::printf("approach point searches: %lld answered from an earlier plan's tries, %lld searched afresh\n",
+              static_cast<long long>(cache.approaches.counters().kept),
+              static_cast<long long>(cache.approaches.counters().searched));
   const auto visibility = cache.visibility_counters();
   std::printf("path graph segment tests (%lld graphs built): %lld kept from an earlier plan, %lld tested again near "
               "a change, %lld of new pairs; %lld graphs afresh (most of the boundary changed)\n",
