@@ -99,11 +99,12 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
         obstacles.near(mapping::Box(Point(f.x() - window_m, f.y() - window_m), Point(f.x() + window_m, f.y() + window_m)));
     const CSpaceOptions& o = cspace.options();
     memo = &cache->memo(f, o.robot_radius_m + o.clearance_margin_m, range_m);
-    const bool same = memo->tried > 0 && memo->cspace_edges == edges && memo->obstacle_edges == walls;
+    const bool same = memo->filled && memo->cspace_edges == edges && memo->obstacle_edges == walls;
     cache->count(same);
     if (!same) {
       memo->cspace_edges = std::move(edges);
       memo->obstacle_edges = std::move(walls);
+      memo->filled = true;
       memo->tried = 0;
       memo->seen_from.clear();
     }
@@ -142,7 +143,6 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
     if (memo) memo->seen_from.push_back(*inside);
     if (cspace.piece_of(*inside) == piece_index) return inside;
   }
-  if (memo) memo->tried = std::max<std::size_t>(memo->tried, 1);  // searched: even without a single try
   return std::nullopt;
 }
 

@@ -206,6 +206,7 @@ class ApproachCache {
   struct Memo {
     std::vector<double> cspace_edges;    // a, b and whether in the robot's piece, by edge index
     std::vector<double> obstacle_edges;  // a and b, sorted
+    bool filled = false;                 // the edges above are a search's (a new memo's are not)
     std::size_t tried = 0;               // boundary points tried so far, nearest first
     std::vector<Point> seen_from;        // those of them (moved inside) that see the frontier, in order
     std::int64_t last_plan = 0;
