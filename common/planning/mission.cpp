@@ -258,6 +258,8 @@ void Mission::on_pose(const Pose2& pose, std::int64_t utime) {
     const auto cap = static_cast<std::size_t>(2.0 * options_.back_out_m / kTrailStepM) + 2;
     if (trail_.size() > 2 * cap) trail_.erase(trail_.begin(), trail_.end() - static_cast<std::ptrdiff_t>(cap));
   }
+  if (phase_ == Phase::kMoving && goal_)
+    goal_moved_m_ = std::max(goal_moved_m_, distance(Point(pose.x_m, pose.y_m), goal_taken_at_));
   pose_ = pose;
   pose_utime_ = utime;
 }
@@ -641,6 +643,8 @@ void Mission::start_goal(const GoalCandidate& goal, const Plan& plan, std::int64
   progress_goal_ = goal.frontier_point;
   best_remaining_m_ = goal.path_length_m;
   progress_utime_ = now_utime;
+  goal_taken_at_ = Point(pose_->x_m, pose_->y_m);
+  goal_moved_m_ = 0.0;
   // However the goal seems to progress, it gets at most this long (a goal
   // that keeps "moving on" without ever being reached is what makes a robot wander).
   goal_deadline_utime_ = deadline_for(goal.path_length_m, now_utime);
@@ -664,7 +668,17 @@ void Mission::give_up_goal(GiveUp kind, const std::string& why) {
   // after another (intel, greedy: FAILED at coverage 0.993 after five), and
   // each is blacklisted, so they run out; a stuck robot still fails on the
   // goals it makes no progress to.
-  if (kind != GiveUp::kBlocked && ++goal_failures_ >= options_.max_consecutive_failures) {
+  // In the round that retries the goals given up, giving one up again is
+  // what a goal the robot cannot get to ends in, not a robot failing: it is
+  // blacklisted again, the round runs out and the mission ends
+  // DONE_WITH_UNREACHABLE listing it (campus, docs/exploration.md "camp2":
+  // in that round the robot drove 16 m to two such goals by turns, their
+  // paths growing as it went, SLAM's pose 6 m off the truth, and it ended
+  // FAILED at coverage 0.964). A robot that did not get kStuckWithinM from
+  // where it took the goal still counts: it is stuck.
+  const bool stuck = goal_moved_m_ < kStuckWithinM;
+  const bool counts = kind != GiveUp::kBlocked && (!given_up_retried_ || stuck);
+  if (counts && ++goal_failures_ >= options_.max_consecutive_failures) {
     finish(Phase::kFailed,
            "gave up " + std::to_string(goal_failures_) + " goals in a row unreached; the last: " + why,
            now_utime_);

@@ -32,7 +32,9 @@
 //                  of progress (the robot could not get closer: stuck) or
 //                  overdue (it chases frontiers it never reaches), or plans
 //                  failed in a row; goals blocked by a newer map are given up
-//                  and blacklisted but are no failure of the robot
+//                  and blacklisted but are no failure of the robot, nor are
+//                  goals given up again in the round that retries them, unless
+//                  the robot stood (did not get 1 m from where it took the goal)
 //   PAUSED         `pause`: wheels stopped, goal and state kept; `resume` goes on
 //   HOMING / HOME  `home`: back to the pose the mission started at, then stopped;
 //                  with no path home with the margin, planned without it and
@@ -410,6 +412,11 @@ class Mission {
   Point progress_goal_;  // where the goal's frontier point was at the last progress
   std::int64_t progress_utime_ = 0;
   std::int64_t goal_deadline_utime_ = 0;  // given up (no progress) after this, whatever the progress
+  // Where the robot was when it took the goal, and the farthest it has got
+  // from there since: a robot that never got kStuckWithinM away is stuck.
+  Point goal_taken_at_;
+  double goal_moved_m_ = 0.0;
+  static constexpr double kStuckWithinM = 1.0;
   std::int64_t pause_utime_ = 0;
   int goal_candidates_ = 0;
   std::vector<FrontierLeft> frontiers_;

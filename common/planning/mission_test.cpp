@@ -614,6 +614,50 @@ TEST(Mission, AGoalGivenUpIsTriedOnceMoreBeforeTheMissionEnds) {
   EXPECT_EQ(goals_taken, 2);
 }
 
+// The goals given up are tried once more before the mission ends. Given up
+// again while the robot drives (here it paces across the room, so no path
+// gets shorter), they end it DONE_WITH_UNREACHABLE: a goal it could not get
+// to is no robot failing, whatever max_consecutive_failures says. A robot
+// that stands (stuck) in that round still fails.
+Phase retry_round_end(bool robot_paces, std::string* status, GoalOutcomes* outcomes) {
+  MissionOptions o = test_options();
+  o.max_consecutive_failures = 3;  // the first round gives up two goals, the second two more
+  Mission m(o);
+  const auto room = [] {
+    return mapping::TypedMultiPolygon{
+        typed_polygon(rectangle(0, 0, 20, 10, {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier}))};
+  };
+  Phase phase = Phase::kIdle;
+  for (std::int64_t t = 0; t <= 400 * kSecond; t += 100'000) {
+    // Pacing: up and down 2 m about the middle, never nearer either end.
+    const double y = robot_paces ? 5.0 + 2.0 * std::sin(static_cast<double>(t) * 1e-6) : 5.0;
+    m.on_pose(Pose2{10, y, std::numbers::pi / 2}, t);
+    if (t % kSecond == 0) m.on_map(room(), t);
+    const auto out = step_with_inline_planning(m, t);
+    phase = out.phase;
+    *status = out.status;
+    if (is_finished(phase)) break;
+  }
+  *outcomes = m.goal_outcomes();
+  return phase;
+}
+
+TEST(Mission, GoalsGivenUpAgainInTheRetryRoundEndItUnreachableNotFailed) {
+  std::string status;
+  GoalOutcomes outcomes;
+  ASSERT_EQ(retry_round_end(/*robot_paces=*/true, &status, &outcomes), Phase::kDoneWithUnreachable) << status;
+  EXPECT_NE(status.find("2 given up"), std::string::npos) << status;
+  EXPECT_EQ(outcomes.no_progress + outcomes.overdue, 4);  // each end twice
+}
+
+TEST(Mission, AStuckRobotStillFailsInTheRetryRound) {
+  std::string status;
+  GoalOutcomes outcomes;
+  ASSERT_EQ(retry_round_end(/*robot_paces=*/false, &status, &outcomes), Phase::kFailed) << status;
+  EXPECT_NE(status.find("3 goals in a row"), std::string::npos) << status;
+  EXPECT_EQ(outcomes.no_progress + outcomes.overdue, 3);
+}
+
 // No driving blind: with scan_timeout_us set, the robot stands until the
 // first scan, stops when scans stop (map and pose still fresh), and goes on
 // to the same goal when they come back.
