@@ -359,6 +359,47 @@ void choose_by_tour(PathMatrix& matrix, const TourOptions& options, Plan& plan) 
   }
 }
 
+// Step 5 of plan_exploration (PlannerOptions::narrow_gap_tolerance_m): of
+// the candidates without a path (in another piece of the C-space than the
+// robot's start, not an approach point), those still apart from the robot
+// in the C-space of a disk narrow_gap_tolerance_m smaller, without margin,
+// are behind gaps narrower than the robot: out of the candidates, into
+// Plan::behind_narrow_gap_points. `pieces` holds each candidate's piece.
+void settle_behind_narrow_gaps(const TypedMultiPolygon& drivable, const Point& start, const PlannerOptions& options,
+                               const mapping::MultiPolygon* passages, const std::vector<int>& pieces, int own_piece,
+                               Plan& plan) {
+  std::vector<std::size_t> apart;
+  for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
+    const auto& c = plan.candidates[i];
+    if (!c.reachable && !c.blacklisted && !c.approach && pieces[i] >= 0 && pieces[i] != own_piece) apart.push_back(i);
+  }
+  if (apart.empty()) return;
+  CSpaceOptions narrower = options.cspace;
+  narrower.robot_radius_m -= options.narrow_gap_tolerance_m;
+  narrower.clearance_margin_m = 0.0;
+  ConfigurationSpace cspace;
+  if (!cspace.build(drivable, narrower, nullptr, passages).ok) return;
+  const auto robot_at = cspace.nearest_interior_point(start, options.start_snap_distance_m);
+  if (!robot_at) return;
+  const int robot_piece = cspace.piece_of(*robot_at);
+  std::vector<char> behind(plan.candidates.size(), 0);
+  for (const std::size_t i : apart) {
+    // The narrower disk's C-space holds the robot's: a point of it is near.
+    const auto at = cspace.nearest_interior_point(plan.candidates[i].position, options.candidate_snap_distance_m);
+    behind[i] = at && robot_piece >= 0 && cspace.piece_of(*at) != robot_piece;
+  }
+  std::vector<GoalCandidate> kept;
+  for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
+    if (behind[i]) {
+      ++plan.stats.candidates_behind_narrow_gaps;
+      plan.behind_narrow_gap_points.push_back(plan.candidates[i].frontier_point);
+    } else {
+      kept.push_back(std::move(plan.candidates[i]));
+    }
+  }
+  plan.candidates = std::move(kept);
+}
+
 }  // namespace
 
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
@@ -541,6 +582,14 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
         plan.best = static_cast<int>(i);
     }
   }
+
+  // 5. No goal, and no margin that could be what shuts the robot out:
+  // which of the candidates without a path lie behind gaps narrower than
+  // the robot. Only then, so it costs a C-space in the endgame alone (the
+  // tour's order is empty when nothing is reachable: no index moves under it).
+  if (plan.best < 0 && options.narrow_gap_tolerance_m > 0.0 && options.cspace.clearance_margin_m == 0.0 &&
+      own_piece >= 0)
+    settle_behind_narrow_gaps(passable ? *passable : map, *start, options, passages, pieces, own_piece, plan);
   plan.ok = true;
   return plan;
 }

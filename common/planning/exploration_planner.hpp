@@ -101,6 +101,20 @@ struct PlannerOptions {
   // robot deeper into the room it is in; what the rule saves is the trip
   // back for one. 0: none.
   double enclosed_goal_range_m = 0.0;
+  // A plan without the clearance margin that leaves the robot no goal looks
+  // once more at the candidates it has no path to (in another piece of its
+  // C-space, with no approach point): one whose piece stays apart from the
+  // robot's even for a disk this much smaller in radius (no margin, along
+  // the way the robot drove as well) lies *behind a gap narrower than the
+  // robot* — a room seen through a gap between a cabinet and a wall, the
+  // far side of a row of desks. No trip takes the robot or its laser in
+  // there, so such frontiers are listed and, like those behind walls, do not
+  // keep the mission from DONE. A gap within this much of the robot's width
+  // may be the map's noise narrowing a passage it fits through (SLAM's
+  // corrections move a door's sides by centimetres): its frontiers stay
+  // "without a path". 0 = off (docs/exploration.md, "Behind gaps narrower
+  // than the robot").
+  double narrow_gap_tolerance_m = 0.0;
 };
 
 struct GoalCandidate {
@@ -136,6 +150,7 @@ struct PlanStats {
   int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
   int candidates_in_pockets = 0;     // PlannerOptions::reach_past_frontier_m: no disk reaches past them
   int candidates_enclosed = 0;       // PlannerOptions::min_enclosed_area_m2: too little unknown behind them
+  int candidates_behind_narrow_gaps = 0;  // PlannerOptions::narrow_gap_tolerance_m
   // Map polygons whose hole was not looked up (enclosed_areas' work budget,
   // a hostile map): their frontiers and those of the holes around them count
   // as unbounded.
@@ -162,6 +177,9 @@ struct Plan {
   std::vector<Point> pocket_frontier_points;
   // Frontier candidates facing a small enclosed region (PlannerOptions::min_enclosed_area_m2).
   std::vector<Point> enclosed_frontier_points;
+  // Frontier candidates behind gaps narrower than the robot
+  // (PlannerOptions::narrow_gap_tolerance_m).
+  std::vector<Point> behind_narrow_gap_points;
   int best = -1;                        // index into candidates, -1: none reachable
   // kTour: the visiting order (indices into candidates); best is its first,
   // or the nearest when the first is too far (TourOptions::max_first_leg_ratio).

@@ -335,6 +335,58 @@ TEST(PlanExploration, ADoorNarrowerThanTheRobotIsNoPocket) {
   EXPECT_TRUE(plan.candidates[0].reachable);
 }
 
+// With no goal left and no margin, a frontier in a room the robot reaches
+// only through a gap narrower than itself (by more than
+// narrow_gap_tolerance_m) is behind a narrow gap: no candidate, listed. A
+// gap within the tolerance of the robot's width (the map's noise may have
+// narrowed a passage it fits) and a plan with the margin (whose tight plan
+// decides) leave it a candidate without a path.
+PlannerOptions narrow_gap_options(double clearance_margin_m) {
+  PlannerOptions o = options();  // robot radius 0.27 m: 0.54 m across
+  o.cspace.clearance_margin_m = clearance_margin_m;
+  o.narrow_gap_tolerance_m = 0.05;  // gaps under 0.44 m
+  return o;
+}
+
+int far_candidates_without_a_path(const Plan& plan) {
+  int n = 0;
+  for (const auto& c : plan.candidates) n += c.frontier_point.x() > 21.9 && !c.reachable;
+  return n;
+}
+
+TEST(PlanExploration, AFrontierBehindAGapNarrowerThanTheRobotIsNoCandidate) {
+  const Plan plan = plan_exploration(testing::a_room_behind_a_gap(0.3), Pose2{2, 2, 0}, {}, narrow_gap_options(0.0));
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.best, -1);
+  EXPECT_TRUE(plan.candidates.empty());
+  ASSERT_GE(plan.stats.candidates_behind_narrow_gaps, 1);
+  ASSERT_EQ(plan.behind_narrow_gap_points.size(), static_cast<std::size_t>(plan.stats.candidates_behind_narrow_gaps));
+  for (const auto& p : plan.behind_narrow_gap_points) EXPECT_NEAR(p.x(), 22.0, 1e-6);
+}
+
+TEST(PlanExploration, AGapWithinTheToleranceOfTheRobotsWidthLeavesTheFrontierWithoutAPath) {
+  // 0.50 m: the robot (0.54 m) does not pass, a disk 0.44 m across does.
+  const Plan plan = plan_exploration(testing::a_room_behind_a_gap(0.5), Pose2{2, 2, 0}, {}, narrow_gap_options(0.0));
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.candidates_behind_narrow_gaps, 0);
+  EXPECT_GE(far_candidates_without_a_path(plan), 1);
+}
+
+TEST(PlanExploration, APlanWithTheMarginOrTheToleranceOffLeavesTheFrontierWithoutAPath) {
+  const auto map = testing::a_room_behind_a_gap(0.3);
+  const Plan with_margin = plan_exploration(map, Pose2{2, 2, 0}, {}, narrow_gap_options(0.05));
+  ASSERT_TRUE(with_margin.ok) << with_margin.error;
+  EXPECT_EQ(with_margin.stats.candidates_behind_narrow_gaps, 0);
+  EXPECT_GE(far_candidates_without_a_path(with_margin), 1);
+  EXPECT_TRUE(margin_may_block(with_margin));  // the tight plan decides
+  PlannerOptions off = narrow_gap_options(0.0);
+  off.narrow_gap_tolerance_m = 0.0;
+  const Plan plan = plan_exploration(map, Pose2{2, 2, 0}, {}, off);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.candidates_behind_narrow_gaps, 0);
+  EXPECT_GE(far_candidates_without_a_path(plan), 1);
+}
+
 TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
   PlannerOptions o = options();
   o.strategy = GoalStrategy::kGreedy;

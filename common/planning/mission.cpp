@@ -470,6 +470,7 @@ void Mission::list_frontiers(const Plan& plan) {
   for (const auto& p : plan.out_of_view_frontier_points) frontiers_.push_back({p, FrontierReason::kOutOfView});
   for (const auto& p : plan.pocket_frontier_points) frontiers_.push_back({p, FrontierReason::kPocket});
   for (const auto& p : plan.enclosed_frontier_points) frontiers_.push_back({p, FrontierReason::kEnclosed});
+  for (const auto& p : plan.behind_narrow_gap_points) frontiers_.push_back({p, FrontierReason::kBehindNarrowGap});
 }
 
 void Mission::on_select_plan(const Plan& plan, bool tight, std::int64_t now_utime) {
@@ -543,29 +544,34 @@ void Mission::select(const Plan& plan, std::int64_t now_utime) {
     const int out_of_view = plan.stats.candidates_out_of_view;
     const int pockets = plan.stats.candidates_in_pockets;
     const int enclosed = plan.stats.candidates_enclosed;
+    const int behind_gaps = plan.stats.candidates_behind_narrow_gaps;
     // DONE when every frontier goal left has been visited (the robot stood
     // there facing it: the map keeps a frontier the laser could not clear),
     // is out of view (behind a wall, seen from no place the robot can
     // reach: a sliver of a misaligned scan beyond a wall, a room behind a
     // window), is a pocket (no robot reaches past it: the far side of a
-    // gap narrower than the robot) or is enclosed (the unknown behind it is
-    // a small region the map closes in): driving cannot show more of any of
-    // them that the robot could reach, or not enough to be worth a trip. Any
-    // frontier it could not get to (no path, too narrow, given up) makes it
-    // DONE_WITH_UNREACHABLE. Both list them.
+    // gap narrower than the robot), is enclosed (the unknown behind it is
+    // a small region the map closes in) or lies behind a gap narrower than
+    // the robot (a room it sees into but cannot enter): driving cannot show
+    // more of any of them that the robot could reach, or not enough to be
+    // worth a trip. Any frontier it could not get to (no path, too narrow,
+    // given up) makes it DONE_WITH_UNREACHABLE. Both list them.
     const bool nothing_left = no_path == 0 && given_up == 0 && narrow == 0;
     const std::string settled = std::to_string(visited) + " visited without clearing them, " +
                                 std::to_string(out_of_view) + " behind walls, " + std::to_string(pockets) +
                                 " in pockets narrower than the robot, " + std::to_string(enclosed) +
-                                " enclosed in small unknown regions)";
+                                " enclosed in small unknown regions, " + std::to_string(behind_gaps) +
+                                " behind gaps narrower than the robot)";
     std::string why;
-    if (plan.candidates.empty() && narrow == 0 && out_of_view == 0 && pockets == 0 && enclosed == 0) {
+    if (plan.candidates.empty() && narrow == 0 && out_of_view == 0 && pockets == 0 && enclosed == 0 &&
+        behind_gaps == 0) {
       why = "no frontier left";
     } else if (nothing_left) {
-      why = "every frontier left visited, out of view, in a pocket or enclosed (" + settled;
+      why = "every frontier left visited, out of view, in a pocket, enclosed or behind a gap narrower than the robot (";
+      why += settled;
     } else {
       why = std::to_string(plan.candidates.size() +
-                           static_cast<std::size_t>(narrow + out_of_view + pockets + enclosed)) +
+                           static_cast<std::size_t>(narrow + out_of_view + pockets + enclosed + behind_gaps)) +
             " frontier goals left, none reachable (" + std::to_string(no_path) + " without a path, " +
             std::to_string(narrow) + " too narrow for the robot, " + std::to_string(given_up) + " given up, " +
             settled;

@@ -96,6 +96,7 @@ enum class FrontierReason : std::int8_t {
   kOutOfView = 5,
   kPocket = 6,
   kEnclosed = 7,
+  kBehindNarrowGap = 8,
 };
 
 struct FrontierLeft {

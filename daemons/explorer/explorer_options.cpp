@@ -64,6 +64,12 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("min_enclosed_area_m2", planner.min_enclosed_area_m2, in_range(0.0, 1000.0));
   planner.enclosed_goal_range_m =
       config.get<double>("enclosed_goal_range_m", planner.enclosed_goal_range_m, in_range(0.0, 1000.0));
+  planner.narrow_gap_tolerance_m =
+      config.get<double>("narrow_gap_tolerance_m", planner.narrow_gap_tolerance_m, in_range(0.0, 1.0));
+  if (planner.narrow_gap_tolerance_m >= cspace.robot_radius_m)
+    throw runtime::ConfigError(config.origin() +
+                               ": narrow_gap_tolerance_m must be less than robot_radius_m (the narrower disk it "
+                               "checks gaps with keeps a radius)");
   if (planner.reach_past_frontier_m >= cspace.robot_radius_m)
     throw runtime::ConfigError(config.origin() +
                                ": reach_past_frontier_m must be less than robot_radius_m (the disk reaches past a "

@@ -1,13 +1,15 @@
 // pex-plan --log IN.lcm [--config explorer.toml] [--pose-channel SIM_TRUTH]
-//          [--utime T] [--tight] [--svg OUT.svg]
+//          [--utime T] [--tight] [--blacklist-from-log] [--svg OUT.svg]
 // Runs the explorer's planner, offline, on a MAP of an LCM log: the last MAP
 // (or the last one at or before --utime) and the newest pose on the pose
 // channel at that time, with the planner options of an explorer config. It
 // prints every frontier goal candidate (where, reachable or why not, path
 // length) and the C-space pieces, and can draw map, C-space, candidates and
 // the chosen path to SVG: how to see why a mission ended where it did.
+// --blacklist-from-log takes the goals the log's last EXPLORE_STATE (up to
+// the map) lists as visited or given up as the blacklist, as the mission had it.
 //
-// pex-plan --log IN.lcm --every-map [--config ...] [--strategy tour]
+// pex-plan --log IN.lcm --every-map [--config ...] [--strategy tour] [--plans-csv F]
 // Plans, as the explorer's worker does (the newest pose and LIDAR_SCAN's live
 // view at each MAP), on every MAP of a mission's log, and prints the planner's
 // CPU time per plan (p50 / p99 / max) and the slowest maps' utimes: the plan-time
@@ -232,7 +234,7 @@ int main(int argc, char** argv) {
   std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path,
       csv_path;
   std::int64_t at_utime = -1;
-  bool tight = false, every_map = false, no_cache = false;
+  bool tight = false, every_map = false, no_cache = false, blacklist_from_log = false;
   std::string strategy;
   app.add_option("--log", log_path, "LCM log with MAP and pose messages")->required();
   app.add_option("--config", config_path, "explorer config (planner options); default: the defaults in code");
@@ -240,6 +242,9 @@ int main(int argc, char** argv) {
   app.add_option("--pose-channel", pose_channel, "channel of the robot's pex.pose_t (SLAM_POSE, SIM_TRUTH)");
   app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
   app.add_flag("--tight", tight, "plan without the clearance margin and along the way the robot drove (the explorer's tight fallback)");
+  app.add_flag("--blacklist-from-log", blacklist_from_log,
+               "blacklist the goals the log's last EXPLORE_STATE up to the map lists as visited or given up (the "
+               "mission's blacklist, as far as it shows it)");
   app.add_option("--svg", svg_path, "draw map, C-space, candidates and the chosen path");
   app.add_flag("--every-map", every_map, "plan on every MAP of the log and print the plan CPU time percentiles");
   app.add_option("--plans-csv", csv_path, "with --every-map: one CSV line per plan (its CPU, map size, candidates, "
@@ -274,6 +279,7 @@ int main(int argc, char** argv) {
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
   std::optional<pex::laser_scan_t> scan, scan_pending;  // the same for LIDAR_SCAN (the live view)
+  std::vector<pex::geometry::Point> blacklist, blacklist_pending;  // --blacklist-from-log
   // The way the robot drove, as the explorer keeps it (a tight plan goes along it).
   pex::explorer::TrailKeeper trails;
   for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
@@ -286,6 +292,15 @@ int main(int argc, char** argv) {
       } catch (const std::invalid_argument&) {
         // refused as the explorer refuses it: the trails stay as they were
       }
+    } else if (blacklist_from_log && e->channel == pex::runtime::channels::kExploreState) {
+      pex::explore_state_t st;
+      if (st.decode(e->data, 0, e->datalen) < 0) continue;
+      if (at_utime >= 0 && st.utime > at_utime) continue;
+      blacklist_pending.clear();
+      for (std::size_t i = 0; i < st.frontier_reason.size() && i < st.frontier_x.size() && i < st.frontier_y.size(); ++i)
+        if (st.frontier_reason[i] == pex::explore_state_t::FRONTIER_VISITED ||
+            st.frontier_reason[i] == pex::explore_state_t::FRONTIER_GIVEN_UP)
+          blacklist_pending.emplace_back(st.frontier_x[i], st.frontier_y[i]);
     } else if (e->channel == pex::runtime::channels::kLidarScan) {
       pex::laser_scan_t s;
       if (s.decode(e->data, 0, e->datalen) < 0) continue;
@@ -304,6 +319,7 @@ int main(int argc, char** argv) {
       map = std::move(m);
       pose = pose_pending;
       scan = scan_pending;
+      blacklist = blacklist_pending;
     }
   }
   if (!map || !pose) {
@@ -327,7 +343,7 @@ int main(int argc, char** argv) {
                               : pex::mapping::MultiPolygon{};
   const auto* passages = corridor.empty() ? nullptr : &corridor;
   const double plan_started_ms = pex::explorer::thread_cpu_ms();
-  const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, {}, planner, live ? &planned_on : nullptr,
+  const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, blacklist, planner, live ? &planned_on : nullptr,
                                                     nullptr, nullptr, passages);
   const double plan_cpu_ms = pex::explorer::thread_cpu_ms() - plan_started_ms;
   pex::planning::ConfigurationSpace cspace;
@@ -335,6 +351,7 @@ int main(int argc, char** argv) {
   std::printf("live view: %s\n", live ? "united into the map (newest LIDAR_SCAN)"
                                       : (scan ? "off (live_view_range_m = 0)" : "none (no LIDAR_SCAN)"));
   std::printf("plan: %.1f ms CPU (no cache, as a first plan)\n", plan_cpu_ms);
+  if (blacklist_from_log) std::printf("blacklist: %zu goals visited or given up (EXPLORE_STATE)\n", blacklist.size());
   if (tight)
     std::printf("trail: %s\n", !trail ? "none for the map's particle and generation"
                                        : (std::to_string(trail->size()) + " points, corridor " +

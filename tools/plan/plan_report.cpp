@@ -46,10 +46,10 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   }
   out += format(
       "frontiers: %d chains (%d too short), %zu candidates, %d approach points, %d with no C-space near, %d out of "
-      "view (behind a wall), %d in pockets, %d enclosed\n",
+      "view (behind a wall), %d in pockets, %d enclosed, %d behind gaps narrower than the robot\n",
       plan.stats.frontier_chains, plan.stats.chains_too_short, plan.candidates.size(), plan.stats.approach_candidates,
       plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view, plan.stats.candidates_in_pockets,
-      plan.stats.candidates_enclosed);
+      plan.stats.candidates_enclosed, plan.stats.candidates_behind_narrow_gaps);
   if (plan.stats.polygons_not_placed > 0)
     out += format(
         "  %d map polygons not placed in their holes (work budget): their frontiers and the holes' count as "
@@ -77,6 +77,8 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
     out += format("  frontier (%.2f, %.2f): pocket (no robot reaches past it)\n", p.x(), p.y());
   for (const auto& p : plan.enclosed_frontier_points)
     out += format("  frontier (%.2f, %.2f): enclosed (a small unknown region the map closes in)\n", p.x(), p.y());
+  for (const auto& p : plan.behind_narrow_gap_points)
+    out += format("  frontier (%.2f, %.2f): behind a gap narrower than the robot\n", p.x(), p.y());
   return out;
 }
 
@@ -127,6 +129,8 @@ std::string to_svg(const mapping::TypedMultiPolygon& map, const geometry::Pose2&
     out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#8000c0\"/>\n", X(p.x()), Y(p.y()));
   for (const auto& p : plan.enclosed_frontier_points)
     out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#a06000\"/>\n", X(p.x()), Y(p.y()));
+  for (const auto& p : plan.behind_narrow_gap_points)
+    out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#c00060\"/>\n", X(p.x()), Y(p.y()));
   if (const auto* best = plan.best_candidate(); best && best->path.size() >= 2) {
     std::string pts;
     for (const auto& p : best->path) pts += format("%.1f,%.1f ", X(p.x()), Y(p.y()));
