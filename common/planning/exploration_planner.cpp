@@ -364,7 +364,8 @@ void choose_by_tour(PathMatrix& matrix, const TourOptions& options, Plan& plan) 
 // robot's start, not an approach point), those still apart from the robot
 // in the C-space of a disk narrow_gap_tolerance_m smaller, without margin,
 // are behind gaps narrower than the robot: out of the candidates, into
-// Plan::behind_narrow_gap_points. `pieces` holds each candidate's piece.
+// Plan::behind_narrow_gap_points; none while the robot's piece of that
+// C-space is not its largest. `pieces` holds each candidate's piece.
 void settle_behind_narrow_gaps(const TypedMultiPolygon& drivable, const Point& start, const PlannerOptions& options,
                                const mapping::MultiPolygon* passages, const std::vector<int>& pieces, int own_piece,
                                Plan& plan) {
@@ -382,11 +383,19 @@ void settle_behind_narrow_gaps(const TypedMultiPolygon& drivable, const Point& s
   const auto robot_at = cspace.nearest_interior_point(start, options.start_snap_distance_m);
   if (!robot_at) return;
   const int robot_piece = cspace.piece_of(*robot_at);
+  if (robot_piece < 0) return;
+  // A robot in a lesser part of the map is shut in a nook more likely than
+  // the rest of the map is shut off from it (a gap it came through, closed
+  // by a newer map and not on its trail): the mission backs out first.
+  const auto& pieces_of_cspace = cspace.polygons();
+  const double robot_piece_m2 = bg::area(pieces_of_cspace[static_cast<std::size_t>(robot_piece)].geometry);
+  for (const auto& piece : pieces_of_cspace)
+    if (bg::area(piece.geometry) > robot_piece_m2) return;
   std::vector<char> behind(plan.candidates.size(), 0);
   for (const std::size_t i : apart) {
     // The narrower disk's C-space holds the robot's: a point of it is near.
     const auto at = cspace.nearest_interior_point(plan.candidates[i].position, options.candidate_snap_distance_m);
-    behind[i] = at && robot_piece >= 0 && cspace.piece_of(*at) != robot_piece;
+    behind[i] = at && cspace.piece_of(*at) != robot_piece;
   }
   std::vector<GoalCandidate> kept;
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {

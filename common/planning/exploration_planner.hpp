@@ -112,8 +112,10 @@ struct PlannerOptions {
   // keep the mission from DONE. A gap within this much of the robot's width
   // may be the map's noise narrowing a passage it fits through (SLAM's
   // corrections move a door's sides by centimetres): its frontiers stay
-  // "without a path". 0 = off (docs/exploration.md, "Behind gaps narrower
-  // than the robot").
+  // "without a path", as do all while the robot is in a lesser piece of
+  // that C-space than its largest (shut in a nook: the mission backs out
+  // first). 0 = off (docs/exploration.md, "Behind gaps narrower than the
+  // robot").
   double narrow_gap_tolerance_m = 0.0;
 };
 

@@ -339,8 +339,9 @@ TEST(PlanExploration, ADoorNarrowerThanTheRobotIsNoPocket) {
 // only through a gap narrower than itself (by more than
 // narrow_gap_tolerance_m) is behind a narrow gap: no candidate, listed. A
 // gap within the tolerance of the robot's width (the map's noise may have
-// narrowed a passage it fits) and a plan with the margin (whose tight plan
-// decides) leave it a candidate without a path.
+// narrowed a passage it fits), a plan with the margin (whose tight plan
+// decides) and a robot in the lesser part of the map (shut in a nook: the
+// mission backs out first) leave it a candidate without a path.
 PlannerOptions narrow_gap_options(double clearance_margin_m) {
   PlannerOptions o = options();  // robot radius 0.27 m: 0.54 m across
   o.cspace.clearance_margin_m = clearance_margin_m;
@@ -348,14 +349,19 @@ PlannerOptions narrow_gap_options(double clearance_margin_m) {
   return o;
 }
 
-int far_candidates_without_a_path(const Plan& plan) {
+// A hall 20 x 4 m (x = -10 to 10) and, through the gap, a room whose far wall is frontier.
+mapping::TypedMultiPolygon a_room_off_a_hall(double gap_m) {
+  return testing::a_room_behind_a_gap(gap_m, -10.0, E::kObstacle, E::kFrontier);
+}
+
+int candidates_without_a_path(const Plan& plan) {
   int n = 0;
-  for (const auto& c : plan.candidates) n += c.frontier_point.x() > 21.9 && !c.reachable;
+  for (const auto& c : plan.candidates) n += !c.reachable;
   return n;
 }
 
 TEST(PlanExploration, AFrontierBehindAGapNarrowerThanTheRobotIsNoCandidate) {
-  const Plan plan = plan_exploration(testing::a_room_behind_a_gap(0.3), Pose2{2, 2, 0}, {}, narrow_gap_options(0.0));
+  const Plan plan = plan_exploration(a_room_off_a_hall(0.3), Pose2{2, 2, 0}, {}, narrow_gap_options(0.0));
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_EQ(plan.best, -1);
   EXPECT_TRUE(plan.candidates.empty());
@@ -366,25 +372,35 @@ TEST(PlanExploration, AFrontierBehindAGapNarrowerThanTheRobotIsNoCandidate) {
 
 TEST(PlanExploration, AGapWithinTheToleranceOfTheRobotsWidthLeavesTheFrontierWithoutAPath) {
   // 0.50 m: the robot (0.54 m) does not pass, a disk 0.44 m across does.
-  const Plan plan = plan_exploration(testing::a_room_behind_a_gap(0.5), Pose2{2, 2, 0}, {}, narrow_gap_options(0.0));
+  const Plan plan = plan_exploration(a_room_off_a_hall(0.5), Pose2{2, 2, 0}, {}, narrow_gap_options(0.0));
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_EQ(plan.stats.candidates_behind_narrow_gaps, 0);
-  EXPECT_GE(far_candidates_without_a_path(plan), 1);
+  EXPECT_GE(candidates_without_a_path(plan), 1);
 }
 
 TEST(PlanExploration, APlanWithTheMarginOrTheToleranceOffLeavesTheFrontierWithoutAPath) {
-  const auto map = testing::a_room_behind_a_gap(0.3);
+  const auto map = a_room_off_a_hall(0.3);
   const Plan with_margin = plan_exploration(map, Pose2{2, 2, 0}, {}, narrow_gap_options(0.05));
   ASSERT_TRUE(with_margin.ok) << with_margin.error;
   EXPECT_EQ(with_margin.stats.candidates_behind_narrow_gaps, 0);
-  EXPECT_GE(far_candidates_without_a_path(with_margin), 1);
+  EXPECT_GE(candidates_without_a_path(with_margin), 1);
   EXPECT_TRUE(margin_may_block(with_margin));  // the tight plan decides
   PlannerOptions off = narrow_gap_options(0.0);
   off.narrow_gap_tolerance_m = 0.0;
   const Plan plan = plan_exploration(map, Pose2{2, 2, 0}, {}, off);
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_EQ(plan.stats.candidates_behind_narrow_gaps, 0);
-  EXPECT_GE(far_candidates_without_a_path(plan), 1);
+  EXPECT_GE(candidates_without_a_path(plan), 1);
+}
+
+TEST(PlanExploration, ARobotInTheLesserPartOfTheMapLeavesTheFrontierWithoutAPath) {
+  // The robot in the 44 m2 room, the frontier on the 80 m2 hall's far wall.
+  const auto map = testing::a_room_behind_a_gap(0.3, -10.0, E::kFrontier, E::kObstacle);
+  const Plan plan = plan_exploration(map, Pose2{16, 2, 0}, {}, narrow_gap_options(0.0));
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.candidates_behind_narrow_gaps, 0);
+  EXPECT_GE(candidates_without_a_path(plan), 1);
+  EXPECT_TRUE(plan.stats.robot_in_a_lesser_piece);
 }
 
 TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {

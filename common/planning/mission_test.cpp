@@ -983,8 +983,8 @@ TEST(Mission, DoneWhenTheOnlyFrontierLeftIsEnclosed) {
   }
 }
 
-// A room explored, and through a 0.3 m gap (the robot is 0.6 m across) a
-// second room whose far wall is frontier: the margin's plan has no path to
+// A hall explored, and through a 0.3 m gap (the robot is 0.6 m across) a
+// room whose far wall is frontier: the margin's plan has no path to
 // it, the plan without the margin neither, even for a disk 0.1 m narrower:
 // behind a gap narrower than the robot, so DONE with it listed. Through a
 // 0.56 m gap (within the tolerance of the robot's width: the map may have
@@ -994,7 +994,8 @@ TEST(Mission, DoneWhenTheOnlyFrontiersLeftAreBehindAGapNarrowerThanTheRobot) {
     MissionOptions o = test_options();  // robot radius 0.3 m, margin 0.05 m
     o.planner.narrow_gap_tolerance_m = 0.05;
     Mission m(o);
-    const auto out = after_two_maps(m, testing::a_room_behind_a_gap(gap_m), Pose2{2, 2, 0});
+    const auto out = after_two_maps(
+        m, testing::a_room_behind_a_gap(gap_m, -10.0, E::kObstacle, E::kFrontier), Pose2{2, 2, 0});
     ASSERT_FALSE(out.frontiers.empty()) << out.status;
     if (gap_m > 0.5) {
       EXPECT_NE(out.phase, Phase::kDone) << out.status;

@@ -82,15 +82,19 @@ inline mapping::TypedMultiPolygon a_room_cut_off_behind_a_slit() {
   return {map};
 }
 
-// A room 10 x 4 m and, through a gap `gap_m` wide in its 1 m thick east
-// wall (centred at y = 2), a second room 11 x 4 m whose far wall (x = 22)
-// is frontier, farther than approach_range_m's 8 m from the first room.
-inline mapping::TypedMultiPolygon a_room_behind_a_gap(double gap_m) {
+// A room from x = west_x to 10, 4 m deep, and, through a gap `gap_m` wide in
+// its 1 m thick east wall (centred at y = 2), a second room 11 x 4 m (x = 11
+// to 22); the first room's west wall and the second's east wall are of the
+// types given. Each wall is farther than approach_range_m's 8 m from the
+// other room when west_x <= 0.
+inline mapping::TypedMultiPolygon a_room_behind_a_gap(double gap_m, double west_x, EdgeType west_wall,
+                                                      EdgeType east_wall) {
   constexpr auto O = EdgeType::kObstacle;
   const double lo = 2.0 - gap_m / 2, hi = 2.0 + gap_m / 2;
-  return {typed_polygon(RingSpec{{Point(0, 0), Point(10, 0), Point(10, lo), Point(11, lo), Point(11, 0), Point(22, 0),
-                                  Point(22, 4), Point(11, 4), Point(11, hi), Point(10, hi), Point(10, 4), Point(0, 4)},
-                                 {O, O, O, O, O, EdgeType::kFrontier, O, O, O, O, O, O}})};
+  return {typed_polygon(RingSpec{{Point(west_x, 0), Point(10, 0), Point(10, lo), Point(11, lo), Point(11, 0),
+                                  Point(22, 0), Point(22, 4), Point(11, 4), Point(11, hi), Point(10, hi), Point(10, 4),
+                                  Point(west_x, 4)},
+                                 {O, O, O, O, O, east_wall, O, O, O, O, O, west_wall}})};
 }
 
 // A 200 x 200 m room with a round hole of `hole_vertices` (radius 95 m
