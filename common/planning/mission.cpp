@@ -248,7 +248,10 @@ void Mission::on_pose(const Pose2& pose, std::int64_t utime) {
   if (pose_ && phase_ != Phase::kWaitingStart) {  // a robot pushed before the start is not the mission's travel
     const double step = std::hypot(pose.x_m - pose_->x_m, pose.y_m - pose_->y_m);
     if (step <= options_.max_travel_step_m) travelled_m_ += step;
-    if (step > options_.max_travel_step_m) trail_.clear();  // the way before the jump is elsewhere in this frame
+    if (step > options_.max_travel_step_m) {  // the way before the jump is elsewhere in this frame
+      trail_.clear();
+      goal_taken_at_ = Point(pose.x_m, pose.y_m);  // and a jump is no move of the robot's
+    }
   }
   if (started_ && (phase_ == Phase::kMoving || phase_ == Phase::kSelecting) && options_.back_out_m > 0.0) {
     constexpr double kTrailStepM = 0.1;

@@ -619,7 +619,8 @@ TEST(Mission, AGoalGivenUpIsTriedOnceMoreBeforeTheMissionEnds) {
 // gets shorter), they end it DONE_WITH_UNREACHABLE: a goal it could not get
 // to is no robot failing, whatever max_consecutive_failures says. A robot
 // that stands (stuck) in that round still fails.
-Phase retry_round_end(bool robot_paces, std::string* status, GoalOutcomes* outcomes) {
+enum class Motion { kPaces, kStands, kStandsWhileSlamJumps };
+Phase retry_round_end(Motion motion, std::string* status, GoalOutcomes* outcomes) {
   MissionOptions o = test_options();
   o.max_consecutive_failures = 3;  // the first round gives up two goals, the second two more
   Mission m(o);
@@ -630,7 +631,10 @@ Phase retry_round_end(bool robot_paces, std::string* status, GoalOutcomes* outco
   Phase phase = Phase::kIdle;
   for (std::int64_t t = 0; t <= 400 * kSecond; t += 100'000) {
     // Pacing: up and down 2 m about the middle, never nearer either end.
-    const double y = robot_paces ? 5.0 + 2.0 * std::sin(static_cast<double>(t) * 1e-6) : 5.0;
+    // Jumps: 3 m across every 2 s, the robot standing.
+    double y = 5.0;
+    if (motion == Motion::kPaces) y += 2.0 * std::sin(static_cast<double>(t) * 1e-6);
+    if (motion == Motion::kStandsWhileSlamJumps && (t / (2 * kSecond)) % 2 == 1) y += 3.0;
     m.on_pose(Pose2{10, y, std::numbers::pi / 2}, t);
     if (t % kSecond == 0) m.on_map(room(), t);
     const auto out = step_with_inline_planning(m, t);
@@ -645,7 +649,7 @@ Phase retry_round_end(bool robot_paces, std::string* status, GoalOutcomes* outco
 TEST(Mission, GoalsGivenUpAgainInTheRetryRoundEndItUnreachableNotFailed) {
   std::string status;
   GoalOutcomes outcomes;
-  ASSERT_EQ(retry_round_end(/*robot_paces=*/true, &status, &outcomes), Phase::kDoneWithUnreachable) << status;
+  ASSERT_EQ(retry_round_end(Motion::kPaces, &status, &outcomes), Phase::kDoneWithUnreachable) << status;
   EXPECT_NE(status.find("2 given up"), std::string::npos) << status;
   EXPECT_EQ(outcomes.no_progress + outcomes.overdue, 4);  // each end twice
 }
@@ -653,9 +657,11 @@ TEST(Mission, GoalsGivenUpAgainInTheRetryRoundEndItUnreachableNotFailed) {
 TEST(Mission, AStuckRobotStillFailsInTheRetryRound) {
   std::string status;
   GoalOutcomes outcomes;
-  ASSERT_EQ(retry_round_end(/*robot_paces=*/false, &status, &outcomes), Phase::kFailed) << status;
-  EXPECT_NE(status.find("3 goals in a row"), std::string::npos) << status;
-  EXPECT_EQ(outcomes.no_progress + outcomes.overdue, 3);
+  for (const Motion motion : {Motion::kStands, Motion::kStandsWhileSlamJumps}) {  // a jump is no move
+    ASSERT_EQ(retry_round_end(motion, &status, &outcomes), Phase::kFailed) << status;
+    EXPECT_NE(status.find("3 goals in a row"), std::string::npos) << status;
+    EXPECT_EQ(outcomes.no_progress + outcomes.overdue, 3);
+  }
 }
 
 // No driving blind: with scan_timeout_us set, the robot stands until the
