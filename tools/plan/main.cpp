@@ -296,11 +296,7 @@ int main(int argc, char** argv) {
       pex::explore_state_t st;
       if (st.decode(e->data, 0, e->datalen) < 0) continue;
       if (at_utime >= 0 && st.utime > at_utime) continue;
-      blacklist_pending.clear();
-      for (std::size_t i = 0; i < st.frontier_reason.size() && i < st.frontier_x.size() && i < st.frontier_y.size(); ++i)
-        if (st.frontier_reason[i] == pex::explore_state_t::FRONTIER_VISITED ||
-            st.frontier_reason[i] == pex::explore_state_t::FRONTIER_GIVEN_UP)
-          blacklist_pending.emplace_back(st.frontier_x[i], st.frontier_y[i]);
+      blacklist_pending = pex::plan_tool::blacklist_of(st);
     } else if (e->channel == pex::runtime::channels::kLidarScan) {
       pex::laser_scan_t s;
       if (s.decode(e->data, 0, e->datalen) < 0) continue;

@@ -82,6 +82,16 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   return out;
 }
 
+std::vector<planning::Point> blacklist_of(const pex::explore_state_t& state) {
+  std::vector<planning::Point> out;
+  const std::size_t n = std::min({state.frontier_x.size(), state.frontier_y.size(), state.frontier_reason.size()});
+  for (std::size_t i = 0; i < n; ++i)
+    if (state.frontier_reason[i] == pex::explore_state_t::FRONTIER_VISITED ||
+        state.frontier_reason[i] == pex::explore_state_t::FRONTIER_GIVEN_UP)
+      out.emplace_back(state.frontier_x[i], state.frontier_y[i]);
+  return out;
+}
+
 std::string to_svg(const mapping::TypedMultiPolygon& map, const geometry::Pose2& robot,
                    const planning::ConfigurationSpace& cspace, const planning::Plan& plan, double pixels_per_m) {
   bg::model::box<Point> box;

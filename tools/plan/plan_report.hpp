@@ -3,7 +3,9 @@
 // text (every candidate, reachable or why not) and as SVG (free space,
 // obstacle and frontier edges, the C-space pieces, candidates, the path).
 #include <string>
+#include <vector>
 
+#include <pex/explore_state_t.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
 
@@ -17,6 +19,11 @@ namespace pex::plan_tool {
 // reachable with path length and cost, or "no path", and the best one.
 std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
                      const planning::ConfigurationSpace& cspace, const planning::Plan& plan);
+
+// The mission's blacklist as an EXPLORE_STATE shows it: the frontier goals
+// it lists as visited or given up (pex-plan --blacklist-from-log). Entries
+// past the shortest of the frontier arrays (a malformed message) are ignored.
+std::vector<planning::Point> blacklist_of(const pex::explore_state_t& state);
 
 std::string to_svg(const mapping::TypedMultiPolygon& map, const geometry::Pose2& robot,
                    const planning::ConfigurationSpace& cspace, const planning::Plan& plan,

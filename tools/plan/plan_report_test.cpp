@@ -115,3 +115,21 @@ TEST(PlanReport, SvgDrawsEdgesCandidatesAndThePath) {
   ASSERT_NE(path_start, std::string::npos);
   EXPECT_NE(big.find("Z \" fill", path_start), std::string::npos);
 }
+
+TEST(PlanReport, TheBlacklistIsTheGoalsTheStateListsAsVisitedOrGivenUp) {
+  pex::explore_state_t state{};
+  state.frontier_x = {1.0, 2.0, 3.0, 4.0};
+  state.frontier_y = {-1.0, -2.0, -3.0, -4.0};
+  state.frontier_reason = {pex::explore_state_t::FRONTIER_VISITED, pex::explore_state_t::FRONTIER_NO_PATH,
+                           pex::explore_state_t::FRONTIER_GIVEN_UP, pex::explore_state_t::FRONTIER_REACHABLE};
+  state.nfrontiers = 4;
+  auto blacklist = pex::plan_tool::blacklist_of(state);
+  ASSERT_EQ(blacklist.size(), 2u);
+  EXPECT_EQ(blacklist[0].x(), 1.0);
+  EXPECT_EQ(blacklist[1].y(), -3.0);
+  state.frontier_reason.resize(2);  // a malformed message: the arrays disagree
+  blacklist = pex::plan_tool::blacklist_of(state);
+  ASSERT_EQ(blacklist.size(), 1u);
+  EXPECT_EQ(blacklist[0].x(), 1.0);
+}
+
