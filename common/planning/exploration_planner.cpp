@@ -359,6 +359,15 @@ void choose_by_tour(PathMatrix& matrix, const TourOptions& options, Plan& plan) 
   }
 }
 
+// Whether `piece` (an index into cspace.polygons()) is smaller than the
+// C-space's largest piece (PlanStats::robot_in_a_lesser_piece).
+bool is_a_lesser_piece(const ConfigurationSpace& cspace, int piece) {
+  const auto& pieces = cspace.polygons();
+  const double area_m2 = bg::area(pieces[static_cast<std::size_t>(piece)].geometry);
+  return std::any_of(pieces.begin(), pieces.end(),
+                     [&](const auto& other) { return bg::area(other.geometry) > area_m2; });
+}
+
 // Step 5 of plan_exploration (PlannerOptions::narrow_gap_tolerance_m): of
 // the candidates without a path (in another piece of the C-space than the
 // robot's start, not an approach point), those still apart from the robot
@@ -387,10 +396,7 @@ void settle_behind_narrow_gaps(const TypedMultiPolygon& drivable, const Point& s
   // A robot in a lesser part of the map is shut in a nook more likely than
   // the rest of the map is shut off from it (a gap it came through, closed
   // by a newer map and not on its trail): the mission backs out first.
-  const auto& pieces_of_cspace = cspace.polygons();
-  const double robot_piece_m2 = bg::area(pieces_of_cspace[static_cast<std::size_t>(robot_piece)].geometry);
-  for (const auto& piece : pieces_of_cspace)
-    if (bg::area(piece.geometry) > robot_piece_m2) return;
+  if (is_a_lesser_piece(cspace, robot_piece)) return;
   std::vector<char> behind(plan.candidates.size(), 0);
   for (const std::size_t i : apart) {
     // The narrower disk's C-space holds the robot's: a point of it is near.
@@ -424,13 +430,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   const Point& robot_point = setup->robot_point;
   const std::optional<Point> start = setup->start;
   const int own_piece = cspace.piece_of(*start);
-  {
-    const auto& pieces_of_cspace = cspace.polygons();
-    double largest = 0.0;
-    for (const auto& piece : pieces_of_cspace) largest = std::max(largest, bg::area(piece.geometry));
-    plan.stats.robot_in_a_lesser_piece =
-        own_piece >= 0 && bg::area(pieces_of_cspace[static_cast<std::size_t>(own_piece)].geometry) < largest;
-  }
+  plan.stats.robot_in_a_lesser_piece = own_piece >= 0 && is_a_lesser_piece(cspace, own_piece);
   const ObstacleEdges obstacles(map);
 
   // 2. Candidates on the frontiers, moved into the C-space, or to an
