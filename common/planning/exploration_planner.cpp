@@ -368,43 +368,101 @@ bool is_a_lesser_piece(const ConfigurationSpace& cspace, int piece) {
                      [&](const auto& other) { return bg::area(other.geometry) > area_m2; });
 }
 
-// Step 5 of plan_exploration (PlannerOptions::narrow_gap_tolerance_m): of
-// the candidates without a path (in another piece of the C-space than the
-// robot's start, not an approach point), those still apart from the robot
-// in the C-space of a disk narrow_gap_tolerance_m smaller, without margin,
-// are behind gaps narrower than the robot: out of the candidates, into
-// Plan::behind_narrow_gap_points; none while the robot's piece of that
-// C-space is not its largest. `pieces` holds each candidate's piece.
-void settle_behind_narrow_gaps(const TypedMultiPolygon& drivable, const Point& start, const PlannerOptions& options,
-                               const mapping::MultiPolygon* passages, const std::vector<int>& pieces, int own_piece,
-                               Plan& plan) {
+// Where to look at a gap about the robot's width from: on the narrower
+// disk's shortest path through it, the last point still in the robot's piece
+// of the plan's C-space (the path leaves that piece for good at the gap; the
+// bends before it, round the narrower disk's corners, come back into it),
+// moved into the piece's interior. nullopt if there is none.
+std::optional<Point> gap_mouth(const ConfigurationSpace& cspace, int own_piece, const std::vector<Point>& path) {
+  constexpr double kStepM = 0.05;
+  std::optional<Point> last;
+  for (std::size_t k = 0; k + 1 < path.size(); ++k) {
+    const Point& a = path[k];
+    const Point& b = path[k + 1];
+    const int n = std::max(1, static_cast<int>(std::ceil(distance(a, b) / kStepM)));
+    for (int j = 0; j <= n; ++j) {
+      const double t = static_cast<double>(j) / n;
+      const Point q(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y()));
+      if (cspace.piece_of(q) == own_piece) last = q;
+    }
+  }
+  if (!last) return std::nullopt;
+  const auto inside = cspace.nearest_interior_point(*last, kStepM);
+  if (!inside || cspace.piece_of(*inside) != own_piece) return std::nullopt;
+  return inside;
+}
+
+// Step 5 of plan_exploration (PlannerOptions::narrow_gap_tolerance_m). The
+// candidates without a path (in another piece of the C-space than the
+// robot's start, not an approach point) are looked at in the C-space of a
+// disk narrow_gap_tolerance_m smaller, without margin:
+//  - those still apart from the robot there are behind gaps narrower than
+//    the robot: out of the candidates, into Plan::behind_narrow_gap_points
+//    (only when the plan has no goal);
+//  - those it joins to the robot are behind a gap about the robot's width,
+//    which may be a door the map narrowed: returned with the mouth of that
+//    gap (gap_mouth), for plan_exploration to make them approach points
+//    there (when the plan has no goal, or for the followed goal).
+// Nothing while the robot's piece of that C-space is not its largest.
+// `pieces` holds each candidate's piece.
+std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
+    const ConfigurationSpace& plan_cspace, const TypedMultiPolygon& drivable, const Point& start,
+    const PlannerOptions& options, const GoalFocus* focus, const mapping::MultiPolygon* passages,
+    const std::vector<int>& pieces, int own_piece, Plan& plan) {
   std::vector<std::size_t> apart;
+  bool focus_apart = false;
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
-    if (!c.reachable && !c.blacklisted && !c.approach && pieces[i] >= 0 && pieces[i] != own_piece) apart.push_back(i);
+    if (!c.reachable && !c.blacklisted && !c.approach && pieces[i] >= 0 && pieces[i] != own_piece) {
+      apart.push_back(i);
+      focus_apart = focus_apart || (focus && focus->matches(c));
+    }
   }
-  if (apart.empty()) return;
+  const bool no_goal = plan.best < 0;
+  if (apart.empty() || (!no_goal && !focus_apart)) return {};
   CSpaceOptions narrower = options.cspace;
   narrower.robot_radius_m -= options.narrow_gap_tolerance_m;
   narrower.clearance_margin_m = 0.0;
   ConfigurationSpace cspace;
-  if (!cspace.build(drivable, narrower, nullptr, passages).ok) return;
+  if (!cspace.build(drivable, narrower, nullptr, passages).ok) return {};
   const auto robot_at = cspace.nearest_interior_point(start, options.start_snap_distance_m);
-  if (!robot_at) return;
+  if (!robot_at) return {};
   const int robot_piece = cspace.piece_of(*robot_at);
-  if (robot_piece < 0) return;
+  if (robot_piece < 0) return {};
   // A robot in a lesser part of the map is shut in a nook more likely than
   // the rest of the map is shut off from it (a gap it came through, closed
   // by a newer map and not on its trail): the mission backs out first.
-  if (is_a_lesser_piece(cspace, robot_piece)) return;
+  if (is_a_lesser_piece(cspace, robot_piece)) return {};
   std::vector<char> behind(plan.candidates.size(), 0);
+  std::vector<std::size_t> within;  // joined to the robot by the narrower disk
+  std::vector<Point> within_at;
   for (const std::size_t i : apart) {
     // The narrower disk's C-space holds the robot's: a point of it is near.
     const auto at = cspace.nearest_interior_point(plan.candidates[i].position, options.candidate_snap_distance_m);
-    behind[i] = at && cspace.piece_of(*at) != robot_piece;
+    if (!at) continue;
+    if (cspace.piece_of(*at) != robot_piece) {
+      behind[i] = no_goal;
+    } else if (no_goal || focus->matches(plan.candidates[i])) {
+      within.push_back(i);
+      within_at.push_back(*at);
+    }
+  }
+  std::vector<std::pair<std::size_t, Point>> mouths;
+  if (!within.empty()) {
+    PathMatrixOptions row;
+    row.between_targets = false;
+    const PathMatrix through = shortest_path_matrix(cspace, *robot_at, within_at, row);
+    plan.stats.segment_tests += through.segment_tests;
+    for (std::size_t k = 0; k < within.size(); ++k) {
+      if (through.path_from_start[k].empty()) continue;
+      if (const auto mouth = gap_mouth(plan_cspace, own_piece, through.path_from_start[k]))
+        mouths.emplace_back(within[k], *mouth);
+    }
   }
   std::vector<GoalCandidate> kept;
+  std::vector<std::size_t> new_index(plan.candidates.size(), 0);
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
+    new_index[i] = kept.size();
     if (behind[i]) {
       ++plan.stats.candidates_behind_narrow_gaps;
       plan.behind_narrow_gap_points.push_back(plan.candidates[i].frontier_point);
@@ -413,6 +471,8 @@ void settle_behind_narrow_gaps(const TypedMultiPolygon& drivable, const Point& s
     }
   }
   plan.candidates = std::move(kept);
+  for (auto& [i, mouth] : mouths) i = new_index[i];
+  return mouths;
 }
 
 }  // namespace
@@ -596,9 +656,43 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   // which of the candidates without a path lie behind gaps narrower than
   // the robot. Only then, so it costs a C-space in the endgame alone (the
   // tour's order is empty when nothing is reachable: no index moves under it).
-  if (plan.best < 0 && options.narrow_gap_tolerance_m > 0.0 && options.cspace.clearance_margin_m == 0.0 &&
-      own_piece >= 0)
-    settle_behind_narrow_gaps(passable ? *passable : map, *start, options, passages, pieces, own_piece, plan);
+  if ((plan.best < 0 || focus) && options.narrow_gap_tolerance_m > 0.0 &&
+      options.cspace.clearance_margin_m == 0.0 && own_piece >= 0) {
+    const auto mouths = settle_behind_narrow_gaps(cspace, passable ? *passable : map, *start, options, focus,
+                                                  passages, pieces, own_piece, plan);
+    // A candidate behind a gap about the robot's width is approached at the
+    // gap's mouth: from there the laser sees through the gap, the live view
+    // (mission.hpp) opens it as wide as it is, and the next plan goes
+    // through if the robot fits. Once: the mouth reached is blacklisted.
+    std::vector<Point> views;
+    for (const auto& [i, mouth] : mouths) views.push_back(mouth);
+    PathMatrixOptions row;
+    row.between_targets = false;
+    PathMatrix to_mouths;
+    if (!views.empty()) to_mouths = shortest_path_matrix(cspace, *start, views, row, visibility);
+    plan.stats.segment_tests += to_mouths.segment_tests;
+    for (std::size_t k = 0; k < mouths.size(); ++k) {
+      if (!std::isfinite(to_mouths.from_start_m[k])) continue;
+      auto& c = plan.candidates[mouths[k].first];
+      c.position = mouths[k].second;
+      c.approach = c.gap_mouth = c.reachable = true;
+      for (const auto& b : blacklist)
+        if (distance(b, c.position) <= options.blacklist_radius_m) c.blacklisted = true;
+      c.cost = cost_of(to_mouths.from_start_m[k], to_mouths.path_from_start[k]);
+      c.path = std::move(to_mouths.path_from_start[k]);
+      c.path_length_m = to_mouths.from_start_m[k] + lead_m;
+      if (lead_m > 0.0) c.path.insert(c.path.begin(), robot_point);
+      ++plan.stats.gap_mouth_candidates;
+    }
+    if (plan.best < 0) {
+      for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
+        const auto& c = plan.candidates[i];
+        if (!c.gap_mouth || c.blacklisted) continue;
+        if (plan.best < 0 || c.cost < plan.candidates[static_cast<std::size_t>(plan.best)].cost)
+          plan.best = static_cast<int>(i);
+      }
+    }
+  }
   plan.ok = true;
   return plan;
 }

@@ -111,11 +111,13 @@ struct PlannerOptions {
   // there, so such frontiers are listed and, like those behind walls, do not
   // keep the mission from DONE. A gap within this much of the robot's width
   // may be the map's noise narrowing a passage it fits through (SLAM's
-  // corrections move a door's sides by centimetres): its frontiers stay
-  // "without a path", as do all while the robot is in a lesser piece of
-  // that C-space than its largest (shut in a nook: the mission backs out
-  // first). 0 = off (docs/exploration.md, "Behind gaps narrower than the
-  // robot").
+  // corrections move a door's sides by centimetres): its frontiers get an
+  // approach point at the gap's mouth (GoalCandidate::gap_mouth), where the
+  // laser sees the gap as wide as it is, once; also for the goal followed
+  // (GoalFocus) when the plan has others. Nothing of this while the robot
+  // is in a lesser piece of that C-space than its largest (shut in a nook:
+  // the mission backs out first). 0 = off (docs/exploration.md, "Behind
+  // gaps narrower than the robot").
   double narrow_gap_tolerance_m = 0.0;
 };
 
@@ -126,6 +128,10 @@ struct GoalCandidate {
   // there is none): `position` is instead the nearest point of the robot's
   // own C-space piece from which the frontier point is in view.
   bool approach = false;
+  // ... an approach point at the mouth of a gap about the robot's width
+  // (PlannerOptions::narrow_gap_tolerance_m): the gap may be a door the map
+  // narrowed, and the laser sees it as wide as it is from there.
+  bool gap_mouth = false;
   int chain = -1;               // frontier chain index
   double chain_length_m = 0.0;  // length of that frontier chain
   // The unknown region behind that chain, when the map encloses it
@@ -153,6 +159,7 @@ struct PlanStats {
   int candidates_in_pockets = 0;     // PlannerOptions::reach_past_frontier_m: no disk reaches past them
   int candidates_enclosed = 0;       // PlannerOptions::min_enclosed_area_m2: too little unknown behind them
   int candidates_behind_narrow_gaps = 0;  // PlannerOptions::narrow_gap_tolerance_m
+  int gap_mouth_candidates = 0;  // moved to the mouth of a gap about the robot's width (GoalCandidate::gap_mouth)
   // Map polygons whose hole was not looked up (enclosed_areas' work budget,
   // a hostile map): their frontiers and those of the holes around them count
   // as unbounded.

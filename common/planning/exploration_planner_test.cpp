@@ -339,9 +339,10 @@ TEST(PlanExploration, ADoorNarrowerThanTheRobotIsNoPocket) {
 // only through a gap narrower than itself (by more than
 // narrow_gap_tolerance_m) is behind a narrow gap: no candidate, listed. A
 // gap within the tolerance of the robot's width (the map's noise may have
-// narrowed a passage it fits), a plan with the margin (whose tight plan
-// decides) and a robot in the lesser part of the map (shut in a nook: the
-// mission backs out first) leave it a candidate without a path.
+// narrowed a passage it fits) is approached at its mouth, once. A plan with
+// the margin (whose tight plan decides) and a robot in the lesser part of
+// the map (shut in a nook: the mission backs out first) leave it a
+// candidate without a path.
 PlannerOptions narrow_gap_options(double clearance_margin_m) {
   PlannerOptions o = options();  // robot radius 0.27 m: 0.54 m across
   o.cspace.clearance_margin_m = clearance_margin_m;
@@ -370,12 +371,70 @@ TEST(PlanExploration, AFrontierBehindAGapNarrowerThanTheRobotIsNoCandidate) {
   for (const auto& p : plan.behind_narrow_gap_points) EXPECT_NEAR(p.x(), 22.0, 1e-6);
 }
 
-TEST(PlanExploration, AGapWithinTheToleranceOfTheRobotsWidthLeavesTheFrontierWithoutAPath) {
+TEST(PlanExploration, AFrontierBehindAGapAboutTheRobotsWidthIsApproachedAtTheGapsMouth) {
   // 0.50 m: the robot (0.54 m) does not pass, a disk 0.44 m across does.
-  const Plan plan = plan_exploration(a_room_off_a_hall(0.5), Pose2{2, 2, 0}, {}, narrow_gap_options(0.0));
+  const Pose2 robot{2, 2, 0};
+  const PlannerOptions o = narrow_gap_options(0.0);
+  const Plan plan = plan_exploration(a_room_off_a_hall(0.5), robot, {}, o);
   ASSERT_TRUE(plan.ok) << plan.error;
   EXPECT_EQ(plan.stats.candidates_behind_narrow_gaps, 0);
+  EXPECT_EQ(candidates_without_a_path(plan), 0);
+  EXPECT_EQ(plan.stats.gap_mouth_candidates, static_cast<int>(plan.candidates.size()));
+  const GoalCandidate* goal = plan.best_candidate();
+  ASSERT_NE(goal, nullptr);
+  EXPECT_TRUE(goal->gap_mouth && goal->approach && goal->reachable);
+  EXPECT_NEAR(goal->frontier_point.x(), 22.0, 1e-6);  // what it is for: the room's far wall
+  // The gap runs x = 10..11, y = 1.75..2.25: the robot stands before it in the hall.
+  EXPECT_GT(goal->position.x(), 9.5);
+  EXPECT_LT(goal->position.x(), 10.0);
+  EXPECT_NEAR(goal->position.y(), 2.0, 0.2);
+  ASSERT_GE(goal->path.size(), 2u);
+  EXPECT_EQ(distance(goal->path.back(), goal->position), 0.0);
+  EXPECT_NEAR(goal->path_length_m, distance(Point(2, 2), goal->position), 1e-6);  // a straight run along the hall
+  // The robot's disk fits everywhere on the way (the C-space of the plan, not the narrower one).
+  ConfigurationSpace cspace;
+  ASSERT_TRUE(cspace.build(a_room_off_a_hall(0.5), o.cspace).ok);
+  for (std::size_t k = 0; k + 1 < goal->path.size(); ++k)
+    for (double t = 0.0; t <= 1.0; t += 0.05)
+      EXPECT_TRUE(cspace.covers(Point(goal->path[k].x() + t * (goal->path[k + 1].x() - goal->path[k].x()),
+                                      goal->path[k].y() + t * (goal->path[k + 1].y() - goal->path[k].y()))));
+
+  // Once: the mouth reached (blacklisted), no goal is left and none is "behind a gap".
+  const Plan again = plan_exploration(a_room_off_a_hall(0.5), robot, {goal->position}, o);
+  ASSERT_TRUE(again.ok) << again.error;
+  EXPECT_EQ(again.best, -1);
+  EXPECT_EQ(again.stats.candidates_behind_narrow_gaps, 0);
+  ASSERT_FALSE(again.candidates.empty());
+  for (const auto& c : again.candidates) EXPECT_TRUE(c.gap_mouth && c.blacklisted);
+}
+
+// A gap about the robot's width is the last resort: while another goal is
+// reachable its frontiers stay without a path, unless one of them is the
+// goal the robot follows (the plan's focus), which keeps its way to the mouth.
+TEST(PlanExploration, AGapsMouthIsAGoalOnlyWhenNoneIsLeftOrWhenItIsTheGoalFollowed) {
+  const auto map = testing::a_room_behind_a_gap(0.5, -10.0, E::kFrontier, E::kFrontier);
+  const Pose2 robot{2, 2, 0};
+  const PlannerOptions o = narrow_gap_options(0.0);
+  const Plan plan = plan_exploration(map, robot, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  ASSERT_NE(plan.best_candidate(), nullptr);
+  EXPECT_LT(plan.best_candidate()->frontier_point.x(), -9.9);  // the hall's west end
+  EXPECT_EQ(plan.stats.gap_mouth_candidates, 0);
   EXPECT_GE(candidates_without_a_path(plan), 1);
+
+  const Plan alone = plan_exploration(a_room_off_a_hall(0.5), robot, {}, o);
+  ASSERT_NE(alone.best_candidate(), nullptr);
+  const GoalFocus focus{alone.best_candidate()->position, alone.best_candidate()->frontier_point, 1.5};
+  const Plan followed = plan_exploration(map, robot, {}, o, nullptr, &focus);
+  ASSERT_TRUE(followed.ok) << followed.error;
+  int matched = 0;
+  for (const auto& c : followed.candidates) {
+    if (!focus.matches(c)) continue;
+    ++matched;
+    EXPECT_TRUE(c.gap_mouth && c.reachable);
+    EXPECT_NEAR(distance(c.position, focus.goal), 0.0, 1e-6);
+  }
+  EXPECT_GE(matched, 1);
 }
 
 TEST(PlanExploration, APlanWithTheMarginOrTheToleranceOffLeavesTheFrontierWithoutAPath) {

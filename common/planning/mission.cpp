@@ -659,7 +659,8 @@ void Mission::start_goal(const GoalCandidate& goal, const Plan& plan, std::int64
   goal_deadline_utime_ = deadline_for(goal.path_length_m, now_utime);
   follower_.set_path(goal.path);
   enter(Phase::kMoving, format("moving to goal (%.2f, %.2f), path %.1f m, %.0f candidates", goal.position.x(),
-                               goal.position.y(), goal.path_length_m, static_cast<double>(plan.candidates.size())));
+                               goal.position.y(), goal.path_length_m, static_cast<double>(plan.candidates.size())) +
+                            (goal.gap_mouth ? ", to look through a gap about the robot's width" : ""));
 }
 
 void Mission::give_up_goal(GiveUp kind, const std::string& why) {

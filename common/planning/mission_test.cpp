@@ -994,7 +994,8 @@ TEST(Mission, DoneWhenTheOnlyFrontierLeftIsEnclosed) {
 // it, the plan without the margin neither, even for a disk 0.1 m narrower:
 // behind a gap narrower than the robot, so DONE with it listed. Through a
 // 0.56 m gap (within the tolerance of the robot's width: the map may have
-// narrowed a door it fits) it stays "without a path": not DONE.
+// narrowed a door it fits) the robot goes to look at the gap from its
+// mouth: not DONE.
 TEST(Mission, DoneWhenTheOnlyFrontiersLeftAreBehindAGapNarrowerThanTheRobot) {
   for (const double gap_m : {0.3, 0.56}) {
     MissionOptions o = test_options();  // robot radius 0.3 m, margin 0.05 m
@@ -1004,8 +1005,10 @@ TEST(Mission, DoneWhenTheOnlyFrontiersLeftAreBehindAGapNarrowerThanTheRobot) {
         m, testing::a_room_behind_a_gap(gap_m, -10.0, E::kObstacle, E::kFrontier), Pose2{2, 2, 0});
     ASSERT_FALSE(out.frontiers.empty()) << out.status;
     if (gap_m > 0.5) {
-      EXPECT_NE(out.phase, Phase::kDone) << out.status;
-      for (const auto& f : out.frontiers) EXPECT_EQ(f.reason, FrontierReason::kNoPath);
+      EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
+      ASSERT_TRUE(out.goal.has_value());
+      EXPECT_GT(out.goal->x(), 9.0);  // the gap runs x = 10..11
+      EXPECT_LT(out.goal->x(), 10.0);
       continue;
     }
     EXPECT_EQ(out.phase, Phase::kDone) << out.status;
@@ -1013,6 +1016,65 @@ TEST(Mission, DoneWhenTheOnlyFrontiersLeftAreBehindAGapNarrowerThanTheRobot) {
     EXPECT_NE(out.status.find(std::to_string(out.frontiers.size()) + " behind gaps narrower than the robot"),
               std::string::npos)
         << out.status;
+  }
+}
+
+// A door 0.66 m wide in the world that the map narrowed to 0.56 m (the robot
+// needs 0.6 m without the margin): its room's frontier has no path, but a
+// disk 0.05 m smaller gets through, so the robot drives to the door's mouth
+// and faces the room. What the laser sees there decides: its live view
+// (PlanRequest::live_view, the door as wide as it is) opens the door and the
+// next plan goes through, without the margin; with no such view the door
+// stays shut, the mouth is not offered again, and the mission ends DONE
+// with the room's frontier listed as visited.
+TEST(Mission, ADoorTheMapNarrowedIsLookedAtFromItsMouthAndGoneThroughIfTheRobotFits) {
+  const auto map = testing::a_room_behind_a_gap(0.56, -10.0, E::kObstacle, E::kFrontier);
+  // The scan at the mouth: the free space through the door as it is (y = 1.67..2.33).
+  const auto door_seen = std::make_shared<const mapping::TypedMultiPolygon>(
+      mapping::TypedMultiPolygon{typed_polygon(rectangle(9.0, 1.67, 12.0, 2.33))});
+  for (const bool laser_sees_through : {true, false}) {
+    SCOPED_TRACE(laser_sees_through);
+    MissionOptions o = test_options();  // robot radius 0.3 m, margin 0.05 m
+    o.planner.cspace.clearance_margin_m = 0.05;
+    o.planner.narrow_gap_tolerance_m = 0.05;
+    Mission m(o);
+    bool at_the_mouth = false;
+    auto planner = [&](PlanRequest request) {
+      if (at_the_mouth && laser_sees_through) request.live_view = door_seen;
+      return compute_plan(request);
+    };
+    m.on_map(map, 0);
+    m.on_pose(Pose2{2, 2, 0}, 0);
+    auto out = step_with_inline_planning(m, 0, planner);
+    ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+    ASSERT_TRUE(out.goal.has_value());
+    const Point mouth = *out.goal;
+    EXPECT_GT(mouth.x(), 9.0);
+    EXPECT_LT(mouth.x(), 10.0);
+    EXPECT_NE(out.status.find("without clearance margin"), std::string::npos) << out.status;
+    // There, facing the room: reached.
+    at_the_mouth = true;
+    m.on_pose(Pose2{mouth.x(), mouth.y(), 0}, kSecond / 2);
+    out = step_with_inline_planning(m, kSecond / 2, planner);
+    ASSERT_EQ(out.phase, Phase::kSelecting) << out.status;
+    ASSERT_NE(out.status.find("reached"), std::string::npos) << out.status;
+    MissionOutput last;
+    for (std::int64_t t = kSecond; t <= 6 * kSecond && last.phase != Phase::kDone && !last.goal; t += kSecond / 2) {
+      if (t % kSecond == 0) m.on_map(map, t);
+      m.on_pose(Pose2{mouth.x(), mouth.y(), 0}, t);
+      last = step_with_inline_planning(m, t, planner);
+    }
+    if (laser_sees_through) {
+      ASSERT_EQ(last.phase, Phase::kMoving) << last.status;
+      ASSERT_TRUE(last.goal.has_value());
+      EXPECT_GT(last.goal->x(), 11.0) << "in the room, through the door";
+      EXPECT_NE(last.status.find("without clearance margin"), std::string::npos) << last.status;
+    } else {
+      ASSERT_EQ(last.phase, Phase::kDone) << last.status;
+      ASSERT_FALSE(last.frontiers.empty());
+      for (const auto& f : last.frontiers) EXPECT_EQ(f.reason, FrontierReason::kVisited);
+      EXPECT_EQ(last.goals.reached, 1);
+    }
   }
 }
 

@@ -6,7 +6,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -51,6 +54,12 @@ std::string make_temp_dir(const std::string& tag) {
   std::string tmpl = (fs::temp_directory_path() / ("pex_" + tag + "_XXXXXX")).string();
   if (!mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed for " + tmpl);
   return tmpl;
+}
+
+ScratchDir::~ScratchDir() {
+  if (::testing::Test::HasFailure() || std::getenv("PEX_KEEP_LOGS")) return;
+  std::error_code ignored;  // a folder that cannot go is litter, not a failure
+  fs::remove_all(path_, ignored);
 }
 
 std::string read_file(const std::string& path) {

@@ -29,6 +29,21 @@ std::string bin_path(const std::string& program);        // build/bin/<program>
 std::string source_path(const std::string& relative);    // repository file
 std::string shared_path(const std::string& relative);    // ../shared file
 std::string make_temp_dir(const std::string& tag);       // fresh folder under $TMPDIR
+
+// A fresh folder under $TMPDIR that goes with its files when the test that
+// made it passed; a failed test (or PEX_KEEP_LOGS set) keeps it to be read.
+// For tests that return early on an ASSERT, which skips a remove_all at the end.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& tag) : path_(make_temp_dir(tag)) {}
+  ~ScratchDir();
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
 std::string read_file(const std::string& path);
 void write_file(const std::string& path, const std::string& text);
 

@@ -68,6 +68,7 @@ class ViewerSet {
   ~ViewerSet() {
     browser_.reset();
     if (viewer_) viewer_->stop();
+    set_.clean_up(::testing::Test::HasFailure());
   }
 
   static SetOptions options() {
@@ -271,7 +272,8 @@ pex::polygon_map_t square_map(double side_m) {
 TEST(ViewerHttp, StateEventsCommandsAndBadInput) {
   std::string why;
   ASSERT_TRUE(in_private_netns(&why)) << why;
-  const std::string dir = make_temp_dir("viewer-http");
+  const ScratchDir scratch("viewer-http");
+  const std::string& dir = scratch.path();
   std::string text = with_key(read_file(sim_config_of("viewer")), "pose_channel", "\"SIM_TRUTH\"");
   text = with_key(text, "max_clients", "1");
   auto viewer = start_daemon("viewer", dir, {}, write_config(dir, "viewer", text));

@@ -39,7 +39,8 @@ bool write_map_log(const std::string& path, const std::vector<pex::polygon_map_t
 TEST(MapTool, SaveFromTheBusReadsBackIntoTheIdenticalMap) {
   std::string why;
   ASSERT_TRUE(pex::testing::in_private_netns(&why)) << why;
-  const std::string dir = pex::testing::make_temp_dir("map-tool-bus");
+  const pex::testing::ScratchDir scratch("map-tool-bus");
+  const std::string& dir = scratch.path();
   pex::testing::Process save({bin_path("pex-map"), "save", dir + "/bus.geojson", "--lcm-url", kTestLcmUrl,
                               "--timeout-s", "30"},
                              dir + "/save.log");
@@ -68,7 +69,8 @@ TEST(MapTool, SaveFromTheBusReadsBackIntoTheIdenticalMap) {
 }
 
 TEST(MapTool, SaveFromALogTakesItsLastMap) {
-  const std::string dir = pex::testing::make_temp_dir("map-tool-log");
+  const pex::testing::ScratchDir scratch("map-tool-log");
+  const std::string& dir = scratch.path();
   auto older = two_rooms_map();  // one ring fewer
   older.rings.pop_back();
   older.nrings = 3;
@@ -82,7 +84,8 @@ TEST(MapTool, SaveFromALogTakesItsLastMap) {
 // pex-map check on a log: every MAP is checked, each invalid one named, and
 // the exit code says whether all were valid.
 TEST(MapTool, CheckNamesEveryInvalidMapOfALog) {
-  const std::string dir = pex::testing::make_temp_dir("map-tool-check");
+  const pex::testing::ScratchDir scratch("map-tool-check");
+  const std::string& dir = scratch.path();
   const auto good = two_rooms_map();
   auto crossed = two_rooms_map();  // the island moved onto the rooms
   for (auto& x : crossed.rings[3].x) x -= 18.0;

@@ -46,10 +46,11 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   }
   out += format(
       "frontiers: %d chains (%d too short), %zu candidates, %d approach points, %d with no C-space near, %d out of "
-      "view (behind a wall), %d in pockets, %d enclosed, %d behind gaps narrower than the robot\n",
+      "view (behind a wall), %d in pockets, %d enclosed, %d behind gaps narrower than the robot, %d approached at "
+      "the mouths of gaps about the robot's width\n",
       plan.stats.frontier_chains, plan.stats.chains_too_short, plan.candidates.size(), plan.stats.approach_candidates,
       plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view, plan.stats.candidates_in_pockets,
-      plan.stats.candidates_enclosed, plan.stats.candidates_behind_narrow_gaps);
+      plan.stats.candidates_enclosed, plan.stats.candidates_behind_narrow_gaps, plan.stats.gap_mouth_candidates);
   if (plan.stats.polygons_not_placed > 0)
     out += format(
         "  %d map polygons not placed in their holes (work budget): their frontiers and the holes' count as "
@@ -59,7 +60,7 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
     const auto& c = plan.candidates[i];
     out += format("  %zu: frontier (%.2f, %.2f) -> (%.2f, %.2f)%s, chain %d (%.2f m", i, c.frontier_point.x(),
-                  c.frontier_point.y(), c.position.x(), c.position.y(), c.approach ? " approach point" : "", c.chain,
+                  c.frontier_point.y(), c.position.x(), c.position.y(), c.gap_mouth ? " approach point at a gap's mouth" : c.approach ? " approach point" : "", c.chain,
                   c.chain_length_m);
     out += std::isfinite(c.enclosed_area_m2) ? format(", encloses %.2f m2): ", c.enclosed_area_m2) : std::string("): ");
     if (c.reachable && std::isfinite(c.path_length_m))
