@@ -372,10 +372,13 @@ bool is_a_lesser_piece(const ConfigurationSpace& cspace, int piece) {
 // disk's shortest path through it, the last point still in the robot's piece
 // of the plan's C-space (the path leaves that piece for good at the gap; the
 // bends before it, round the narrower disk's corners, come back into it),
-// moved into the piece's interior. nullopt if there is none.
+// moved into the piece's interior; where that point has no interior point of
+// the piece near it (a sliver of the piece's edge), the one before it, up to
+// a metre back. nullopt if there is none.
 std::optional<Point> gap_mouth(const ConfigurationSpace& cspace, int own_piece, const std::vector<Point>& path) {
   constexpr double kStepM = 0.05;
-  std::optional<Point> last;
+  constexpr int kTries = 20;
+  std::vector<Point> in_piece;  // the path's samples in the robot's piece, in order
   for (std::size_t k = 0; k + 1 < path.size(); ++k) {
     const Point& a = path[k];
     const Point& b = path[k + 1];
@@ -383,13 +386,14 @@ std::optional<Point> gap_mouth(const ConfigurationSpace& cspace, int own_piece, 
     for (int j = 0; j <= n; ++j) {
       const double t = static_cast<double>(j) / n;
       const Point q(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y()));
-      if (cspace.piece_of(q) == own_piece) last = q;
+      if (cspace.piece_of(q) == own_piece) in_piece.push_back(q);
     }
   }
-  if (!last) return std::nullopt;
-  const auto inside = cspace.nearest_interior_point(*last, kStepM);
-  if (!inside || cspace.piece_of(*inside) != own_piece) return std::nullopt;
-  return inside;
+  for (int tried = 0; tried < kTries && !in_piece.empty(); ++tried, in_piece.pop_back()) {
+    const auto inside = cspace.nearest_interior_point(in_piece.back(), kStepM);
+    if (inside && cspace.piece_of(*inside) == own_piece) return inside;
+  }
+  return std::nullopt;
 }
 
 // Step 5 of plan_exploration (PlannerOptions::narrow_gap_tolerance_m). The
