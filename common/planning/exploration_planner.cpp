@@ -412,7 +412,7 @@ std::optional<Point> gap_mouth(const ConfigurationSpace& cspace, int own_piece, 
 std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
     const ConfigurationSpace& plan_cspace, const TypedMultiPolygon& drivable, const Point& start,
     const PlannerOptions& options, const GoalFocus* focus, const mapping::MultiPolygon* passages,
-    const std::vector<int>& pieces, int own_piece, Plan& plan) {
+    const std::vector<int>& pieces, int own_piece, OffsetTileCache* offsets, Plan& plan) {
   std::vector<std::size_t> apart;
   bool focus_apart = false;
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
@@ -428,7 +428,10 @@ std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
   narrower.robot_radius_m -= options.narrow_gap_tolerance_m;
   narrower.clearance_margin_m = 0.0;
   ConfigurationSpace cspace;
-  if (!cspace.build(drivable, narrower, nullptr, passages).ok) return {};
+  // The offset tiles are kept for this clearance too: the endgame plans with
+  // the margin, without it and with this one by turns, on maps that change
+  // little (OffsetTileCache keeps what the last calls used).
+  if (!cspace.build(drivable, narrower, offsets, passages).ok) return {};
   const auto robot_at = cspace.nearest_interior_point(start, options.start_snap_distance_m);
   if (!robot_at) return {};
   const int robot_piece = cspace.piece_of(*robot_at);
@@ -663,7 +666,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   if ((plan.best < 0 || focus) && options.narrow_gap_tolerance_m > 0.0 &&
       options.cspace.clearance_margin_m == 0.0 && own_piece >= 0) {
     const auto mouths = settle_behind_narrow_gaps(cspace, passable ? *passable : map, *start, options, focus,
-                                                  passages, pieces, own_piece, plan);
+                                                  passages, pieces, own_piece, cache ? &cache->offsets : nullptr, plan);
     // A candidate behind a gap about the robot's width is approached at the
     // gap's mouth: from there the laser sees through the gap, the live view
     // (mission.hpp) opens it as wide as it is, and the next plan goes
