@@ -460,7 +460,12 @@ void Mission::list_frontiers(const Plan& plan) {
   frontiers_.clear();
   for (const auto& c : plan.candidates) {
     FrontierReason why = FrontierReason::kReachable;
-    if (!c.reachable) {
+    if (!c.reachable || (c.blacklisted && c.gap_mouth)) {
+      // A gap's mouth blacklisted: the robot looked through the gap from
+      // there (or could not get there) and has no way through it; whether
+      // the robot's body would pass is not settled, so the frontier is left
+      // without a path, not visited (docs/exploration.md, "A gap about the
+      // robot's width").
       why = FrontierReason::kNoPath;
     } else if (c.blacklisted) {
       bool visited = false;
