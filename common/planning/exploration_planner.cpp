@@ -661,8 +661,10 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
 
   // 5. No goal, and no margin that could be what shuts the robot out:
   // which of the candidates without a path lie behind gaps narrower than
-  // the robot. Only then, so it costs a C-space in the endgame alone (the
-  // tour's order is empty when nothing is reachable: no index moves under it).
+  // the robot, and which behind gaps about its width. Only then (or for the
+  // goal followed, when it is one of the latter), so it costs a C-space in
+  // the endgame alone (candidates are taken out only when there is no goal:
+  // the tour's order is empty then, and no index moves under plan.best).
   if ((plan.best < 0 || focus) && options.narrow_gap_tolerance_m > 0.0 &&
       options.cspace.clearance_margin_m == 0.0 && own_piece >= 0) {
     const auto mouths = settle_behind_narrow_gaps(cspace, passable ? *passable : map, *start, options, focus,
