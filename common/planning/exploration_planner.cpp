@@ -368,6 +368,19 @@ bool is_a_lesser_piece(const ConfigurationSpace& cspace, int piece) {
                      [&](const auto& other) { return bg::area(other.geometry) > area_m2; });
 }
 
+// The index of the cheapest candidate that may be a goal (reachable, not
+// blacklisted) and that `also` accepts; the first of equal costs; -1: none.
+template <class Accept>
+int cheapest_goal(const Plan& plan, Accept also) {
+  int best = -1;
+  for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
+    const auto& c = plan.candidates[i];
+    if (!c.reachable || c.blacklisted || !also(c)) continue;
+    if (best < 0 || c.cost < plan.candidates[static_cast<std::size_t>(best)].cost) best = static_cast<int>(i);
+  }
+  return best;
+}
+
 // Where to look at a gap about the robot's width from: on the narrower
 // disk's shortest path through it, the last point still in the robot's piece
 // of the plan's C-space (the path leaves that piece for good at the gap; the
@@ -507,6 +520,10 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   // behind a thin wall, a misaligned scan's free space beyond one), and a
   // robot sent there stands looking at the wall; such a point is dropped and
   // an approach point, which is in view by construction, tried instead.
+  auto near_the_blacklist = [&](const Point& p) {
+    return std::any_of(blacklist.begin(), blacklist.end(),
+                       [&](const Point& b) { return distance(b, p) <= options.blacklist_radius_m; });
+  };
   const auto chains = frontier_chains(map, &plan.stats.polygons_not_placed);
   plan.stats.frontier_chains = static_cast<int>(chains.size());
   const auto points = frontier_candidates(chains, options.frontier, &plan.stats.chains_too_short);
@@ -575,8 +592,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     c.chain = fp.chain;
     c.chain_length_m = fp.chain_length_m;
     c.enclosed_area_m2 = chains[static_cast<std::size_t>(fp.chain)].enclosed_area_m2;
-    for (const auto& b : blacklist)
-      if (distance(b, c.position) <= options.blacklist_radius_m) c.blacklisted = true;
+    c.blacklisted = near_the_blacklist(c.position);
     plan.candidates.push_back(std::move(c));
     targets.push_back(*position);
     pieces.push_back(piece);
@@ -595,6 +611,15 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     double turn = 0.0;
     if (distance(a, b) > 1e-9) turn = std::abs(geometry::wrap_angle(std::atan2(b.y() - a.y(), b.x() - a.x()) - robot.theta_rad));
     return length_from_start_m + lead_m + options.turn_cost_m_per_rad * turn;
+  };
+  // A candidate's shortest path from start, searched: reachable, with its
+  // cost, and the path from the robot's own point.
+  auto take_path = [&](GoalCandidate& c, double length_from_start_m, std::vector<Point> path_from_start) {
+    c.reachable = true;
+    c.cost = cost_of(length_from_start_m, path_from_start);
+    c.path = std::move(path_from_start);
+    c.path_length_m = length_from_start_m + lead_m;
+    if (lead_m > 0.0) c.path.insert(c.path.begin(), robot_point);
   };
   // Only candidates in the robot's piece of the C-space are searched for: a
   // search for one it cannot reach never bounds itself and settles the whole
@@ -638,11 +663,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       c.reachable = !matrix.all_searched && own_piece >= 0 && pieces[i] == own_piece;
       continue;
     }
-    c.reachable = true;
-    c.cost = cost_of(matrix.from_start_m[i], matrix.path_from_start[i]);
-    c.path = std::move(matrix.path_from_start[i]);
-    c.path_length_m = matrix.from_start_m[i] + lead_m;
-    if (lead_m > 0.0) c.path.insert(c.path.begin(), robot_point);
+    take_path(c, matrix.from_start_m[i], std::move(matrix.path_from_start[i]));
   }
 
   // 4. The goal: the cheapest candidate (greedy), or the first of the
@@ -651,12 +672,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   if (options.strategy == GoalStrategy::kTour) {
     choose_by_tour(matrix, options.tour, plan);
   } else {
-    for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
-      const auto& c = plan.candidates[i];
-      if (!c.reachable || c.blacklisted) continue;
-      if (plan.best < 0 || c.cost < plan.candidates[static_cast<std::size_t>(plan.best)].cost)
-        plan.best = static_cast<int>(i);
-    }
+    plan.best = cheapest_goal(plan, [](const GoalCandidate&) { return true; });
   }
 
   // 5. No goal, and no margin that could be what shuts the robot out:
@@ -684,23 +700,12 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       if (!std::isfinite(to_mouths.from_start_m[k])) continue;
       auto& c = plan.candidates[mouths[k].first];
       c.position = mouths[k].second;
-      c.approach = c.gap_mouth = c.reachable = true;
-      for (const auto& b : blacklist)
-        if (distance(b, c.position) <= options.blacklist_radius_m) c.blacklisted = true;
-      c.cost = cost_of(to_mouths.from_start_m[k], to_mouths.path_from_start[k]);
-      c.path = std::move(to_mouths.path_from_start[k]);
-      c.path_length_m = to_mouths.from_start_m[k] + lead_m;
-      if (lead_m > 0.0) c.path.insert(c.path.begin(), robot_point);
+      c.approach = c.gap_mouth = true;
+      c.blacklisted = near_the_blacklist(c.position);
+      take_path(c, to_mouths.from_start_m[k], std::move(to_mouths.path_from_start[k]));
       ++plan.stats.gap_mouth_candidates;
     }
-    if (plan.best < 0) {
-      for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
-        const auto& c = plan.candidates[i];
-        if (!c.gap_mouth || c.blacklisted) continue;
-        if (plan.best < 0 || c.cost < plan.candidates[static_cast<std::size_t>(plan.best)].cost)
-          plan.best = static_cast<int>(i);
-      }
-    }
+    if (plan.best < 0) plan.best = cheapest_goal(plan, [](const GoalCandidate& c) { return c.gap_mouth; });
   }
   plan.ok = true;
   return plan;

@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <filesystem>
 #include <optional>
 #include <regex>
@@ -184,7 +183,7 @@ class ExplorationSet {
     }
   }
   void clean_up(bool failed) {
-    if (!failed && !std::getenv("PEX_KEEP_LOGS")) std::filesystem::remove_all(dir_);
+    if (!keep_test_dir(failed)) std::filesystem::remove_all(dir_);
   }
 
  private:

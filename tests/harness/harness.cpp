@@ -56,8 +56,10 @@ std::string make_temp_dir(const std::string& tag) {
   return tmpl;
 }
 
+bool keep_test_dir(bool failed) { return failed || std::getenv("PEX_KEEP_LOGS") != nullptr; }
+
 ScratchDir::~ScratchDir() {
-  if (::testing::Test::HasFailure() || std::getenv("PEX_KEEP_LOGS")) return;
+  if (keep_test_dir(::testing::Test::HasFailure())) return;
   std::error_code ignored;  // a folder that cannot go is litter, not a failure
   fs::remove_all(path_, ignored);
 }

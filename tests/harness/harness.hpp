@@ -29,9 +29,12 @@ std::string bin_path(const std::string& program);        // build/bin/<program>
 std::string source_path(const std::string& relative);    // repository file
 std::string shared_path(const std::string& relative);    // ../shared file
 std::string make_temp_dir(const std::string& tag);       // fresh folder under $TMPDIR
+// Whether a test's folder stays after it: when the test failed, or with
+// PEX_KEEP_LOGS set (its daemons' logs are what there is to read).
+bool keep_test_dir(bool failed);
 
-// A fresh folder under $TMPDIR that goes with its files when the test that
-// made it passed; a failed test (or PEX_KEEP_LOGS set) keeps it to be read.
+// A fresh folder under $TMPDIR that goes with its files unless keep_test_dir
+// (the test that made it failed, or PEX_KEEP_LOGS).
 // For tests that return early on an ASSERT, which skips a remove_all at the end.
 class ScratchDir {
  public:
