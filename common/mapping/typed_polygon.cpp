@@ -483,27 +483,11 @@ bool simplify_ring(const Ring& input_ring, const std::vector<EdgeType>& input_ty
   points[n] = points[0];
   keep.assign(n + 1, false);
   keep[0] = keep[n] = true;
-  if (uniform) {
-    // Anchor the farthest vertex from vertex 0 so both halves are open chains.
-    std::size_t far = 1;
-    double best = -1.0;
-    for (std::size_t i = 1; i < n; ++i) {
-      const double d = bg::comparable_distance(points[0], points[i]);
-      if (d > best) best = d, far = i;
-    }
-    keep[far] = true;
-    rdp_keep(points, 0, far, epsilon_m, keep);
-    rdp_keep(points, far, n, epsilon_m, keep);
-  } else {
-    std::size_t run_start = 0;
-    for (std::size_t i = 1; i <= n; ++i) {
-      if (i == n || t[i] != t[run_start]) {
-        keep[i] = true;
-        rdp_keep(points, run_start, i, epsilon_m, keep);
-        run_start = i;
-      }
-    }
-  }
+  // Each run of one type is simplified with its end points fixed.
+  if (!uniform)
+    for (std::size_t i = 1, run_start = 0; i < n; ++i)
+      if (t[i] != t[run_start]) keep[i] = true, run_start = i;
+  rdp_keep_ring(points, epsilon_m, keep);
   out_ring.clear();
   out_types.clear();
   const auto kept = static_cast<std::size_t>(std::count(keep.begin(), keep.begin() + static_cast<std::ptrdiff_t>(n), true));
@@ -550,6 +534,25 @@ void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t l
       stack.push_back({worst_index, b});
     }
   }
+}
+
+void rdp_keep_ring(const std::vector<Point>& points, double epsilon_m, std::vector<bool>& keep) {
+  const std::size_t n = points.size() - 1;
+  if (std::count(keep.begin(), keep.begin() + static_cast<std::ptrdiff_t>(n + 1), true) == 2) {
+    // Anchor the farthest vertex from vertex 0 so both halves are open chains.
+    std::size_t far = 1;
+    double best = -1.0;
+    for (std::size_t i = 1; i < n; ++i) {
+      const double d = bg::comparable_distance(points[0], points[i]);
+      if (d > best) best = d, far = i;
+    }
+    keep[far] = true;
+  }
+  for (std::size_t i = 1, anchor = 0; i <= n; ++i)
+    if (keep[i]) {
+      rdp_keep(points, anchor, i, epsilon_m, keep);
+      anchor = i;
+    }
 }
 
 TypedMultiPolygon simplify_typed(std::span<const TypedPolygon> polygons, double epsilon_m,

@@ -148,5 +148,10 @@ TypedMultiPolygon simplify_typed(std::span<const TypedPolygon> polygons, double 
 // Indices of the points RDP keeps from points[first..last] (both kept).
 void rdp_keep(const std::vector<Point>& points, std::size_t first, std::size_t last,
               double epsilon_m, std::vector<bool>& keep);
+// RDP on a closed ring: points[0..n], points[n] == points[0]. keep[i] true
+// (keep[0] and keep[n] among them) fixes vertex i; between consecutive fixed
+// vertices, the vertices RDP keeps are marked. With only vertex 0 fixed, the
+// vertex farthest from it is fixed too, so both halves are open chains.
+void rdp_keep_ring(const std::vector<Point>& points, double epsilon_m, std::vector<bool>& keep);
 
 }  // namespace pex::mapping

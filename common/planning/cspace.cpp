@@ -172,6 +172,7 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
     how.type_edges = options.edge_types;
     how.tile_m = options.offset_tile_m;
     how.tile_min_vertices = options.offset_tile_min_vertices;
+    how.simplify_epsilon_m = options.simplify_epsilon_m;
     auto offset = options.boost_offset ? mapping::typed_offset(free_space, -shrink_m, options.points_per_circle)
                                        : offset_inward(free_space, how, cache);
     if (!offset.ok) {
@@ -179,10 +180,13 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
       return result;
     }
     polygons_ = std::move(offset.polygons);
+    // offset_inward simplifies (a tiled polygon tile by tile), Boost's does not.
+    if (options.boost_offset && options.simplify_epsilon_m > 0.0)
+      polygons_ = mapping::simplify_typed(polygons_, options.simplify_epsilon_m);
   } else {
     polygons_ = free_space;
+    if (options.simplify_epsilon_m > 0.0) polygons_ = mapping::simplify_typed(polygons_, options.simplify_epsilon_m);
   }
-  if (options.simplify_epsilon_m > 0.0) polygons_ = mapping::simplify_typed(polygons_, options.simplify_epsilon_m);
   // After the simplification: a bridge's narrow corridor would keep the
   // whole polygon it joins from being simplified (simplify_typed keeps a
   // polygon whole when simplifying it would make it invalid).

@@ -293,6 +293,38 @@ TEST(InwardOffset, TilesGiveTheWholePolygonsOffset) {
   }
 }
 
+// Simplified tile by tile (InwardOffset::simplify_epsilon_m), a tiled
+// offset stays within the epsilon of the exact offset: every vertex of it
+// lies within the epsilon of the unsimplified whole offset's boundary (and
+// that set's vertices within the epsilon of its boundary), in as many
+// pieces, valid, with fewer vertices than the tiles unsimplified.
+TEST(InwardOffset, TilesSimplifiedStayWithinTheEpsilon) {
+  const InwardOffset whole = untyped_offset(0.0);
+  const InwardOffset tiled = untyped_offset(1.5);
+  InwardOffset simplified = tiled;
+  simplified.simplify_epsilon_m = 0.01;
+  int map_index = 0;
+  for (const auto& map : oracle_maps()) {
+    SCOPED_TRACE("map " + std::to_string(map_index++));
+    const auto exact = offset_inward(map, whole);
+    const auto raw = offset_inward(map, tiled);
+    const auto simple = offset_inward(map, simplified);
+    ASSERT_TRUE(exact.ok && raw.ok && simple.ok) << exact.error << raw.error << simple.error;
+    ASSERT_FALSE(exact.polygons.empty());
+    EXPECT_EQ(simple.polygons.size(), exact.polygons.size());
+    EXPECT_TRUE(boost::geometry::is_valid(geometry_of(simple)));
+    EXPECT_LT(mapping::vertex_count(simple.polygons), mapping::vertex_count(raw.polygons));
+    double worst = 0.0, worst_back = 0.0;
+    for (const auto& p : simple.polygons)
+      for (const auto& q : p.geometry.outer()) worst = std::max(worst, min_distance_to_edges(q, exact.polygons));
+    for (const auto& p : exact.polygons)
+      for (const auto& q : p.geometry.outer()) worst_back = std::max(worst_back, min_distance_to_edges(q, simple.polygons));
+    // The grid's rounding (10 um) on top.
+    EXPECT_LE(worst, simplified.simplify_epsilon_m + 2e-5);
+    EXPECT_LE(worst_back, simplified.simplify_epsilon_m + 2e-5);
+  }
+}
+
 // Two halls joined by a corridor 0.7 m wide (open for 0.32 m: a strip 6 cm
 // wide): straight along the side of two 1 m tiles, or slanted across the
 // sides of many. One piece, tiled as whole; the halls' middles are tiles
@@ -358,8 +390,13 @@ TEST(InwardOffset, APolygonOfLongEdgesAcrossManyTilesIsOffsetWhole) {
 // cache the offset is the one computed afresh, point for point, and most
 // tiles come from the cache, as the map changes only within the laser's
 // reach of the robot.
-TEST(InwardOffset, ACacheKeepsTilesAndChangesNothing) {
-  const InwardOffset how = untyped_offset(2.0);
+class InwardOffsetCache : public ::testing::TestWithParam<double> {};
+INSTANTIATE_TEST_SUITE_P(Simplified, InwardOffsetCache, ::testing::Values(0.0, 0.01), [](const auto& info) {
+  return info.param > 0.0 ? std::string("ByTheEpsilon") : std::string("Not");
+});
+TEST_P(InwardOffsetCache, KeepsTilesAndChangesNothing) {
+  InwardOffset how = untyped_offset(2.0);
+  how.simplify_epsilon_m = GetParam();
   OffsetTileCache cache;
   std::mt19937_64 rng(5);
   const auto walls = mapping::testing::random_room(40, 10, 8, rng);

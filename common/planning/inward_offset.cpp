@@ -10,6 +10,7 @@
 #include <polyclipping/clipper.hpp>
 
 #include "mapping/edge_reassignment.hpp"
+#include "mapping/typed_polygon.hpp"
 
 namespace pex::planning {
 
@@ -44,6 +45,12 @@ constexpr long long kMaxTiles = 1 << 16;
 // vertex on average (long edges across many tiles: a map nothing like a
 // building's, or hostile) is offset whole, so the keys' size stays bounded.
 constexpr long double kMaxTilesPerEdge = 32;
+// InwardOffset::simplify_epsilon_m on a tiled polygon: its tiles are
+// simplified by the epsilon less this, and the union by this (at most half
+// the epsilon). The union's own vertices are where the tiles' results cross
+// (within a grid unit of a tile's boundary: nearly collinear, and the turn
+// a unit's rounding gives them would make them reflex nodes).
+constexpr double kSeamEpsilonM = 5e-4;
 
 // Finite and within kMaxAbsCoordinateM: on Clipper's grid.
 bool on_grid(const mapping::Point& p) {
@@ -252,24 +259,124 @@ std::size_t OffsetTileCache::entries() const {
 
 namespace {
 
+__extension__ typedef __int128 I128;  // GCC and Clang; -Wpedantic knows no 128-bit type
+
+// 2 x the signed area of triangle (a, b, c), exact: grid coordinates are
+// below 2^47 (kMaxAbsCoordinateM and a tile's growth), their products far
+// below 2^127.
+I128 orientation(const IntPoint& a, const IntPoint& b, const IntPoint& c) {
+  return I128(b.X - a.X) * (c.Y - a.Y) - I128(b.Y - a.Y) * (c.X - a.X);
+}
+
+int sign(I128 v) { return (v > 0) - (v < 0); }
+
+bool on_segment(const IntPoint& a, const IntPoint& b, const IntPoint& p) {
+  return std::min(a.X, b.X) <= p.X && p.X <= std::max(a.X, b.X) && std::min(a.Y, b.Y) <= p.Y &&
+         p.Y <= std::max(a.Y, b.Y);
+}
+
+// Whether the closed segments a-b and c-d meet.
+bool segments_meet(const IntPoint& a, const IntPoint& b, const IntPoint& c, const IntPoint& d) {
+  const int o1 = sign(orientation(a, b, c)), o2 = sign(orientation(a, b, d));
+  const int o3 = sign(orientation(c, d, a)), o4 = sign(orientation(c, d, b));
+  if (o1 != o2 && o3 != o4) return true;
+  return (o1 == 0 && on_segment(a, b, c)) || (o2 == 0 && on_segment(a, b, d)) ||
+         (o3 == 0 && on_segment(c, d, a)) || (o4 == 0 && on_segment(c, d, b));
+}
+
+// Whether two edges of the rings meet anywhere but at the vertex two
+// neighbours of one ring share: a sweep over the edges by x.
+bool rings_meet(const Paths& rings) {
+  struct E {
+    cInt x0, x1;
+    std::uint32_t ring, k;
+  };
+  std::vector<E> edges;
+  for (std::uint32_t r = 0; r < rings.size(); ++r)
+    for (std::uint32_t k = 0; k < rings[r].size(); ++k) {
+      const IntPoint& a = rings[r][k];
+      const IntPoint& b = rings[r][(k + 1) % rings[r].size()];
+      edges.push_back({std::min(a.X, b.X), std::max(a.X, b.X), r, k});
+    }
+  std::sort(edges.begin(), edges.end(), [](const E& a, const E& b) { return a.x0 < b.x0; });
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    const E& e = edges[i];
+    const Path& re = rings[e.ring];
+    const IntPoint& a = re[e.k];
+    const IntPoint& b = re[(e.k + 1) % re.size()];
+    for (std::size_t j = i + 1; j < edges.size() && edges[j].x0 <= e.x1; ++j) {
+      const E& f = edges[j];
+      const Path& rf = rings[f.ring];
+      const IntPoint& c = rf[f.k];
+      const IntPoint& d = rf[(f.k + 1) % rf.size()];
+      if (f.ring == e.ring) {
+        const std::size_t n = re.size();
+        // Neighbours share one vertex: they meet elsewhere only if they overlap.
+        if ((e.k + 1) % n == f.k) {
+          if (sign(orientation(a, b, d)) == 0 && on_segment(a, b, d)) return true;
+          if (sign(orientation(c, d, a)) == 0 && on_segment(c, d, a)) return true;
+          continue;
+        }
+        if ((f.k + 1) % n == e.k) {
+          if (sign(orientation(c, d, b)) == 0 && on_segment(c, d, b)) return true;
+          if (sign(orientation(a, b, c)) == 0 && on_segment(a, b, c)) return true;
+          continue;
+        }
+      }
+      if (segments_meet(a, b, c, d)) return true;
+    }
+  }
+  return false;
+}
+
+// RDP on a closed ring, every vertex `fixed` says kept. Empty: nothing to
+// keep it from (fewer than 3 vertices left, no area, or turned over).
+template <class Fixed>
+Path simplified_ring(const Path& ring, double epsilon_units, Fixed fixed) {
+  const std::size_t n = ring.size();
+  std::size_t start = 0;  // the first vertex fixed, or 0
+  while (start < n && !fixed(ring[start])) ++start;
+  if (start == n) start = 0;
+  // Scratch kept per thread, as simplify_typed's.
+  thread_local std::vector<mapping::Point> points;
+  thread_local std::vector<bool> keep;
+  points.resize(n + 1);
+  keep.assign(n + 1, false);
+  for (std::size_t i = 0; i <= n; ++i) {
+    const IntPoint& q = ring[(start + i) % n];
+    points[i] = mapping::Point(static_cast<double>(q.X), static_cast<double>(q.Y));
+    keep[i] = i == 0 || i == n || fixed(q);
+  }
+  mapping::rdp_keep_ring(points, epsilon_units, keep);
+  Path out;
+  for (std::size_t i = 0; i < n; ++i)
+    if (keep[i]) out.push_back(ring[(start + i) % n]);
+  const double area = out.size() >= 3 ? ClipperLib::Area(out) : 0.0;
+  if (area == 0.0 || (area > 0.0) != (ClipperLib::Area(ring) > 0.0)) return {};
+  return out;
+}
+
 struct Eroder {
   cInt delta = 0;
   double arc_tolerance = 0.0;
   cInt tile = 0;  // 0: no tiles
   int tile_min_vertices = 0;
+  double tile_epsilon = 0.0;  // a tile's simplification, in grid units (0: none)
   OffsetTileCache::Impl* cache = nullptr;
   OffsetTileCache::Counters* counters = nullptr;
 
-  // One polygon's rings, the outer ring first.
-  void polygon(const Paths& rings, mapping::MultiPolygon& out) {
+  // One polygon's rings, the outer ring first. True: offset in tiles.
+  bool polygon(const Paths& rings, mapping::MultiPolygon& out) {
     std::size_t vertices = 0;
     for (const auto& r : rings) vertices += r.size();
     const IntBox box = box_of(rings[0]);
     if (tile > 0 && vertices >= static_cast<std::size_t>(tile_min_vertices) && tiles_over(box) <= kMaxTiles &&
-        edge_listings(rings) <= kMaxTilesPerEdge * static_cast<long double>(vertices))
+        edge_listings(rings) <= kMaxTilesPerEdge * static_cast<long double>(vertices)) {
       tiled(rings, box, out);
-    else
-      whole(rings, out);
+      return true;
+    }
+    whole(rings, out);
+    return false;
   }
 
   // How far a tile's input box reaches beyond the tile.
@@ -383,7 +490,8 @@ struct Eroder {
           continue;
         }
         std::vector<cInt> key = key_head(1, delta, arc_tolerance);
-        key.insert(key.end(), {tile, i0 + static_cast<cInt>(ix), j0 + static_cast<cInt>(iy), inside[t]});
+        key.insert(key.end(), {std::bit_cast<cInt>(tile_epsilon), tile, i0 + static_cast<cInt>(ix),
+                               j0 + static_cast<cInt>(iy), inside[t]});
         key.insert(key.end(), edges[t].begin(), edges[t].end());
         const std::uint64_t hash = cache ? hash_of(key) : 0;
         if (cache)
@@ -422,7 +530,28 @@ struct Eroder {
     if (clipped.empty()) return {};
     Paths eroded;
     erode(clipped, static_cast<double>(delta), arc_tolerance, eroded);
+    if (tile_epsilon > 0.0) simplify_tile(eroded, input.grown(-input_reach()));
     return eroded;
+  }
+
+  // RDP on a tile's result, but for its vertices within kSeamBand of the
+  // tile's sides: there the neighbours' results overlap it (kInputSlack
+  // each way), and with the vertices of both kept there as the offset made
+  // them, the union joins them as it joins the unsimplified results. A
+  // chord from the band inwards moves the boundary by at most the epsilon,
+  // as anywhere. Rings that would cross (RDP does not see other rings) keep
+  // the tile as it was.
+  void simplify_tile(Paths& result, const IntBox& tile_box) const {
+    const cInt band = 2 * kInputSlack + static_cast<cInt>(std::ceil(tile_epsilon));
+    const IntBox inner = tile_box.grown(-band);
+    auto fixed = [&](const IntPoint& p) { return !(inner.x0 < p.X && p.X < inner.x1 && inner.y0 < p.Y && p.Y < inner.y1); };
+    Paths simplified;
+    simplified.reserve(result.size());
+    for (const Path& ring : result) {
+      Path s = simplified_ring(ring, tile_epsilon, fixed);
+      simplified.push_back(s.empty() ? ring : std::move(s));
+    }
+    if (!rings_meet(simplified)) result = std::move(simplified);
   }
 };
 
@@ -450,6 +579,8 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
   // A tile narrower than its input's growth would cost more than it saves.
   if (eroder.tile > 0 && eroder.tile < eroder.delta) eroder.tile = eroder.delta;
   eroder.tile_min_vertices = how.tile_min_vertices;
+  const double seam_epsilon_m = std::min(kSeamEpsilonM, how.simplify_epsilon_m / 2.0);
+  if (how.simplify_epsilon_m > 0.0) eroder.tile_epsilon = (how.simplify_epsilon_m - seam_epsilon_m) * kUnitsPerM;
   if (cache) {
     eroder.cache = cache->impl_.get();
     eroder.counters = &cache->counters_;
@@ -468,6 +599,7 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
   // times the edges across each, so several small sweeps cost less than one
   // across the whole map.
   mapping::MultiPolygon geometry;
+  std::vector<char> from_tiles;  // per polygon of geometry
   try {
     for (const auto& input : free_space) {
       Paths rings;
@@ -477,7 +609,8 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
         rings.push_back(to_clipper(hole));
         if (rings.back().size() < 3) rings.pop_back();
       }
-      eroder.polygon(rings, geometry);
+      const bool tiled = eroder.polygon(rings, geometry);
+      from_tiles.resize(geometry.size(), tiled ? 1 : 0);
     }
   } catch (const std::exception& e) {
     result.error = std::string("offset failed: ") + e.what();
@@ -486,16 +619,28 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
   if (cache) eroder.cache->drop_old();
   if (!how.type_edges) {
     result.polygons = mapping::with_uniform_type(geometry, mapping::EdgeType::kObstacle);
-    result.ok = true;
-    return result;
+  } else {
+    // Each output edge takes the type of the map edge it was offset from.
+    mapping::EdgeTypeIndex index;
+    index.add(free_space);
+    index.build();
+    // The search reaches past distance_m by more than the grid's rounding.
+    result.polygons =
+        mapping::assign_types(geometry, index, how.distance_m + 1e-3, mapping::TypedOpOptions{}, &result.reassign);
   }
-  // Each output edge takes the type of the map edge it was offset from.
-  mapping::EdgeTypeIndex index;
-  index.add(free_space);
-  index.build();
-  // The search reaches past distance_m by more than the grid's rounding.
-  result.polygons =
-      mapping::assign_types(geometry, index, how.distance_m + 1e-3, mapping::TypedOpOptions{}, &result.reassign);
+  if (how.simplify_epsilon_m > 0.0) {
+    // A whole polygon by the epsilon; a tiled one's tiles are simplified
+    // already but for the seams, where the union's vertices also are.
+    mapping::TypedMultiPolygon simplified;
+    simplified.reserve(result.polygons.size());
+    for (std::size_t k = 0; k < result.polygons.size(); ++k) {
+      const bool tiled = k < from_tiles.size() && from_tiles[k];
+      for (auto& p : mapping::simplify_typed(std::span(&result.polygons[k], 1),
+                                             tiled ? seam_epsilon_m : how.simplify_epsilon_m))
+        simplified.push_back(std::move(p));
+    }
+    result.polygons = std::move(simplified);
+  }
   result.ok = true;
   return result;
 }

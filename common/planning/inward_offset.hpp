@@ -31,6 +31,15 @@ struct InwardOffset {
   // at least tile_min_vertices is offset in; 0: every polygon whole.
   double tile_m = 12.0;
   int tile_min_vertices = 400;
+  // > 0: the result simplified (Ramer-Douglas-Peucker), its boundary moving
+  // by at most this much: a polygon offset whole after the offset
+  // (mapping::simplify_typed), a tiled one tile by tile before the tiles are
+  // united (the union then costs a fraction: most of a tile's vertices are
+  // the round joins' arcs), but for the seams: within a band along each
+  // tile's sides its vertices are kept, and the union of the tiles is
+  // simplified by a little (kSeamEpsilonM), the tiles by the rest. A tile
+  // whose simplified rings would cross keeps them as they were.
+  double simplify_epsilon_m = 0.0;
 };
 
 // Offset results kept between calls of offset_inward(): each keyed by the

@@ -9,7 +9,7 @@
 // --blacklist-from-log takes the goals the log's last EXPLORE_STATE (up to
 // the map) lists as visited or given up as the blacklist, as the mission had it.
 //
-// pex-plan --log IN.lcm --every-map [--config ...] [--strategy tour] [--plans-csv F]
+// pex-plan --log IN.lcm --every-map [--config ...] [--strategy tour] [--plans-csv F] [--from-utime T]
 // Plans, as the explorer's worker does (the newest pose and LIDAR_SCAN's live
 // view at each MAP), on every MAP of a mission's log, and prints the planner's
 // CPU time per plan (p50 / p99 / max) and the slowest maps' utimes: the plan-time
@@ -59,7 +59,8 @@ namespace {
 // fallback is a second plan.
 int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::string& map_channel,
                    const std::string& pose_channel, const pex::explorer::ExplorerOptions& options,
-                   const pex::planning::PlannerOptions& planner, bool use_cache, const std::string& csv_path) {
+                   const pex::planning::PlannerOptions& planner, bool use_cache, const std::string& csv_path,
+                   std::int64_t from_utime) {
   // As the explorer's worker keeps it: the C-space's offset tiles and the
   // path graph's segment tests between plans.
   pex::planning::PlanCache cache;
@@ -122,6 +123,7 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
         ++bad_maps;
         continue;
       }
+      if (m.utime < from_utime) continue;  // the slow end of a mission, timed alone
       const auto decoded = pex::explorer::decode_map(m, options.map);
       if (!decoded.ok) {
         ++bad_maps;
@@ -233,7 +235,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Run the explorer's planner on a logged MAP and show why it chose what it chose"};
   std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path,
       csv_path;
-  std::int64_t at_utime = -1;
+  std::int64_t at_utime = -1, from_utime = 0;
   bool tight = false, every_map = false, no_cache = false, blacklist_from_log = false;
   std::string strategy;
   app.add_option("--log", log_path, "LCM log with MAP and pose messages")->required();
@@ -249,6 +251,9 @@ int main(int argc, char** argv) {
   app.add_flag("--every-map", every_map, "plan on every MAP of the log and print the plan CPU time percentiles");
   app.add_option("--plans-csv", csv_path, "with --every-map: one CSV line per plan (its CPU, map size, candidates, "
                  "segment tests, offset tiles computed, path lengths)");
+  app.add_option("--from-utime", from_utime,
+                 "with --every-map: plan only on the maps of this message utime and later (a mission's slow end; the "
+                 "caches start empty there)");
   app.add_flag("--no-cache,--no-offset-cache", no_cache,
                "with --every-map: compute every offset tile and every segment test of the path graph afresh (the "
                "plans must not change)");
@@ -274,7 +279,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pex-plan: cannot read %s\n", log_path.c_str());
     return EX_NOINPUT;
   }
-  if (every_map) return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_cache, csv_path);
+  if (every_map)
+    return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_cache, csv_path, from_utime);
   std::optional<pex::polygon_map_t> map;
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
