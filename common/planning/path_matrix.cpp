@@ -354,6 +354,19 @@ class LazySearch {
       for (std::uint32_t v = r_; v < total; ++v) relax(v);
       if (bound < kInf) {
         reflex_grid_.for_each_within(nodes_[u], bound - d + 1e-9, relax);
+      } else if (u < r_) {
+        // Every reflex node: the corners' test first, for a block at once
+        // (both ends, vectorised, no square root), as pruned_graph_edges
+        // does; relax() repeats it for those it keeps, so the edges tested
+        // are the same. Most of a settled node's pairs end here.
+        constexpr std::uint32_t kBlock = 256;
+        double score[kBlock];
+        for (std::uint32_t first = 0; first < r_; first += kBlock) {
+          const std::uint32_t count = std::min(kBlock, r_ - first);
+          corners_.scores(u, first, count, score);
+          for (std::uint32_t t = 0; t < count; ++t)
+            if (!(score[t] < 0.0)) relax(first + t);
+        }
       } else {
         for (std::uint32_t v = 0; v < r_; ++v) relax(v);
       }
