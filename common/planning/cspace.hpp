@@ -32,8 +32,10 @@ struct CSpaceOptions {
   double clearance_margin_m = 0.05;
   // Vertices of the round joins the offset puts around the map's corners.
   int points_per_circle = 16;
-  // Ramer-Douglas-Peucker tolerance after offsetting (0 = off): fewer
-  // vertices, fewer graph nodes.
+  // Ramer-Douglas-Peucker tolerance of the offset (0 = off): fewer
+  // vertices, fewer graph nodes. A tiled polygon is simplified tile by tile
+  // before the tiles' union (InwardOffset::simplify_epsilon_m), to the same
+  // bound.
   double simplify_epsilon_m = 0.01;
   // Graph nodes on the boundary (reflex vertices, snapped candidates) are
   // moved this far into the interior, so segment tests between them never

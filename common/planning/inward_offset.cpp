@@ -534,13 +534,13 @@ struct Eroder {
     return eroded;
   }
 
-  // RDP on a tile's result, but for its vertices within kSeamBand of the
-  // tile's sides: there the neighbours' results overlap it (kInputSlack
-  // each way), and with the vertices of both kept there as the offset made
-  // them, the union joins them as it joins the unsimplified results. A
-  // chord from the band inwards moves the boundary by at most the epsilon,
-  // as anywhere. Rings that would cross (RDP does not see other rings) keep
-  // the tile as it was.
+  // RDP on a tile's result, but for its vertices within 2 kInputSlack +
+  // the epsilon of the tile's sides: there the neighbours' results overlap
+  // it (kInputSlack each way), and with the vertices of both kept there as
+  // the offset made them, the union joins them as it joins the
+  // unsimplified results. A chord from the band inwards moves the boundary
+  // by at most the epsilon, as anywhere. Rings that would meet (RDP does
+  // not see other rings, nor the rest of its own) keep the tile as it was.
   void simplify_tile(Paths& result, const IntBox& tile_box) const {
     const cInt band = 2 * kInputSlack + static_cast<cInt>(std::ceil(tile_epsilon));
     const IntBox inner = tile_box.grown(-band);
