@@ -285,7 +285,11 @@ bool segments_meet(const IntPoint& a, const IntPoint& b, const IntPoint& c, cons
 }
 
 // Whether two edges of the rings meet anywhere but at the vertex two
-// neighbours of one ring share: a sweep over the edges by x.
+// neighbours of one ring share: a sweep over the edges by x. Rings of long
+// edges side by side (nothing like a building's, or hostile) would make
+// that quadratic: past kMeetTestsPerEdge pairs per edge it answers true
+// (not shown apart), and the caller keeps what it had.
+constexpr std::size_t kMeetTestsPerEdge = 64;
 bool rings_meet(const Paths& rings) {
   struct E {
     cInt x0, x1;
@@ -299,12 +303,14 @@ bool rings_meet(const Paths& rings) {
       edges.push_back({std::min(a.X, b.X), std::max(a.X, b.X), r, k});
     }
   std::sort(edges.begin(), edges.end(), [](const E& a, const E& b) { return a.x0 < b.x0; });
+  std::size_t budget = kMeetTestsPerEdge * edges.size();
   for (std::size_t i = 0; i < edges.size(); ++i) {
     const E& e = edges[i];
     const Path& re = rings[e.ring];
     const IntPoint& a = re[e.k];
     const IntPoint& b = re[(e.k + 1) % re.size()];
     for (std::size_t j = i + 1; j < edges.size() && edges[j].x0 <= e.x1; ++j) {
+      if (budget-- == 0) return true;
       const E& f = edges[j];
       const Path& rf = rings[f.ring];
       const IntPoint& c = rf[f.k];
