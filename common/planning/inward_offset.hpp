@@ -37,8 +37,9 @@ struct InwardOffset {
   // united (the union then costs a fraction: most of a tile's vertices are
   // the round joins' arcs), but for the seams: within a band along each
   // tile's sides its vertices are kept, and the union of the tiles is
-  // simplified by a little (kSeamEpsilonM), the tiles by the rest. A tile
-  // whose simplified rings would cross keeps them as they were.
+  // simplified by a little (kSeamEpsilonM, 0.5 mm), the tiles by the rest.
+  // A tile whose simplified rings would meet, or cannot be shown apart
+  // within 64 pair tests per edge, keeps them as they were.
   double simplify_epsilon_m = 0.0;
 };
 
