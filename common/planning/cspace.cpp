@@ -139,9 +139,119 @@ std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& c
   return united(cspace, bridges);
 }
 
+std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon& cspace, const DrivenWay& way) {
+  const auto& points = way.points;
+  if (points.empty()) return {};
+  const std::vector<Point> all(points.begin(), points.end());
+  mapping::Box box;
+  bg::assign_inverse(box);
+  std::size_t vertices = 0;
+  for (const auto& polygon : cspace) {
+    bg::expand(box, bg::return_envelope<mapping::Box>(polygon.outer()));
+    vertices += polygon.outer().size();
+  }
+  if (vertices == 0) return {all};  // no C-space: all of the way is outside it
+  // A cell is marked when an edge of the C-space may come within `reach` of
+  // it. An unmarked cell holds no point of the C-space's boundary, so it is
+  // wholly inside or wholly outside, and so is every unmarked cell it
+  // shares a side with (the boundary would have to pass that side).
+  const double reach = way.half_width_m + 1e-3;
+  constexpr std::size_t kMaxCells = std::size_t{1} << 22;
+  const double x0 = box.min_corner().x() - 2.0 * reach, y0 = box.min_corner().y() - 2.0 * reach;
+  const double w = box.max_corner().x() - x0 + 2.0 * reach, h = box.max_corner().y() - y0 + 2.0 * reach;
+  double cell = 0.25;
+  if (w * h / (cell * cell) > static_cast<double>(kMaxCells)) cell = std::sqrt(w * h / static_cast<double>(kMaxCells));
+  const int nx = static_cast<int>(std::ceil(w / cell)) + 1, ny = static_cast<int>(std::ceil(h / cell)) + 1;
+  constexpr std::int32_t kMarked = -2, kUnlabelled = -1;
+  std::vector<std::int32_t> label(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), kUnlabelled);
+  auto clamp_x = [&](double x) { return std::clamp(static_cast<int>(std::floor((x - x0) / cell)), 0, nx - 1); };
+  auto clamp_y = [&](double y) { return std::clamp(static_cast<int>(std::floor((y - y0) / cell)), 0, ny - 1); };
+  // Calls f(cx, cy) for the cells of the boxes about the pieces (at most a
+  // cell long) of segment a-b grown by r; false if one is off the grid.
+  auto for_cells = [&](const Point& a, const Point& b, double r, auto&& f) {
+    if (std::min(a.x(), b.x()) - r < x0 || std::min(a.y(), b.y()) - r < y0 ||
+        std::max(a.x(), b.x()) + r >= x0 + nx * cell || std::max(a.y(), b.y()) + r >= y0 + ny * cell)
+      return false;
+    const int pieces = std::max(1, static_cast<int>(std::ceil(distance(a, b) / cell)));
+    for (int k = 0; k < pieces; ++k) {
+      const double t0 = static_cast<double>(k) / pieces, t1 = static_cast<double>(k + 1) / pieces;
+      const double ax = a.x() + t0 * (b.x() - a.x()), ay = a.y() + t0 * (b.y() - a.y());
+      const double bx = a.x() + t1 * (b.x() - a.x()), by = a.y() + t1 * (b.y() - a.y());
+      const double lx = std::min(ax, bx) - r, hx = std::max(ax, bx) + r;
+      const double ly = std::min(ay, by) - r, hy = std::max(ay, by) + r;
+      for (int cy = clamp_y(ly); cy <= clamp_y(hy); ++cy)
+        for (int cx = clamp_x(lx); cx <= clamp_x(hx); ++cx)
+          if (!f(cx, cy)) return false;
+    }
+    return true;
+  };
+  auto at = [&](int cx, int cy) -> std::int32_t& {
+    return label[static_cast<std::size_t>(cy) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(cx)];
+  };
+  auto mark_ring = [&](const mapping::Ring& ring) {
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i)
+      for_cells(ring[i], ring[i + 1], reach, [&](int cx, int cy) {
+        at(cx, cy) = kMarked;
+        return true;
+      });
+  };
+  for (const auto& polygon : cspace) {
+    mark_ring(polygon.outer());
+    for (const auto& hole : polygon.inners()) mark_ring(hole);
+  }
+  // Whether each region of unmarked cells is inside, found when the way
+  // first enters it: a flood fill, and one point-in-polygon test.
+  std::vector<char> region_inside;
+  std::vector<std::pair<int, int>> stack;
+  auto region_of = [&](int cx, int cy) {
+    if (at(cx, cy) >= 0) return at(cx, cy);
+    const auto region = static_cast<std::int32_t>(region_inside.size());
+    const Point centre(x0 + (cx + 0.5) * cell, y0 + (cy + 0.5) * cell);
+    region_inside.push_back(bg::within(centre, cspace) ? 1 : 0);
+    at(cx, cy) = region;
+    stack.assign(1, {cx, cy});
+    while (!stack.empty()) {
+      const auto [x, y] = stack.back();
+      stack.pop_back();
+      constexpr int kDx[] = {1, -1, 0, 0}, kDy[] = {0, 0, 1, -1};
+      for (int d = 0; d < 4; ++d) {
+        const int u = x + kDx[d], v = y + kDy[d];
+        if (u < 0 || v < 0 || u >= nx || v >= ny || at(u, v) != kUnlabelled) continue;
+        at(u, v) = region;
+        stack.emplace_back(u, v);
+      }
+    }
+    return region;
+  };
+  // A piece of the way is dropped when every cell about it (grown by the
+  // corridor's half-width) is unmarked and its region is inside: its
+  // corridor then lies in the C-space's interior.
+  auto inside_clear = [&](const Point& a, const Point& b) {
+    bool clear = for_cells(a, b, reach, [&](int cx, int cy) { return at(cx, cy) != kMarked; });
+    return clear && region_inside[static_cast<std::size_t>(region_of(clamp_x(a.x()), clamp_y(a.y())))] != 0;
+  };
+  std::vector<std::vector<Point>> stretches;
+  if (points.size() == 1) {
+    if (!inside_clear(points[0], points[0])) stretches.push_back(all);
+    return stretches;
+  }
+  std::vector<Point> stretch;
+  for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+    if (inside_clear(points[i], points[i + 1])) {
+      if (!stretch.empty()) stretches.push_back(std::move(stretch));
+      stretch.clear();
+      continue;
+    }
+    if (stretch.empty()) stretch.push_back(points[i]);
+    stretch.push_back(points[i + 1]);
+  }
+  if (!stretch.empty()) stretches.push_back(std::move(stretch));
+  return stretches;
+}
+
 ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygon& free_space,
                                                           const CSpaceOptions& options, OffsetTileCache* cache,
-                                                          const mapping::MultiPolygon* passages) {
+                                                          const DrivenWay* way) {
   options_ = options;
   polygons_.clear();
   edges_.clear();
@@ -190,13 +300,20 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
   // After the simplification: a bridge's narrow corridor would keep the
   // whole polygon it joins from being simplified (simplify_typed keeps a
   // polygon whole when simplifying it would make it invalid).
-  if (passages && !passages->empty()) {
-    auto with_passages = with_bridges(mapping::geometry_of(polygons_), *passages);
-    if (!with_passages) {
-      result.error = "a passage has a coordinate not finite or beyond 1e9 m";
-      return result;
+  if (way && !way->points.empty() && way->half_width_m > 0.0 &&
+      std::all_of(way->points.begin(), way->points.end(), [](const Point& p) {
+        return std::isfinite(p.x()) && std::isfinite(p.y()) && std::abs(p.x()) <= 1e9 && std::abs(p.y()) <= 1e9;
+      })) {
+    const auto cspace = mapping::geometry_of(polygons_);
+    const auto passages = dilated_polylines(way_near_or_outside(cspace, *way), way->half_width_m);
+    if (!passages.empty()) {
+      auto with_passages = with_bridges(cspace, passages);
+      if (!with_passages) {
+        result.error = "a passage has a coordinate not finite or beyond 1e9 m";
+        return result;
+      }
+      polygons_ = mapping::with_uniform_type(std::move(*with_passages), EdgeType::kObstacle);
     }
-    polygons_ = mapping::with_uniform_type(std::move(*with_passages), EdgeType::kObstacle);
   }
 
   // Edges ring by ring, with repeated points dropped, linked to their neighbours.

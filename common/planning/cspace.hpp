@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,15 @@ namespace pex::planning {
 using mapping::EdgeType;
 using mapping::Point;
 using mapping::TypedMultiPolygon;
+
+// The way the robot drove (its centre's positions, oldest first) and the
+// corridor of half_width_m about it that the C-space keeps open
+// (ConfigurationSpace::build, driven_trail.hpp: the one certain proof of
+// where the robot's disk fits). A view of the points: they outlive the build.
+struct DrivenWay {
+  std::span<const Point> points;
+  double half_width_m = 0.0;
+};
 
 struct CSpaceOptions {
   double robot_radius_m = 0.25;
@@ -77,14 +87,14 @@ class ConfigurationSpace {
   // free space on the left of every edge) inward by the robot radius plus
   // margin. An empty result (the map is narrower than the robot) is ok: the
   // C-space is simply empty. `cache` (may be null) keeps offset tiles from
-  // one build to the next; the C-space does not depend on it. `passages`
-  // (may be null or empty) are positions of the robot's centre known to be
-  // free whatever the map says (the corridor of the way it drove:
-  // driven_trail.hpp): those of their parts that join two pieces of the
-  // C-space are united into it after the offset (with_bridges); their
-  // edges are typed kObstacle.
+  // one build to the next; the C-space does not depend on it. `way` (may
+  // be null or empty): its corridor is positions of the robot's centre
+  // known to be free whatever the map says; those of its parts that join
+  // two pieces of the C-space are united into it after the offset
+  // (with_bridges); their edges are typed kObstacle. A way with a point
+  // not finite or beyond 1e9 m adds nothing.
   BuildResult build(const TypedMultiPolygon& free_space, const CSpaceOptions& options,
-                    OffsetTileCache* cache = nullptr, const mapping::MultiPolygon* passages = nullptr);
+                    OffsetTileCache* cache = nullptr, const DrivenWay* way = nullptr);
 
   const TypedMultiPolygon& polygons() const { return polygons_; }
   const std::vector<Edge>& edges() const { return edges_; }
@@ -174,6 +184,17 @@ class ConfigurationSpace {
 // coordinate not finite or beyond 1e9 m.
 std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& cspace,
                                                   const mapping::MultiPolygon& passages);
+
+// The stretches of `way` whose corridor may reach out of `cspace`: the rest
+// of it runs inside, farther than half_width_m (and 1 mm) from every edge of
+// `cspace`, so its corridor adds nothing there. A robot at the end of a long
+// mission has driven kilometres, nearly all of it well inside the C-space;
+// the corridor of all of it took two thirds of a tight plan's CPU (campus,
+// `pex-plan --every-map --tight`, docs/exploration.md "Planning time").
+// Conservative: a stretch is kept unless a grid of the edges shows it clear.
+// Each stretch is a polyline of two or more points of `way` (one, for a way
+// of one point); every point of `way` is assumed finite.
+std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon& cspace, const DrivenWay& way);
 
 // Small geometry helpers shared by the planning code.
 double distance(const Point& a, const Point& b);

@@ -114,9 +114,10 @@ class DrivenTrails {
 };
 
 // The corridor of half-width `half_width_m` about a trail: the positions of
-// the robot's centre within that distance of where it has been. United into
-// the C-space (ConfigurationSpace::build's `passages`) it keeps the way open
-// that the robot drove. Empty for an empty trail or half-width <= 0.
+// the robot's centre within that distance of where it has been. The C-space
+// keeps it open where it joins pieces (ConfigurationSpace::build, given the
+// trail as a DrivenWay, dilates only the stretches that matter there:
+// way_near_or_outside). Empty for an empty trail or half-width <= 0.
 mapping::MultiPolygon trail_corridor(const std::vector<mapping::Point>& trail, double half_width_m);
 
 }  // namespace pex::planning

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -271,9 +272,10 @@ TEST(TrailCorridor, JoinsTheCSpaceAcrossAGapTheMapShut) {
   const mapping::Point a(8, 2), b(13, 2);
   EXPECT_NE(without.piece_of(a), without.piece_of(b));
 
-  const auto corridor = trail_corridor({{7, 1}, {8, 2}, {13, 2}}, 0.05);
+  const std::vector<mapping::Point> trail{{7, 1}, {8, 2}, {13, 2}};
+  const DrivenWay way{trail, 0.05};
   ConfigurationSpace with;
-  ASSERT_TRUE(with.build(map, options, nullptr, &corridor).ok);
+  ASSERT_TRUE(with.build(map, options, nullptr, &way).ok);
   ASSERT_GE(with.piece_of(a), 0);
   EXPECT_EQ(with.piece_of(a), with.piece_of(b));
   EXPECT_TRUE(with.covers(mapping::Point(10.5, 2.04)));
@@ -288,12 +290,85 @@ TEST(TrailCorridor, AddsNothingWhereItJoinsNoTwoPieces) {
   const auto options = testing::disk(0.25);
   ConfigurationSpace without;
   ASSERT_TRUE(without.build(map, options).ok);
-  const auto corridor = trail_corridor({{1, 0.2}, {3, 0.2}, {3, 1}}, 0.05);
+  const std::vector<mapping::Point> trail{{1, 0.2}, {3, 0.2}, {3, 1}};
+  const DrivenWay way{trail, 0.05};
   ConfigurationSpace with;
-  ASSERT_TRUE(with.build(map, options, nullptr, &corridor).ok);
+  ASSERT_TRUE(with.build(map, options, nullptr, &way).ok);
   EXPECT_FALSE(with.covers(mapping::Point(2, 0.2)));
   EXPECT_EQ(with.edges().size(), without.edges().size());
   EXPECT_EQ(with.polygons().size(), without.polygons().size());
+}
+
+// The C-space keeps only the stretches of the way that come near its edges
+// or run outside it (way_near_or_outside): the rest lies deep inside, and its
+// corridor adds nothing. The C-space must be the same as with the corridor
+// of the whole way, on ways that run deep inside, along walls, through the
+// slit and through walls (the map's walls where SLAM put them, not where
+// the robot found them).
+TEST(TrailCorridor, TheWayDeepInsideTheCSpaceChangesNothing) {
+  namespace bg = boost::geometry;
+  const auto map = testing::a_room_cut_off_behind_a_slit();
+  const auto options = testing::disk(0.25);
+  ConfigurationSpace without;
+  ASSERT_TRUE(without.build(map, options).ok);
+  const auto cspace = mapping::geometry_of(without.polygons());
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> turn(-0.6, 0.6);
+  int dropped_somewhere = 0, bridged = 0;
+  for (int walk = 0; walk < 24; ++walk) {
+    std::vector<mapping::Point> trail{{std::uniform_real_distribution<double>(0.5, 15.5)(random),
+                                       std::uniform_real_distribution<double>(0.5, 3.5)(random)}};
+    double heading = std::uniform_real_distribution<double>(-3.14, 3.14)(random);
+    for (int step = 0; step < 600; ++step) {
+      heading += turn(random);
+      const auto& p = trail.back();
+      // Kept on the map's box (walls and the slit crossed freely) by turning back at its sides.
+      double x = p.x() + 0.05 * std::cos(heading), y = p.y() + 0.05 * std::sin(heading);
+      if (x < 0.1 || x > 15.9 || y < 0.1 || y > 3.9) {
+        heading += 3.14159;
+        x = p.x();
+        y = p.y();
+      }
+      trail.emplace_back(x, y);
+    }
+    const DrivenWay way{trail, 0.05};
+    const auto stretches = way_near_or_outside(cspace, way);
+    std::size_t kept = 0;
+    for (const auto& s : stretches) kept += s.size();
+    dropped_somewhere += kept < trail.size();
+
+    const auto whole = with_bridges(cspace, trail_corridor(trail, 0.05));
+    ASSERT_TRUE(whole.has_value());
+    ConfigurationSpace with;
+    ASSERT_TRUE(with.build(map, options, nullptr, &way).ok) << "walk " << walk;
+    const auto built = mapping::geometry_of(with.polygons());
+    EXPECT_NEAR(bg::area(built), bg::area(*whole), 1e-6) << "walk " << walk;
+    EXPECT_EQ(built.size(), whole->size()) << "walk " << walk;
+    bridged += bg::area(*whole) > bg::area(cspace) + 1e-6;
+  }
+  EXPECT_GT(dropped_somewhere, 12) << "most walks have stretches deep inside the C-space";
+  EXPECT_GT(bridged, 0) << "some walks cross the slit or a wall and join the rooms";
+}
+
+TEST(TrailCorridor, AWayOutsideAnEmptyCSpaceIsKeptWhole) {
+  const std::vector<mapping::Point> trail{{0, 0}, {1, 0}, {1, 1}};
+  const auto stretches = way_near_or_outside({}, DrivenWay{trail, 0.05});
+  ASSERT_EQ(stretches.size(), 1u);
+  EXPECT_EQ(stretches[0].size(), 3u);
+  const std::vector<mapping::Point> one{{0.5, 0.5}};
+  ASSERT_EQ(way_near_or_outside({}, DrivenWay{one, 0.05}).size(), 1u);
+}
+
+TEST(TrailCorridor, AWayWithAPointNotFiniteAddsNothing) {
+  const auto map = testing::a_room_cut_off_behind_a_slit();
+  const auto options = testing::disk(0.25);
+  ConfigurationSpace without, with;
+  ASSERT_TRUE(without.build(map, options).ok);
+  const std::vector<mapping::Point> trail{{7, 1}, {8, 2}, {NAN, 2}, {13, 2}};
+  const DrivenWay way{trail, 0.05};
+  ASSERT_TRUE(with.build(map, options, nullptr, &way).ok);
+  EXPECT_EQ(with.polygons().size(), without.polygons().size());
+  EXPECT_EQ(with.edges().size(), without.edges().size());
 }
 
 TEST(TrailCorridor, ATightPlanGoesBackTheWayTheRobotCame) {

@@ -218,13 +218,13 @@ struct Setup {
   Point start;
 };
 std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, const PlannerOptions& options,
-                            PlanCache* cache, const mapping::MultiPolygon* passages, Plan& plan) {
+                            PlanCache* cache, const DrivenWay* way, Plan& plan) {
   if (!std::isfinite(robot.x_m) || !std::isfinite(robot.y_m) || !std::isfinite(robot.theta_rad)) {
     plan.error = "robot pose is not finite";
     return std::nullopt;
   }
   Setup s;
-  const auto built = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr, passages);
+  const auto built = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr, way);
   if (!built.ok) {
     plan.error = built.error;
     return std::nullopt;
@@ -424,7 +424,7 @@ std::optional<Point> gap_mouth(const ConfigurationSpace& cspace, int own_piece, 
 // `pieces` holds each candidate's piece.
 std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
     const ConfigurationSpace& plan_cspace, const TypedMultiPolygon& drivable, const Point& start,
-    const PlannerOptions& options, const GoalFocus* focus, const mapping::MultiPolygon* passages,
+    const PlannerOptions& options, const GoalFocus* focus, const DrivenWay* way,
     const std::vector<int>& pieces, int own_piece, OffsetTileCache* offsets, Plan& plan) {
   std::vector<std::size_t> apart;
   bool focus_apart = false;
@@ -444,7 +444,7 @@ std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
   // The offset tiles are kept for this clearance too: the endgame plans with
   // the margin, without it and with this one by turns, on maps that change
   // little (OffsetTileCache keeps what the last calls used).
-  if (!cspace.build(drivable, narrower, offsets, passages).ok) return {};
+  if (!cspace.build(drivable, narrower, offsets, way).ok) return {};
   const auto robot_at = cspace.nearest_interior_point(start, options.start_snap_distance_m);
   if (!robot_at) return {};
   const int robot_piece = cspace.piece_of(*robot_at);
@@ -499,12 +499,12 @@ std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
 
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable, const GoalFocus* focus,
-                      PlanCache* cache, const mapping::MultiPolygon* passages) {
+                      PlanCache* cache, const DrivenWay* way) {
   Plan plan;
   if (cache) cache->approaches.begin_plan();
   // 1. The C-space, the robot's own node, and the C-space piece it is in: a
   // polygon of the C-space is one connected piece, so only its points are reachable.
-  auto setup = set_up(passable ? *passable : map, robot, options, cache, passages, plan);
+  auto setup = set_up(passable ? *passable : map, robot, options, cache, way, plan);
   if (!setup) return plan;
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;
@@ -684,7 +684,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   if ((plan.best < 0 || focus) && options.narrow_gap_tolerance_m > 0.0 &&
       options.cspace.clearance_margin_m == 0.0 && own_piece >= 0) {
     const auto mouths = settle_behind_narrow_gaps(cspace, passable ? *passable : map, *start, options, focus,
-                                                  passages, pieces, own_piece, cache ? &cache->offsets : nullptr, plan);
+                                                  way, pieces, own_piece, cache ? &cache->offsets : nullptr, plan);
     // A candidate behind a gap about the robot's width is approached at the
     // gap's mouth: from there the laser sees through the gap, the live view
     // (mission.hpp) opens it as wide as it is, and the next plan goes
@@ -712,13 +712,13 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
 }
 
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
-                  const PlannerOptions& options, PlanCache* cache, const mapping::MultiPolygon* passages) {
+                  const PlannerOptions& options, PlanCache* cache, const DrivenWay* way) {
   Plan plan;
   if (!std::isfinite(target.x()) || !std::isfinite(target.y())) {
     plan.error = "target is not finite";
     return plan;
   }
-  auto setup = set_up(map, robot, options, cache, passages, plan);
+  auto setup = set_up(map, robot, options, cache, way, plan);
   if (!setup) return plan;
   const ConfigurationSpace& cspace = setup->cspace;
   const Point& robot_point = setup->robot_point;

@@ -291,19 +291,19 @@ class PlanCache {
 // the tour needs them all. Deterministic: the plan is a function of the
 // arguments; `cache` (may be null) keeps the C-space's offset tiles and the
 // path graph's segment tests from one plan to the next and changes only the
-// time taken. `passages` (may be null) are united into the C-space
-// (ConfigurationSpace::build): the corridor of the way the robot drove.
+// time taken. `way` (may be null): the way the robot drove, whose corridor
+// keeps the C-space open where it joins pieces (ConfigurationSpace::build).
 Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const std::vector<Point>& blacklist,
                       const PlannerOptions& options, const TypedMultiPolygon* passable = nullptr,
                       const GoalFocus* focus = nullptr, PlanCache* cache = nullptr,
-                      const mapping::MultiPolygon* passages = nullptr);
+                      const DrivenWay* way = nullptr);
 
 // A path from `robot` to `target` (e.g. the mission's start pose) in the
-// C-space of `map` (with `passages` united in, as plan_exploration): the
+// C-space of `map` (with `way`'s corridor, as plan_exploration): the
 // plan's one candidate is `target` moved into the C-space (at most
 // candidate_snap_distance_m), best when it is reachable.
 Plan plan_path_to(const TypedMultiPolygon& map, const Pose2& robot, const Point& target,
                   const PlannerOptions& options, PlanCache* cache = nullptr,
-                  const mapping::MultiPolygon* passages = nullptr);
+                  const DrivenWay* way = nullptr);
 
 }  // namespace pex::planning

@@ -653,21 +653,31 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
 
 
 mapping::MultiPolygon dilated_polyline(const std::vector<mapping::Point>& points, double radius_m) {
-  if (points.empty() || !(radius_m > 0.0) || radius_m > kMaxAbsCoordinateM ||
-      !std::all_of(points.begin(), points.end(), [](const auto& p) { return on_grid(p); }))
-    return {};
-  Path path;
-  path.reserve(points.size());
-  for (const auto& p : points) {
-    const IntPoint q(static_cast<cInt>(std::llround(p.x() * kUnitsPerM)),
-                     static_cast<cInt>(std::llround(p.y() * kUnitsPerM)));
-    if (path.empty() || !(path.back() == q)) path.push_back(q);
-  }
+  return dilated_polylines({points}, radius_m);
+}
+
+mapping::MultiPolygon dilated_polylines(const std::vector<std::vector<mapping::Point>>& polylines, double radius_m) {
+  if (!(radius_m > 0.0) || radius_m > kMaxAbsCoordinateM) return {};
+  for (const auto& points : polylines)
+    if (!std::all_of(points.begin(), points.end(), [](const auto& p) { return on_grid(p); })) return {};
   ClipperLib::ClipperOffset offset;
   offset.ArcTolerance = std::min(radius_m, 1e-3) * kUnitsPerM;
-  // A single point is a closed path of one vertex to Clipper; an open path
-  // with round ends gives its disk.
-  offset.AddPath(path, ClipperLib::jtRound, ClipperLib::etOpenRound);
+  bool any = false;
+  for (const auto& points : polylines) {
+    if (points.empty()) continue;
+    Path path;
+    path.reserve(points.size());
+    for (const auto& p : points) {
+      const IntPoint q(static_cast<cInt>(std::llround(p.x() * kUnitsPerM)),
+                       static_cast<cInt>(std::llround(p.y() * kUnitsPerM)));
+      if (path.empty() || !(path.back() == q)) path.push_back(q);
+    }
+    // A single point is a closed path of one vertex to Clipper; an open path
+    // with round ends gives its disk.
+    offset.AddPath(path, ClipperLib::jtRound, ClipperLib::etOpenRound);
+    any = true;
+  }
+  if (!any) return {};
   ClipperLib::PolyTree tree;
   offset.Execute(tree, radius_m * kUnitsPerM);
   mapping::MultiPolygon out;

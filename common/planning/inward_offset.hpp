@@ -97,6 +97,9 @@ mapping::TypedOpResult offset_inward(const mapping::TypedMultiPolygon& free_spac
 // 10 um grid. Empty for no points, radius_m <= 0, or a coordinate not finite
 // or beyond 1e9 m.
 mapping::MultiPolygon dilated_polyline(const std::vector<mapping::Point>& points, double radius_m);
+// ... of several polylines at once: the union of their dilations. Empty when
+// any of them has a coordinate not finite or beyond 1e9 m.
+mapping::MultiPolygon dilated_polylines(const std::vector<std::vector<mapping::Point>>& polylines, double radius_m);
 
 // a united with b, and a less b (each a set of polygons with holes), on the
 // same grid. Either side with a coordinate not finite or beyond 1e9 m: nullopt.

@@ -82,15 +82,14 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   const bool live = request.live_view && !request.live_view->empty();
   const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
   // A tight plan also goes where the robot has driven.
-  const mapping::MultiPolygon corridor = request.tight && request.trail
-                                             ? trail_corridor(*request.trail, request.options.trail_corridor_m)
-                                             : mapping::MultiPolygon{};
-  const mapping::MultiPolygon* passages = corridor.empty() ? nullptr : &corridor;
+  DrivenWay way;
+  if (request.tight && request.trail) way = {*request.trail, request.options.trail_corridor_m};
+  const DrivenWay* driven = way.points.empty() ? nullptr : &way;
   result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options,
-                                            cache, passages)
+                                            cache, driven)
                              : plan_exploration(*request.map, request.pose, request.blacklist, request.options,
                                                 live ? &opened : nullptr, request.focus ? &*request.focus : nullptr,
-                                                cache, passages);
+                                                cache, driven);
   return result;
 }
 

@@ -60,7 +60,7 @@ namespace {
 int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::string& map_channel,
                    const std::string& pose_channel, const pex::explorer::ExplorerOptions& options,
                    const pex::planning::PlannerOptions& planner, bool use_cache, const std::string& csv_path,
-                   std::int64_t from_utime) {
+                   std::int64_t from_utime, bool tight) {
   // As the explorer's worker keeps it: the C-space's offset tiles and the
   // path graph's segment tests between plans.
   pex::planning::PlanCache cache;
@@ -72,6 +72,9 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
     std::size_t vertices;
   };
   std::vector<Timed> timed;
+  // --tight: every plan is a tight fallback, along the way the robot drove
+  // as the explorer keeps it (the endgame's plans, timed alone).
+  pex::explorer::TrailKeeper trails;
   std::size_t bad_maps = 0, failed = 0;  // failed: no plan at all (Plan::error), not merely no goal
   std::optional<pex::planning::GoalFocus> focus;
   // FNV-1a over every plan's candidates (positions, reachability, costs and
@@ -105,9 +108,21 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
     if (e->channel == pex::runtime::channels::kLidarScan) {
       pex::laser_scan_t s;
       if (s.decode(e->data, 0, e->datalen) >= 0) scan = std::move(s);
+    } else if (tight && e->channel == pex::runtime::channels::kSlamUpdate) {
+      pex::slam_update_t u;
+      if (u.decode(e->data, 0, e->datalen) < 0) continue;
+      try {
+        trails.on_slam_update(u);
+      } catch (const std::invalid_argument&) {
+        // refused as the explorer refuses it: the trails stay as they were
+      }
     } else if (e->channel == pose_channel) {
       pex::pose_t p;
-      if (p.decode(e->data, 0, e->datalen) >= 0) pose = p;
+      if (p.decode(e->data, 0, e->datalen) >= 0) {
+        pose = p;
+        if (tight && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta))
+          trails.on_pose({p.x, p.y, p.theta});
+      }
     } else if (e->channel == pex::runtime::channels::kExploreState) {
       pex::explore_state_t state;
       if (state.decode(e->data, 0, e->datalen) < 0) continue;
@@ -123,6 +138,7 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
         ++bad_maps;
         continue;
       }
+      if (tight) trails.on_map(m);
       if (m.utime < from_utime) continue;  // the slow end of a mission, timed alone
       const auto decoded = pex::explorer::decode_map(m, options.map);
       if (!decoded.ok) {
@@ -136,6 +152,8 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
       request.options = planner;
       if (scan) request.live_view = pex::explorer::live_view_of(*scan, robot, options.live_view);
       request.focus = focus;
+      request.tight = tight;
+      if (tight) request.trail = trails.trail_for_map();
       const auto tiles_before = cache.offsets.counters();
       const auto tests_before = cache.visibility_counters();
       // Timed as the explorer times its worker: the thread's CPU, live view union included.
@@ -243,7 +261,9 @@ int main(int argc, char** argv) {
   app.add_option("--map-channel", map_channel, "channel of the pex.polygon_map_t messages");
   app.add_option("--pose-channel", pose_channel, "channel of the robot's pex.pose_t (SLAM_POSE, SIM_TRUTH)");
   app.add_option("--utime", at_utime, "plan on the last MAP at or before this message utime (default: the last MAP)");
-  app.add_flag("--tight", tight, "plan without the clearance margin and along the way the robot drove (the explorer's tight fallback)");
+  app.add_flag("--tight", tight,
+               "plan without the clearance margin and along the way the robot drove (the explorer's tight fallback); "
+               "with --every-map, every plan so");
   app.add_flag("--blacklist-from-log", blacklist_from_log,
                "blacklist the goals the log's last EXPLORE_STATE up to the map lists as visited or given up (the "
                "mission's blacklist, as far as it shows it)");
@@ -280,7 +300,8 @@ int main(int argc, char** argv) {
     return EX_NOINPUT;
   }
   if (every_map)
-    return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_cache, csv_path, from_utime);
+    return time_every_map(log, log_path, map_channel, pose_channel, options, planner, !no_cache, csv_path, from_utime,
+                          tight);
   std::optional<pex::polygon_map_t> map;
   std::optional<pex::pose_t> pose;           // newest pose up to the chosen map
   std::optional<pex::pose_t> pose_pending;   // newest pose overall, taken with the next map
@@ -341,15 +362,15 @@ int main(int argc, char** argv) {
   // A tight plan also goes along the way the robot drove (trail_corridor_m).
   trails.on_map(*map);
   const auto trail = tight ? trails.trail_for_map() : nullptr;
-  const auto corridor = trail ? pex::planning::trail_corridor(*trail, planner.trail_corridor_m)
-                              : pex::mapping::MultiPolygon{};
-  const auto* passages = corridor.empty() ? nullptr : &corridor;
+  pex::planning::DrivenWay way;
+  if (trail) way = {*trail, planner.trail_corridor_m};
+  const auto* driven = way.points.empty() ? nullptr : &way;
   const double plan_started_ms = pex::explorer::thread_cpu_ms();
   const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, blacklist, planner, live ? &planned_on : nullptr,
-                                                    nullptr, nullptr, passages);
+                                                    nullptr, nullptr, driven);
   const double plan_cpu_ms = pex::explorer::thread_cpu_ms() - plan_started_ms;
   pex::planning::ConfigurationSpace cspace;
-  cspace.build(planned_on, planner.cspace, nullptr, passages);
+  cspace.build(planned_on, planner.cspace, nullptr, driven);
   std::printf("live view: %s\n", live ? "united into the map (newest LIDAR_SCAN)"
                                       : (scan ? "off (live_view_range_m = 0)" : "none (no LIDAR_SCAN)"));
   std::printf("plan: %.1f ms CPU (no cache, as a first plan)\n", plan_cpu_ms);
