@@ -152,9 +152,8 @@ std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon&
   }
   if (vertices == 0) return {all};  // no C-space: all of the way is outside it
   // A cell is marked when an edge of the C-space may come within `reach` of
-  // it. An unmarked cell holds no point of the C-space's boundary, so it is
-  // wholly inside or wholly outside, and so is every unmarked cell it
-  // shares a side with (the boundary would have to pass that side).
+  // it. An unmarked cell holds no point of the C-space's boundary: it is
+  // wholly inside or wholly outside.
   const double reach = way.half_width_m + 1e-3;
   constexpr std::size_t kMaxCells = std::size_t{1} << 22;
   const double x0 = box.min_corner().x() - 2.0 * reach, y0 = box.min_corner().y() - 2.0 * reach;
@@ -162,8 +161,7 @@ std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon&
   double cell = 0.25;
   if (w * h / (cell * cell) > static_cast<double>(kMaxCells)) cell = std::sqrt(w * h / static_cast<double>(kMaxCells));
   const int nx = static_cast<int>(std::ceil(w / cell)) + 1, ny = static_cast<int>(std::ceil(h / cell)) + 1;
-  constexpr std::int32_t kMarked = -2, kUnlabelled = -1;
-  std::vector<std::int32_t> label(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), kUnlabelled);
+  std::vector<char> marked(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
   auto clamp_x = [&](double x) { return std::clamp(static_cast<int>(std::floor((x - x0) / cell)), 0, nx - 1); };
   auto clamp_y = [&](double y) { return std::clamp(static_cast<int>(std::floor((y - y0) / cell)), 0, ny - 1); };
   // Calls f(cx, cy) for the cells of the boxes about the pieces (at most a
@@ -185,13 +183,13 @@ std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon&
     }
     return true;
   };
-  auto at = [&](int cx, int cy) -> std::int32_t& {
-    return label[static_cast<std::size_t>(cy) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(cx)];
+  auto at = [&](int cx, int cy) -> char& {
+    return marked[static_cast<std::size_t>(cy) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(cx)];
   };
   auto mark_ring = [&](const mapping::Ring& ring) {
     for (std::size_t i = 0; i + 1 < ring.size(); ++i)
       for_cells(ring[i], ring[i + 1], reach, [&](int cx, int cy) {
-        at(cx, cy) = kMarked;
+        at(cx, cy) = 1;
         return true;
       });
   };
@@ -199,36 +197,45 @@ std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon&
     mark_ring(polygon.outer());
     for (const auto& hole : polygon.inners()) mark_ring(hole);
   }
-  // Whether each region of unmarked cells is inside, found when the way
-  // first enters it: a flood fill, and one point-in-polygon test.
-  std::vector<char> region_inside;
-  std::vector<std::pair<int, int>> stack;
-  auto region_of = [&](int cx, int cy) {
-    if (at(cx, cy) >= 0) return at(cx, cy);
-    const auto region = static_cast<std::int32_t>(region_inside.size());
-    const Point centre(x0 + (cx + 0.5) * cell, y0 + (cy + 0.5) * cell);
-    region_inside.push_back(bg::within(centre, cspace) ? 1 : 0);
-    at(cx, cy) = region;
-    stack.assign(1, {cx, cy});
-    while (!stack.empty()) {
-      const auto [x, y] = stack.back();
-      stack.pop_back();
-      constexpr int kDx[] = {1, -1, 0, 0}, kDy[] = {0, 0, 1, -1};
-      for (int d = 0; d < 4; ++d) {
-        const int u = x + kDx[d], v = y + kDy[d];
-        if (u < 0 || v < 0 || u >= nx || v >= ny || at(u, v) != kUnlabelled) continue;
-        at(u, v) = region;
-        stack.emplace_back(u, v);
+  // Whether an unmarked cell is inside: the parity of the C-space's edges
+  // crossing its row's centre line left of its centre (all of its points
+  // share the centre's answer). Each row's crossings, sorted when first asked.
+  std::vector<std::vector<double>> row_crossings(static_cast<std::size_t>(ny));
+  std::vector<char> row_sorted(static_cast<std::size_t>(ny), 0);
+  auto add_crossings = [&](const mapping::Ring& ring) {
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+      const Point& a = ring[i];
+      const Point& b = ring[i + 1];
+      const double lo = std::min(a.y(), b.y()), hi = std::max(a.y(), b.y());
+      // Rows whose centre line y satisfies lo <= y < hi (a vertex on a
+      // centre line counts once for the two edges that meet there).
+      for (int cy = std::max(0, static_cast<int>(std::ceil((lo - y0) / cell - 0.5)));
+           cy < ny && y0 + (cy + 0.5) * cell < hi; ++cy) {
+        const double y = y0 + (cy + 0.5) * cell;
+        if (y < lo) continue;  // rounding in the first row's index
+        row_crossings[static_cast<std::size_t>(cy)].push_back(a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y()));
       }
     }
-    return region;
+  };
+  for (const auto& polygon : cspace) {
+    add_crossings(polygon.outer());
+    for (const auto& hole : polygon.inners()) add_crossings(hole);
+  }
+  auto cell_inside = [&](int cx, int cy) {
+    auto& row = row_crossings[static_cast<std::size_t>(cy)];
+    if (!row_sorted[static_cast<std::size_t>(cy)]) {
+      std::sort(row.begin(), row.end());
+      row_sorted[static_cast<std::size_t>(cy)] = 1;
+    }
+    const double x = x0 + (cx + 0.5) * cell;
+    return (std::lower_bound(row.begin(), row.end(), x) - row.begin()) % 2 == 1;
   };
   // A piece of the way is dropped when every cell about it (grown by the
-  // corridor's half-width) is unmarked and its region is inside: its
-  // corridor then lies in the C-space's interior.
+  // corridor's half-width) is unmarked and inside: its corridor then lies
+  // in the C-space's interior.
   auto inside_clear = [&](const Point& a, const Point& b) {
-    bool clear = for_cells(a, b, reach, [&](int cx, int cy) { return at(cx, cy) != kMarked; });
-    return clear && region_inside[static_cast<std::size_t>(region_of(clamp_x(a.x()), clamp_y(a.y())))] != 0;
+    const bool clear = for_cells(a, b, reach, [&](int cx, int cy) { return at(cx, cy) == 0; });
+    return clear && cell_inside(clamp_x(a.x()), clamp_y(a.y()));
   };
   std::vector<std::vector<Point>> stretches;
   if (points.size() == 1) {
