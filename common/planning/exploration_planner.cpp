@@ -128,12 +128,15 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
     }
   }
   // Ties by coordinates: the answer does not depend on the edges' order.
-  std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
-    if (a.first != b.first) return a.first < b.first;
-    if (a.second.x() != b.second.x()) return a.second.x() < b.second.x();
-    return a.second.y() < b.second.y();
-  });
+  // Only the nearest kTries are ever tried (a ragged wall within range_m
+  // gives thousands of points): those are put in order, not the rest.
   const std::size_t tries = std::min(near.size(), kTries);
+  std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(tries), near.end(),
+                    [](const auto& a, const auto& b) {
+                      if (a.first != b.first) return a.first < b.first;
+                      if (a.second.x() != b.second.x()) return a.second.x() < b.second.x();
+                      return a.second.y() < b.second.y();
+                    });
   for (std::size_t i = memo ? memo->tried : 0; i < tries; ++i) {
     const auto inside = cspace.nearest_interior_point(near[i].second, 0.05);
     if (memo) memo->tried = i + 1;
