@@ -411,6 +411,46 @@ TEST(InwardOffset, APolygonOfLongEdgesAcrossManyTilesIsOffsetWhole) {
   EXPECT_GT(mapping::area(offset.polygons), 100 * 1.36 * 990.0 * 0.99);
 }
 
+// A polygon whose box averages more than tile_min_vertices vertices per
+// tile (a ragged, scanned wall all round: 10 per m^2) is offset in tiles of
+// half the side, point for point as if asked for them; a sparse one keeps
+// the side asked for.
+TEST(InwardOffset, ADenseRaggedPolygonIsOffsetInSmallerTiles) {
+  auto square_with_teeth = [](double side_m, double tooth_m) {
+    const int n = static_cast<int>(std::lround(side_m / tooth_m));
+    std::vector<Point> ring;
+    for (int i = 0; i < n; ++i) ring.insert(ring.end(), {Point(i * tooth_m, 0), Point((i + 0.5) * tooth_m, 0.01)});
+    for (int i = 0; i < n; ++i)
+      ring.insert(ring.end(), {Point(side_m, i * tooth_m), Point(side_m - 0.01, (i + 0.5) * tooth_m)});
+    for (int i = 0; i < n; ++i)
+      ring.insert(ring.end(), {Point(side_m - i * tooth_m, side_m), Point(side_m - (i + 0.5) * tooth_m, side_m - 0.01)});
+    for (int i = 0; i < n; ++i)
+      ring.insert(ring.end(), {Point(0, side_m - i * tooth_m), Point(0.01, side_m - (i + 0.5) * tooth_m)});
+    return TypedMultiPolygon{typed_polygon(RingSpec{ring, {}})};
+  };
+  auto offset_in = [](const TypedMultiPolygon& map, double tile_m, OffsetTileCache& cache) {
+    InwardOffset how = untyped_offset(tile_m);
+    how.tile_min_vertices = 400;
+    auto result = offset_inward(map, how, &cache);
+    EXPECT_TRUE(result.ok) << result.error;
+    return result;
+  };
+  const auto dense = square_with_teeth(20.0, 0.04);  // 4,000 vertices on 400 m^2
+  ASSERT_TRUE(boost::geometry::is_valid(dense[0].geometry));
+  OffsetTileCache asked_12, asked_6;
+  const auto in_12 = offset_in(dense, 12.0, asked_12);
+  const auto in_6 = offset_in(dense, 6.0, asked_6);
+  EXPECT_EQ(asked_12.counters().misses, asked_6.counters().misses);
+  EXPECT_TRUE(boost::geometry::equals(geometry_of(in_12), geometry_of(in_6)));
+  EXPECT_EQ(mapping::vertex_count(in_12.polygons), mapping::vertex_count(in_6.polygons));
+
+  const auto sparse = square_with_teeth(100.0, 0.4);  // 2,000 vertices on 10,000 m^2
+  OffsetTileCache sparse_12, sparse_6;
+  offset_in(sparse, 12.0, sparse_12);
+  offset_in(sparse, 6.0, sparse_6);
+  EXPECT_LT(sparse_12.counters().misses, sparse_6.counters().misses);
+}
+
 // Maps that grow scan by scan (a 40 m long building, a 10 m laser): with a
 // cache the offset is the one computed afresh, point for point, and most
 // tiles come from the cache, as the map changes only within the laser's

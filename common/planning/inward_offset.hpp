@@ -28,7 +28,10 @@ struct InwardOffset {
   // (mapping::assign_types); false: every edge kObstacle.
   bool type_edges = true;
   // Side of the square tiles (on a grid fixed in the map frame) a polygon of
-  // at least tile_min_vertices is offset in; 0: every polygon whole.
+  // at least tile_min_vertices is offset in; 0: every polygon whole. A
+  // polygon whose box averages more than tile_min_vertices per tile of this
+  // side gets tiles of half the side, or a quarter (a ragged, scanned map;
+  // tile_min_vertices 0: always this side).
   double tile_m = 12.0;
   int tile_min_vertices = 400;
   // > 0: the result simplified (Ramer-Douglas-Peucker), its boundary moving
