@@ -9,7 +9,7 @@
 // --blacklist-from-log takes the goals the log's last EXPLORE_STATE (up to
 // the map) lists as visited or given up as the blacklist, as the mission had it.
 //
-// pex-plan --log IN.lcm --every-map [--config ...] [--strategy tour] [--plans-csv F] [--from-utime T]
+// pex-plan --log IN.lcm --every-map [--config ...] [--strategy tour] [--plans-csv F] [--from-utime T] [--tight]
 // Plans, as the explorer's worker does (the newest pose and LIDAR_SCAN's live
 // view at each MAP), on every MAP of a mission's log, and prints the planner's
 // CPU time per plan (p50 / p99 / max) and the slowest maps' utimes: the plan-time
@@ -56,7 +56,8 @@ namespace {
 // is MOVING, or, in a log without it, the goal committed to as the mission
 // does (kept while a candidate matches it, else the new plan's best). Not the
 // tight fallback nor the blacklist: the blacklist only drops candidates, the
-// fallback is a second plan.
+// fallback is a second plan. With --tight every plan is a tight fallback
+// instead, along the trail kept from the log's SLAM_UPDATE and poses.
 int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::string& map_channel,
                    const std::string& pose_channel, const pex::explorer::ExplorerOptions& options,
                    const pex::planning::PlannerOptions& planner, bool use_cache, const std::string& csv_path,
