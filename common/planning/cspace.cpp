@@ -142,7 +142,8 @@ std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& c
 std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon& cspace, const DrivenWay& way) {
   const auto& points = way.points;
   if (points.empty()) return {};
-  const std::vector<Point> all(points.begin(), points.end());
+  // The whole way, when it is all outside (copied only then: it is kilometres long).
+  auto all = [&] { return std::vector<Point>(points.begin(), points.end()); };
   mapping::Box box;
   bg::assign_inverse(box);
   std::size_t vertices = 0;
@@ -150,7 +151,7 @@ std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon&
     bg::expand(box, bg::return_envelope<mapping::Box>(polygon.outer()));
     vertices += polygon.outer().size();
   }
-  if (vertices == 0) return {all};  // no C-space: all of the way is outside it
+  if (vertices == 0) return {all()};  // no C-space: all of the way is outside it
   // A cell is marked when an edge of the C-space may come within `reach` of
   // it. An unmarked cell holds no point of the C-space's boundary: it is
   // wholly inside or wholly outside.
@@ -239,7 +240,7 @@ std::vector<std::vector<Point>> way_near_or_outside(const mapping::MultiPolygon&
   };
   std::vector<std::vector<Point>> stretches;
   if (points.size() == 1) {
-    if (!inside_clear(points[0], points[0])) stretches.push_back(all);
+    if (!inside_clear(points[0], points[0])) stretches.push_back(all());
     return stretches;
   }
   std::vector<Point> stretch;
