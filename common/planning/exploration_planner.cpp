@@ -527,7 +527,13 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     return std::any_of(blacklist.begin(), blacklist.end(),
                        [&](const Point& b) { return distance(b, p) <= options.blacklist_radius_m; });
   };
-  const auto chains = frontier_chains(map, &plan.stats.polygons_not_placed);
+  auto chains = frontier_chains(map, &plan.stats.polygons_not_placed);
+  if (options.min_enclosed_area_m2 > 0.0 && options.bay_max_area_m2 > 0.0) {
+    WalledBayOptions bays;
+    bays.max_area_m2 = options.bay_max_area_m2;
+    bays.max_lid_m = options.bay_max_lid_m;
+    find_walled_bays(map, chains, bays);
+  }
   plan.stats.frontier_chains = static_cast<int>(chains.size());
   const auto points = frontier_candidates(chains, options.frontier, &plan.stats.chains_too_short);
   std::vector<Point> targets;
@@ -535,7 +541,8 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   for (const auto& fp : points) {
     // Enclosed first: what lies behind such a frontier is bounded by the
     // map itself, wherever the robot could stand.
-    if (chains[static_cast<std::size_t>(fp.chain)].enclosed_area_m2 < options.min_enclosed_area_m2 &&
+    const FrontierChain& chain = chains[static_cast<std::size_t>(fp.chain)];
+    if ((chain.enclosed_area_m2 < options.min_enclosed_area_m2 || chain.bay_area_m2 < options.bay_max_area_m2) &&
         !(distance(fp.point, robot_point) <= options.enclosed_goal_range_m) &&
         !(focus && distance(fp.point, focus->frontier) <= focus->radius_m)) {
       ++plan.stats.candidates_enclosed;
@@ -594,7 +601,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     c.approach = approach;
     c.chain = fp.chain;
     c.chain_length_m = fp.chain_length_m;
-    c.enclosed_area_m2 = chains[static_cast<std::size_t>(fp.chain)].enclosed_area_m2;
+    c.enclosed_area_m2 = chains[static_cast<std::size_t>(fp.chain)].enclosed_or_bay_area_m2();
     c.blacklisted = near_the_blacklist(c.position);
     plan.candidates.push_back(std::move(c));
     targets.push_back(*position);

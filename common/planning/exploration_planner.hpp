@@ -101,6 +101,14 @@ struct PlannerOptions {
   // robot deeper into the room it is in; what the rule saves is the trip
   // back for one. 0: none.
   double enclosed_goal_range_m = 0.0;
+  // A chain in a walled bay of the map's boundary of less than
+  // bay_max_area_m2 (find_walled_bays: the flank of a desk, cabinet or box
+  // against a wall, whose front and the wall on both sides the laser saw;
+  // the lid, the unseen wall behind the object, at most bay_max_lid_m long)
+  // is enclosed as well, on the same terms. Only with min_enclosed_area_m2
+  // > 0. bay_max_area_m2 0 = off (docs/exploration.md, "Walled bays").
+  double bay_max_area_m2 = 0.0;
+  double bay_max_lid_m = 3.0;
   // A plan without the clearance margin that leaves the robot no goal looks
   // once more at the candidates it has no path to (in another piece of its
   // C-space, with no approach point): one whose piece stays apart from the
@@ -135,7 +143,7 @@ struct GoalCandidate {
   int chain = -1;               // frontier chain index
   double chain_length_m = 0.0;  // length of that frontier chain
   // The unknown region behind that chain, when the map encloses it
-  // (FrontierChain::enclosed_area_m2); +inf: the map's outside.
+  // or a walled bay holds it (FrontierChain::enclosed_or_bay_area_m2); +inf: the map's outside.
   double enclosed_area_m2 = std::numeric_limits<double>::infinity();
   bool blacklisted = false;
   bool reachable = false;       // in the robot's piece of the C-space: a path exists

@@ -230,6 +230,62 @@ TEST(PlanExploration, AFrontierOnASmallEnclosedUnknownIsNoGoal) {
   EXPECT_EQ(plan.stats.candidates_enclosed, 0);
 }
 
+// A 10 x 10 m room, its top side frontier (unbounded unknown beyond), with a
+// 1.6 x 0.8 m desk 5 cm in front of its bottom wall (x 4..5.6) whose left
+// flank the laser has not seen: the frontier from the wall up to the desk's
+// corner lies in a walled bay of 1.6 x 0.85 m.
+mapping::TypedMultiPolygon room_with_a_desk_against_its_wall() {
+  using E = mapping::EdgeType;
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(4, 0), Point(4, 0.85), Point(5.6, 0.85), Point(5.6, 0.05), Point(5.6, 0), Point(10, 0),
+       Point(10, 10), Point(0, 10)},
+      {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle,
+       E::kFrontier, E::kObstacle}})};
+}
+
+TEST(PlanExploration, AFrontierInASmallWalledBayIsEnclosed) {
+  const auto map = room_with_a_desk_against_its_wall();
+  auto flank = [](const Plan& plan) {
+    return std::find_if(plan.candidates.begin(), plan.candidates.end(),
+                        [](const GoalCandidate& c) { return c.frontier_point.y() < 1.0; });
+  };
+  PlannerOptions o = options();
+  o.min_enclosed_area_m2 = 2.0;
+  o.enclosed_goal_range_m = 4.0;
+  // Without bays: the flank (7.2 m away) is a goal, the nearest.
+  Plan plan = plan_exploration(map, Pose2{8, 6, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  ASSERT_NE(flank(plan), plan.candidates.end());
+  EXPECT_TRUE(std::isinf(flank(plan)->enclosed_area_m2));
+  EXPECT_EQ(plan.stats.candidates_enclosed, 0);
+  // With them: enclosed, and the room's top is the goal.
+  o.bay_max_area_m2 = 3.0;
+  plan = plan_exploration(map, Pose2{8, 6, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(flank(plan), plan.candidates.end());
+  EXPECT_EQ(plan.stats.candidates_enclosed, 1);
+  ASSERT_EQ(plan.enclosed_frontier_points.size(), 1u);
+  EXPECT_LT(plan.enclosed_frontier_points[0].y(), 1.0);
+  ASSERT_GE(plan.best, 0);
+  EXPECT_GT(plan.candidates[static_cast<std::size_t>(plan.best)].frontier_point.y(), 9.9);
+  // Within enclosed_goal_range_m of the robot it is still a goal, with the bay's area.
+  plan = plan_exploration(map, Pose2{3, 2.5, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  ASSERT_NE(flank(plan), plan.candidates.end());
+  EXPECT_NEAR(flank(plan)->enclosed_area_m2, 1.6 * 0.85, 1e-9);
+  // A bay of the desk's size or more is not looked for.
+  o.bay_max_area_m2 = 1.3;
+  plan = plan_exploration(map, Pose2{8, 6, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_NE(flank(plan), plan.candidates.end());
+  // Nor without the enclosed rule itself.
+  o.bay_max_area_m2 = 3.0;
+  o.min_enclosed_area_m2 = 0.0;
+  plan = plan_exploration(map, Pose2{8, 6, 0}, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_NE(flank(plan), plan.candidates.end());
+}
+
 TEST(PlanExploration, AnEnclosedFrontierNearTheRobotOrFollowedIsStillAGoal) {
   const auto map = room_with_a_desk_seen_from_three_sides();  // the desk's frontier at x = 6, y 4..5
   PlannerOptions o = options();

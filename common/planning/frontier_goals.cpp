@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <iterator>
+#include <optional>
 #include <utility>
 
 #include <boost/geometry/index/rtree.hpp>
@@ -20,7 +22,7 @@ bool is_frontier(mapping::EdgeType type) { return type != mapping::EdgeType::kOb
 
 // The chains of one ring, each with the area the ring encloses (enclosed_areas).
 void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeType>& types, double enclosed_area_m2,
-                     std::vector<FrontierChain>& chains) {
+                     int polygon, int ring_index, std::vector<FrontierChain>& chains) {
   const std::size_t n = ring.size() < 2 ? 0 : ring.size() - 1;  // edges
   if (n == 0 || types.size() != n) return;
   std::size_t start = n;  // first edge of a chain: a frontier edge after an obstacle edge
@@ -39,29 +41,40 @@ void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeT
     chain.points.assign(ring.begin(), ring.end());
     chain.length_m = polyline_length(chain.points);
     chain.enclosed_area_m2 = enclosed_area_m2;
+    chain.polygon = polygon;
+    chain.ring = ring_index;
+    chain.first_edge = 0;
+    chain.edge_count = n;
     chains.push_back(std::move(chain));
     return;
   }
   // Walk once around the ring from `start`, cutting at obstacle edges.
   FrontierChain current;
+  auto finish = [&] {
+    current.length_m = polyline_length(current.points);
+    current.enclosed_area_m2 = enclosed_area_m2;
+    current.polygon = polygon;
+    current.ring = ring_index;
+    current.edge_count = current.points.size() - 1;
+    chains.push_back(std::move(current));
+    current = FrontierChain{};
+  };
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = (start + k) % n;
     if (is_frontier(types[i])) {
-      if (current.points.empty()) current.points.push_back(ring[i]);
+      if (current.points.empty()) {
+        current.points.push_back(ring[i]);
+        current.first_edge = i;
+      }
       current.points.push_back(ring[i + 1]);
     } else if (!current.points.empty()) {
-      current.length_m = polyline_length(current.points);
-      current.enclosed_area_m2 = enclosed_area_m2;
-      chains.push_back(std::move(current));
-      current = FrontierChain{};
+      finish();
     }
   }
-  if (!current.points.empty()) {
-    current.length_m = polyline_length(current.points);
-    current.enclosed_area_m2 = enclosed_area_m2;
-    chains.push_back(std::move(current));
-  }
+  if (!current.points.empty()) finish();
 }
+
+double cross(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
 
 }  // namespace
 
@@ -154,11 +167,150 @@ std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map, int* po
   for (std::size_t p = 0; p < map.size(); ++p) {
     const auto& polygon = map[p];
     if (!mapping::types_match_rings(polygon)) continue;
-    add_ring_chains(polygon.geometry.outer(), polygon.edge_types[0], areas[p][0], chains);
+    add_ring_chains(polygon.geometry.outer(), polygon.edge_types[0], areas[p][0], static_cast<int>(p), 0, chains);
     for (std::size_t k = 0; k < polygon.geometry.inners().size(); ++k)
-      add_ring_chains(polygon.geometry.inners()[k], polygon.edge_types[1 + k], areas[p][1 + k], chains);
+      add_ring_chains(polygon.geometry.inners()[k], polygon.edge_types[1 + k], areas[p][1 + k], static_cast<int>(p),
+                      static_cast<int>(1 + k), chains);
   }
   return chains;
+}
+
+void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& chains,
+                      const WalledBayOptions& options) {
+  if (!(options.max_area_m2 > 0.0) || !(options.max_lid_m > 0.0)) return;
+  // Every edge of the map, frontier or obstacle: a lid may cross none. Built
+  // when a first lid gets that far.
+  using Value = std::pair<mapping::Segment, std::size_t>;
+  std::optional<bgi::rtree<Value, bgi::rstar<16>>> edges;
+  auto crosses_an_edge = [&](const Point& a, const Point& b) {
+    for (auto it = edges->qbegin(bgi::intersects(mapping::Segment(a, b))); it != edges->qend(); ++it)
+      if (segments_intersect(a, b, it->first.first, it->first.second)) return true;
+    return false;
+  };
+  // The lid u -> w, short of each end, where it meets the walls it
+  // continues: the ragged steps of a wall's obstacle band, where the wall
+  // meets a frontier, cross the wall's line by centimetres.
+  auto lid_crosses_an_edge = [&](const Point& u, const Point& w) {
+    if (!edges) {
+      std::vector<Value> values;
+      for (const auto& piece : map) {
+        if (std::abs(bg::area(piece.geometry.outer())) < options.min_piece_m2) continue;
+        mapping::for_each_edge(piece, [&](const Point& a, const Point& b, mapping::EdgeType) {
+          values.emplace_back(mapping::Segment(a, b), values.size());
+        });
+      }
+      edges.emplace(values.begin(), values.end());
+    }
+    auto short_of = [&](const Point& from, const Point& to) {  // `from` moved towards `to`
+      const double d = distance(from, to), t = std::min(options.lid_end_tolerance_m, 0.25 * d) / d;
+      return Point(from.x() + t * (to.x() - from.x()), from.y() + t * (to.y() - from.y()));
+    };
+    return crosses_an_edge(short_of(u, w), short_of(w, u));
+  };
+  const double cos_turn = std::cos(options.max_lid_turn_rad);
+  // A budget of ring steps for the walks and the face tests, linear in the
+  // map's size: a hostile map of many tiny edges must not cost chains x
+  // pairs x ring. Past it no more bays are looked for, which leaves their
+  // frontiers goals, as without the rule.
+  std::size_t map_vertices = 0;
+  for (const auto& polygon : map) {
+    map_vertices += polygon.geometry.outer().size();
+    for (const auto& inner : polygon.geometry.inners()) map_vertices += inner.size();
+  }
+  std::int64_t steps_left = static_cast<std::int64_t>(kWalledBayStepsPerMapVertex * map_vertices + kWalledBayStepsFloor);
+  for (FrontierChain& chain : chains) {
+    if (steps_left <= 0) break;
+    if (chain.closed || chain.polygon < 0 || static_cast<std::size_t>(chain.polygon) >= map.size()) continue;
+    const auto& polygon = map[static_cast<std::size_t>(chain.polygon)];
+    const auto& ring = chain.ring == 0 ? polygon.geometry.outer()
+                                       : polygon.geometry.inners()[static_cast<std::size_t>(chain.ring - 1)];
+    const auto& types = polygon.edge_types[static_cast<std::size_t>(chain.ring)];
+    const std::size_t n = ring.size() - 1;
+    if (chain.edge_count >= n) continue;
+    auto edge_length = [&](std::size_t i) { return distance(ring[i], ring[i + 1]); };
+    auto is_wall = [&](std::size_t i) {
+      return types[i] == mapping::EdgeType::kObstacle && edge_length(i) >= options.min_wall_m;
+    };
+    // Wall edges before the chain (each with the steps back from the chain's
+    // first edge) and after it, within search_m along the ring; the two
+    // walks share no edge.
+    const std::size_t free_edges = n - chain.edge_count;
+    std::vector<std::size_t> before, after;  // steps: 1 = the edge next to the chain
+    double walked = 0.0;
+    std::size_t back = 0;
+    while (back < free_edges && walked < options.search_m && steps_left-- > 0) {
+      ++back;
+      const std::size_t i = (chain.first_edge + n - back) % n;
+      if (is_wall(i)) before.push_back(back);
+      walked += edge_length(i);
+    }
+    walked = 0.0;
+    for (std::size_t ahead = 1; ahead + back <= free_edges && walked < options.search_m && steps_left-- > 0; ++ahead) {
+      const std::size_t i = (chain.first_edge + chain.edge_count - 1 + ahead) % n;
+      if (is_wall(i)) after.push_back(ahead);
+      walked += edge_length(i);
+    }
+    if (before.empty() || after.empty()) continue;
+    // The loop from u (the end of a wall edge before the chain) along the
+    // ring to w (the start of one after it), closed by the lid w -> u. The
+    // ring has the free space on its left, so a loop round unknown space
+    // turns clockwise: its signed area is negative.
+    const Point origin = ring[chain.first_edge];
+    auto ring_index = [&](std::ptrdiff_t k) {  // of the vertex (and edge) k steps from the chain's first
+      const auto signed_n = static_cast<std::ptrdiff_t>(n);
+      return static_cast<std::size_t>(((static_cast<std::ptrdiff_t>(chain.first_edge) + k) % signed_n + signed_n) %
+                                      signed_n);
+    };
+    auto vertex = [&](std::ptrdiff_t k) { return ring[ring_index(k)]; };
+    const std::ptrdiff_t first = -static_cast<std::ptrdiff_t>(back) + 1;
+    const std::ptrdiff_t last = static_cast<std::ptrdiff_t>(chain.edge_count + after.back()) - 1;
+    // Twice the signed area swept from `origin` by the ring's edges, summed
+    // from vertex `first` on: the loop's area in O(1) per pair.
+    std::vector<double> swept(static_cast<std::size_t>(last - first + 1), 0.0);
+    for (std::ptrdiff_t k = first; k < last; ++k) {
+      const Point a = vertex(k), b = vertex(k + 1);
+      swept[static_cast<std::size_t>(k - first + 1)] =
+          swept[static_cast<std::size_t>(k - first)] +
+          cross(a.x() - origin.x(), a.y() - origin.y(), b.x() - origin.x(), b.y() - origin.y());
+    }
+    double best = std::numeric_limits<double>::infinity();
+    for (const std::size_t b_steps : before) {
+      const std::ptrdiff_t ku = -static_cast<std::ptrdiff_t>(b_steps) + 1;  // u: the end of that wall edge
+      const Point u = vertex(ku), u_from = vertex(ku - 1);
+      const double bx = (u.x() - u_from.x()) / distance(u_from, u), by = (u.y() - u_from.y()) / distance(u_from, u);
+      for (const std::size_t a_steps : after) {
+        const std::ptrdiff_t kw = static_cast<std::ptrdiff_t>(chain.edge_count + a_steps) - 1;  // w: its start
+        const Point w = vertex(kw), w_to = vertex(kw + 1);
+        const double ax = (w_to.x() - w.x()) / distance(w, w_to), ay = (w_to.y() - w.y()) / distance(w, w_to);
+        // The lid: straight on from u to w, the two walls in line with it.
+        // (Not round a corner: the wall before u and one seen through a door
+        // beyond would close a room's worth of unknown as readily as the
+        // corner behind a desk.)
+        const double lid = distance(u, w);
+        if (!(lid >= 0.01) || lid > options.max_lid_m) continue;
+        const double lx = (w.x() - u.x()) / lid, ly = (w.y() - u.y()) / lid;
+        if (lx * bx + ly * by < cos_turn || lx * ax + ly * ay < cos_turn) continue;
+        auto rel_cross = [&](const Point& p, const Point& q) {
+          return cross(p.x() - origin.x(), p.y() - origin.y(), q.x() - origin.x(), q.y() - origin.y());
+        };
+        const double twice_area = swept[static_cast<std::size_t>(kw - first)] -
+                                  swept[static_cast<std::size_t>(ku - first)] + rel_cross(w, u);
+        const double area = -0.5 * twice_area;  // > 0 round unknown space
+        if (!(area > 0.0) || area >= options.max_area_m2 || area >= best) continue;
+        // The object in front of the lid: a wall edge of the loop (not the
+        // two the lid continues) whose middle is min_depth_m from the lid.
+        bool faced = false;
+        for (std::ptrdiff_t k = ku; k < kw && !faced && steps_left > 0; ++k, --steps_left) {
+          const Point a = vertex(k), b = vertex(k + 1);
+          const Point middle(0.5 * (a.x() + b.x()), 0.5 * (a.y() + b.y()));
+          faced = is_wall(ring_index(k)) && distance(middle, closest_point_on_segment(middle, u, w)) >= options.min_depth_m;
+        }
+        if (!faced || lid_crosses_an_edge(u, w)) continue;
+        best = area;
+      }
+    }
+    chain.bay_area_m2 = best;
+  }
 }
 
 Point point_at_arc_length(const std::vector<Point>& polyline, double s) {

@@ -28,6 +28,16 @@ struct FrontierChain {
   // reveal more than this: the shadow behind a desk seen from three sides,
   // the inside of a cabinet seen through a crack, a pillar's unseen face.
   double enclosed_area_m2 = std::numeric_limits<double>::infinity();
+  // The area of the walled bay the chain lies in (find_walled_bays), +inf
+  // when none was looked for or found.
+  double bay_area_m2 = std::numeric_limits<double>::infinity();
+  // The smaller of the two: what a visit to the chain can reveal at most.
+  double enclosed_or_bay_area_m2() const { return enclosed_area_m2 < bay_area_m2 ? enclosed_area_m2 : bay_area_m2; }
+  // Where the chain lies: map polygon, ring (0 outer, 1 + k the k-th hole)
+  // and its first edge (ring[first_edge] -> ring[first_edge + 1]) and edge
+  // count; a closed chain is the whole ring.
+  int polygon = -1, ring = -1;
+  std::size_t first_edge = 0, edge_count = 0;
 };
 
 // Every frontier chain of the map, ring by ring in map order, each with the
@@ -53,6 +63,55 @@ std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map, int* po
 inline constexpr std::size_t kEnclosedLookupVerticesPerMapVertex = 64;
 inline constexpr std::size_t kEnclosedLookupVerticesFloor = 1'000'000;
 std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map, int* polygons_not_placed = nullptr);
+
+// A walled bay: a notch of a map ring on its unknown side that a straight
+// lid closes, the lid continuing a wall on both sides, with an obstacle face
+// standing in front of the lid. It is what a desk, a cabinet or a box
+// against a wall leaves: the laser saw the object's front and the wall on
+// both sides, not the object's flank nor the wall behind it; the frontier
+// on the flank borders a region the map all but encloses, which a look
+// from the flank shows to be the object and a strip of wall. Bays of more
+// than max_area_m2 are not looked for: a room seen through a door has its
+// door's jambs in line, but its unknown region is larger, and the lid across
+// a door the laser saw through crosses the free space.
+struct WalledBayOptions {
+  double max_area_m2 = 0.0;  // 0: off
+  // The lid: the stretch of wall nobody saw, from the end of a wall edge
+  // before the chain to the start of one after it (each at least min_wall_m
+  // long and turned no more than max_lid_turn_rad from the lid), at most
+  // max_lid_m long. Straight only: a lid round a corner would close a
+  // room's worth of unknown seen through a door as readily as the corner
+  // behind a desk.
+  double max_lid_m = 3.0;
+  double min_wall_m = 0.1;
+  double max_lid_turn_rad = 0.2;
+  // An obstacle edge of the bay (at least min_wall_m long) whose middle is
+  // this far from the lid: the object in front of the unseen wall. Without one
+  // the notch is the wall itself, seen at a grazing angle or not at all,
+  // where a door may be.
+  double min_depth_m = 0.2;
+  // How far along the ring, on each side of the chain, the lid's ends are
+  // looked for.
+  double search_m = 8.0;
+  // The lid crosses no edge of the map but within this of its ends (at most
+  // a quarter of its length): there the ragged steps of a wall's obstacle
+  // band, where it meets the frontier, cross the wall's line.
+  double lid_end_tolerance_m = 0.05;
+  // Nor an edge of a map polygon smaller than this: a sliver of free space
+  // seen past the object's end into the strip behind it lies in the bay.
+  // A room seen through a gap behind the object is larger, and stops it.
+  double min_piece_m2 = 0.25;
+};
+
+// Sets bay_area_m2 of every chain that lies in a walled bay of less than
+// options.max_area_m2 (the smallest such bay). `chains` as frontier_chains
+// gave them for `map`. The ring steps read have a budget of
+// kWalledBayStepsPerMapVertex per map vertex plus kWalledBayStepsFloor;
+// past it the chains left keep bay_area_m2 +inf (goals, as without bays).
+inline constexpr std::size_t kWalledBayStepsPerMapVertex = 64;
+inline constexpr std::size_t kWalledBayStepsFloor = 1'000'000;
+void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& chains,
+                      const WalledBayOptions& options);
 
 struct FrontierGoalOptions {
   // Radius within which a candidate "covers" the frontier (the paper's sensor

@@ -180,5 +180,160 @@ TEST(FrontierCandidates, NoFrontierNoCandidate) {
   EXPECT_TRUE(frontier_candidates(frontier_chains(map), {}).empty());
 }
 
+// A 6 x 4 m room whose bottom wall has a 1.6 x 0.8 m desk standing 5 cm in
+// front of it (x 2..3.6): the laser saw the desk's front and right flank and
+// the wall on both sides, not the desk's left flank (a frontier from the wall
+// up to the desk's corner) nor the 5 cm behind it (a short frontier down the
+// right flank's end).
+mapping::TypedMultiPolygon room_with_a_desk_against_the_wall() {
+  RingSpec outer{{Point(0, 0), Point(2, 0), Point(2, 0.85), Point(3.6, 0.85), Point(3.6, 0.05), Point(3.6, 0),
+                  Point(6, 0), Point(6, 4), Point(0, 4)},
+                 {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle,
+                  E::kObstacle, E::kObstacle}};
+  return {typed_polygon(outer)};
+}
+
+WalledBayOptions bays_below(double max_area_m2) {
+  WalledBayOptions o;
+  o.max_area_m2 = max_area_m2;
+  return o;
+}
+
+TEST(WalledBays, ADesksFlankAgainstAWallLiesInABayOfTheDesksSize) {
+  const auto map = room_with_a_desk_against_the_wall();
+  auto chains = frontier_chains(map);
+  ASSERT_EQ(chains.size(), 2u);  // the desk's left flank, the 5 cm behind its right end
+  for (const auto& c : chains) EXPECT_TRUE(std::isinf(c.enclosed_area_m2));  // on the room's outer ring
+  find_walled_bays(map, chains, bays_below(2.0));
+  // The lid runs along the wall from (2, 0) to (3.6, 0): the bay is the desk
+  // and the 5 cm strip behind it, 1.6 x 0.85 m.
+  EXPECT_NEAR(chains[0].bay_area_m2, 1.6 * 0.85, 1e-9);
+  EXPECT_NEAR(chains[1].bay_area_m2, 1.6 * 0.85, 1e-9);
+  EXPECT_NEAR(chains[0].enclosed_or_bay_area_m2(), 1.6 * 0.85, 1e-9);
+  // Bays of that size or more are not looked for; off by default.
+  auto again = frontier_chains(map);
+  find_walled_bays(map, again, bays_below(1.36));
+  EXPECT_TRUE(std::isinf(again[0].bay_area_m2));
+  find_walled_bays(map, again, WalledBayOptions{});
+  EXPECT_TRUE(std::isinf(again[0].bay_area_m2));
+  // A lid longer than allowed: none.
+  WalledBayOptions short_lid = bays_below(2.0);
+  short_lid.max_lid_m = 1.5;
+  find_walled_bays(map, again, short_lid);
+  EXPECT_TRUE(std::isinf(again[0].bay_area_m2));
+}
+
+TEST(WalledBays, ADoorTheLaserSawThroughIsNoBay) {
+  // The bottom wall has a 1 m door (x 2..3) the laser saw through: the free
+  // space runs through it into a wedge of the room below, whose far wall it
+  // saw. The door's jambs are in line, but the loop round the wedge encloses
+  // free space, not unknown.
+  RingSpec outer{{Point(0, 0), Point(2, 0), Point(1.5, -2), Point(3.5, -2), Point(3, 0), Point(6, 0), Point(6, 4),
+                  Point(0, 4)},
+                 {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
+                  E::kObstacle}};
+  const mapping::TypedMultiPolygon map{typed_polygon(outer)};
+  auto chains = frontier_chains(map);
+  ASSERT_EQ(chains.size(), 2u);
+  find_walled_bays(map, chains, bays_below(1000.0));
+  EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
+  EXPECT_TRUE(std::isinf(chains[1].bay_area_m2));
+}
+
+TEST(WalledBays, AWallStretchNothingStandsInFrontOfIsNoBay) {
+  // The wall between x 2 and 3 was not seen (a grazing look; a door may be
+  // there): a shallow notch of frontier, and of wall 0.1 m in front of the
+  // wall's line (scan noise), not an object in front of it.
+  RingSpec outer{{Point(0, 0), Point(2, 0), Point(2.4, 0.1), Point(2.8, 0.1), Point(3, 0), Point(6, 0), Point(6, 4),
+                  Point(0, 4)},
+                 {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
+                  E::kObstacle}};
+  const mapping::TypedMultiPolygon map{typed_polygon(outer)};
+  auto chains = frontier_chains(map);
+  ASSERT_EQ(chains.size(), 2u);
+  find_walled_bays(map, chains, bays_below(2.0));
+  EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
+  EXPECT_TRUE(std::isinf(chains[1].bay_area_m2));
+  // Asked for less depth, the same notch is a bay: the depth is what rules it out.
+  WalledBayOptions shallow = bays_below(2.0);
+  shallow.min_depth_m = 0.05;
+  find_walled_bays(map, chains, shallow);
+  EXPECT_NEAR(chains[0].bay_area_m2, 0.07, 1e-9);
+  EXPECT_NEAR(chains[1].bay_area_m2, 0.07, 1e-9);
+}
+
+TEST(WalledBays, WallsThatDoNotContinueAlongTheLidCloseNoBay) {
+  // The desk's right flank meets the room's right wall instead of the bottom
+  // wall: from (2, 0) the next wall edge runs up (x = 6), not along the lid.
+  RingSpec outer{{Point(0, 0), Point(2, 0), Point(2, 0.85), Point(6, 0.85), Point(6, 4), Point(0, 4)},
+                 {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}};
+  const mapping::TypedMultiPolygon map{typed_polygon(outer)};
+  auto chains = frontier_chains(map);
+  ASSERT_EQ(chains.size(), 1u);
+  find_walled_bays(map, chains, bays_below(1000.0));
+  EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
+}
+
+TEST(WalledBays, ALidThroughAnotherPieceOfTheMapIsNone) {
+  // Free space seen behind the desk, across the wall's line (a room beyond a
+  // gap: a second polygon of the map, x 2.5..3.1): the lid would cross it.
+  auto map = room_with_a_desk_against_the_wall();
+  map.push_back(typed_polygon(testing::rectangle(2.5, -1.0, 3.1, 0.02,
+                                                 {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle})));
+  auto chains = frontier_chains(map);
+  find_walled_bays(map, chains, bays_below(2.0));
+  EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
+  EXPECT_TRUE(std::isinf(chains[1].bay_area_m2));
+  // A sliver (under min_piece_m2) seen into the strip behind the desk does not.
+  map.back() = typed_polygon(testing::rectangle(2.5, -0.02, 3.1, 0.02,
+                                                {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle}));
+  chains = frontier_chains(map);
+  find_walled_bays(map, chains, bays_below(2.0));
+  EXPECT_NEAR(chains[0].bay_area_m2, 1.6 * 0.85, 1e-9);
+}
+
+TEST(WalledBays, NoLidTurnsACorner) {
+  // A desk in the room's bottom-right corner (x 4.3..5.95): its bay would be
+  // closed by the corner (6, 0). But so would, through a door, part of the
+  // next room: the room's left wall carried on down and the far wall the
+  // laser saw through the door, meeting at (0, -1) (2.75 m2 of unknown
+  // beside the door's wedge). Neither is a bay: lids are straight.
+  RingSpec desk{{Point(0, 0), Point(4.3, 0), Point(4.3, 0.85), Point(5.95, 0.85), Point(5.95, 1.0), Point(6, 1.0),
+                 Point(6, 4), Point(0, 4)},
+                {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
+                 E::kObstacle}};
+  RingSpec door{{Point(0, 0), Point(2, 0), Point(1.75, -1), Point(3.25, -1), Point(3, 0), Point(6, 0), Point(6, 4),
+                 Point(0, 4)},
+                {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
+                 E::kObstacle}};
+  for (const RingSpec& ring : {desk, door}) {
+    const mapping::TypedMultiPolygon map{typed_polygon(ring)};
+    auto chains = frontier_chains(map);
+    ASSERT_EQ(chains.size(), 2u);
+    find_walled_bays(map, chains, bays_below(3.0));
+    EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
+    EXPECT_TRUE(std::isinf(chains[1].bay_area_m2));
+  }
+}
+
+TEST(WalledBays, AChainOnAHoleRingFindsItsBayToo) {
+  // The room as a hole of a larger map polygon would be built clockwise: the
+  // same desk on the wall of a courtyard seen from outside (a hole whose
+  // ring has free space on its left as well).
+  RingSpec outer{{Point(-10, -10), Point(20, -10), Point(20, 20), Point(-10, 20)},
+                 {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}};
+  // A 6 x 4 m block (the hole) whose top wall (y = 4, seen from above) has a
+  // desk in front of it on the free side, x 2..3.6, front at y = 4.85.
+  RingSpec hole{{Point(0, 0), Point(0, 4), Point(2, 4), Point(2, 4.85), Point(3.6, 4.85), Point(3.6, 4),
+                 Point(6, 4), Point(6, 0)},
+                {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle,
+                 E::kObstacle}};
+  const mapping::TypedMultiPolygon map{typed_polygon(outer, {hole})};
+  auto chains = frontier_chains(map);
+  ASSERT_EQ(chains.size(), 1u);
+  find_walled_bays(map, chains, bays_below(2.0));
+  EXPECT_NEAR(chains[0].bay_area_m2, 1.6 * 0.85, 1e-9);
+}
+
 }  // namespace
 }  // namespace pex::planning

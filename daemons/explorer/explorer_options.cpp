@@ -64,6 +64,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("min_enclosed_area_m2", planner.min_enclosed_area_m2, in_range(0.0, 1000.0));
   planner.enclosed_goal_range_m =
       config.get<double>("enclosed_goal_range_m", planner.enclosed_goal_range_m, in_range(0.0, 1000.0));
+  planner.bay_max_area_m2 = config.get<double>("bay_max_area_m2", planner.bay_max_area_m2, in_range(0.0, 1000.0));
+  planner.bay_max_lid_m = config.get<double>("bay_max_lid_m", planner.bay_max_lid_m, in_range(0.01, 20.0));
   planner.narrow_gap_tolerance_m =
       config.get<double>("narrow_gap_tolerance_m", planner.narrow_gap_tolerance_m, in_range(0.0, 1.0));
   if (planner.narrow_gap_tolerance_m >= cspace.robot_radius_m)
