@@ -316,6 +316,44 @@ TEST(WalledBays, NoLidTurnsACorner) {
   }
 }
 
+TEST(WalledBays, AMapOfManyTinyEdgesIsReadWithinABudgetNeverTakenAsABay) {
+  // The desk's room, its ring starting at (0, 4) and its left wall a zigzag
+  // of 40,000 edges 0.1 mm long, every other one frontier: 20,000 chains,
+  // each walking up to 8 m of ring before the desk's two come. The ring
+  // steps have a budget linear in the map's size; past it the desk's chains
+  // are not looked at and stay goals (+inf), never the other way round.
+  auto room = [](int zigzag_edges) {
+    std::vector<Point> points{Point(0, 4)};
+    std::vector<E> types;
+    for (int i = 1; i <= zigzag_edges; ++i) {
+      points.push_back(Point(i % 2 == 1 && i < zigzag_edges ? 1e-4 : 0.0, 4.0 - 4.0 * i / zigzag_edges));
+      types.push_back(i % 2 == 1 ? E::kFrontier : E::kObstacle);
+    }
+    for (const Point& p : {Point(2, 0), Point(2, 0.85), Point(3.6, 0.85), Point(3.6, 0.05), Point(3.6, 0), Point(6, 0),
+                           Point(6, 4)})
+      points.push_back(p);
+    for (E t : {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle,
+                E::kObstacle})
+      types.push_back(t);
+    return mapping::TypedMultiPolygon{typed_polygon(RingSpec{points, types})};
+  };
+  auto desk_bays = [](const mapping::TypedMultiPolygon& map) {
+    auto chains = frontier_chains(map);
+    find_walled_bays(map, chains, bays_below(2.0));
+    std::vector<double> areas;
+    for (const auto& c : chains)
+      if (c.points.front().y() < 1.0 && c.points.front().x() > 1.0) areas.push_back(c.bay_area_m2);
+    return areas;
+  };
+  const auto few = desk_bays(room(2));
+  ASSERT_EQ(few.size(), 2u);
+  EXPECT_NEAR(few[0], 1.6 * 0.85, 1e-9);
+  const auto many = desk_bays(room(40000));
+  ASSERT_EQ(many.size(), 2u);
+  EXPECT_TRUE(std::isinf(many[0]));
+  EXPECT_TRUE(std::isinf(many[1]));
+}
+
 TEST(WalledBays, AChainOnAHoleRingFindsItsBayToo) {
   // The room as a hole of a larger map polygon would be built clockwise: the
   // same desk on the wall of a courtyard seen from outside (a hole whose
