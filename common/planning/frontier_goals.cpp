@@ -76,6 +76,17 @@ void add_ring_chains(const mapping::Ring& ring, const std::vector<mapping::EdgeT
 
 double cross(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
 
+// The points of every ring of the map (closing points counted): what the
+// work budgets of enclosed_areas and find_walled_bays scale with.
+std::size_t ring_points(const TypedMultiPolygon& map) {
+  std::size_t points = 0;
+  for (const auto& polygon : map) {
+    points += polygon.geometry.outer().size();
+    for (const auto& inner : polygon.geometry.inners()) points += inner.size();
+  }
+  return points;
+}
+
 }  // namespace
 
 std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map, int* polygons_not_placed) {
@@ -110,11 +121,7 @@ std::vector<std::vector<double>> enclosed_areas(const TypedMultiPolygon& map, in
   // taken from no hole's region, and the holes it might lie in, and its own
   // outer ring, count as unbounded (their frontiers goals as any other),
   // so the budget can cost goals to visit, never a frontier skipped.
-  std::size_t map_vertices = 0;
-  for (const auto& polygon : map) {
-    map_vertices += polygon.geometry.outer().size();
-    for (const auto& inner : polygon.geometry.inners()) map_vertices += inner.size();
-  }
+  const std::size_t map_vertices = ring_points(map);
   const std::size_t budget = kEnclosedLookupVerticesPerMapVertex * map_vertices + kEnclosedLookupVerticesFloor;
   std::size_t read = 0;
   std::vector<char> hole_unbounded(holes.size(), 0), placed(map.size(), 1);
@@ -212,11 +219,7 @@ void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& 
   // map's size: a hostile map of many tiny edges must not cost chains x
   // pairs x ring. Past it no more bays are looked for, which leaves their
   // frontiers goals, as without the rule.
-  std::size_t map_vertices = 0;
-  for (const auto& polygon : map) {
-    map_vertices += polygon.geometry.outer().size();
-    for (const auto& inner : polygon.geometry.inners()) map_vertices += inner.size();
-  }
+  const std::size_t map_vertices = ring_points(map);
   std::int64_t steps_left = static_cast<std::int64_t>(kWalledBayStepsPerMapVertex * map_vertices + kWalledBayStepsFloor);
   for (FrontierChain& chain : chains) {
     if (steps_left <= 0) break;
@@ -266,13 +269,13 @@ void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& 
     const std::ptrdiff_t last = static_cast<std::ptrdiff_t>(chain.edge_count + after.back()) - 1;
     // Twice the signed area swept from `origin` by the ring's edges, summed
     // from vertex `first` on: the loop's area in O(1) per pair.
+    auto rel_cross = [&](const Point& p, const Point& q) {
+      return cross(p.x() - origin.x(), p.y() - origin.y(), q.x() - origin.x(), q.y() - origin.y());
+    };
     std::vector<double> swept(static_cast<std::size_t>(last - first + 1), 0.0);
-    for (std::ptrdiff_t k = first; k < last; ++k) {
-      const Point a = vertex(k), b = vertex(k + 1);
-      swept[static_cast<std::size_t>(k - first + 1)] =
-          swept[static_cast<std::size_t>(k - first)] +
-          cross(a.x() - origin.x(), a.y() - origin.y(), b.x() - origin.x(), b.y() - origin.y());
-    }
+    for (std::ptrdiff_t k = first; k < last; ++k)
+      swept[static_cast<std::size_t>(k - first + 1)] = swept[static_cast<std::size_t>(k - first)] +
+                                                        rel_cross(vertex(k), vertex(k + 1));
     double best = std::numeric_limits<double>::infinity();
     for (const std::size_t b_steps : before) {
       const std::ptrdiff_t ku = -static_cast<std::ptrdiff_t>(b_steps) + 1;  // u: the end of that wall edge
@@ -290,9 +293,6 @@ void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& 
         if (!(lid >= 0.01) || lid > options.max_lid_m) continue;
         const double lx = (w.x() - u.x()) / lid, ly = (w.y() - u.y()) / lid;
         if (lx * bx + ly * by < cos_turn || lx * ax + ly * ay < cos_turn) continue;
-        auto rel_cross = [&](const Point& p, const Point& q) {
-          return cross(p.x() - origin.x(), p.y() - origin.y(), q.x() - origin.x(), q.y() - origin.y());
-        };
         const double twice_area = swept[static_cast<std::size_t>(kw - first)] -
                                   swept[static_cast<std::size_t>(ku - first)] + rel_cross(w, u);
         const double area = -0.5 * twice_area;  // > 0 round unknown space
