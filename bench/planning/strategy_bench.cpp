@@ -14,11 +14,13 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <boost/geometry/io/wkt/write.hpp>
 
 #include "evaluation/exploration_metrics.hpp"
 #include "explorer_options.hpp"
@@ -45,6 +47,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> strategies;
   std::vector<std::string> worlds;
   double max_travel_m = 4000.0;
+  std::string map_wkt_dir;
   app.add_option("--config", config_path, "explorer config (planner options)")->check(CLI::ExistingFile);
   app.add_option("--mapper-config", mapper_config_path, "polygon_mapper config (scan polygons, map)")
       ->check(CLI::ExistingFile);
@@ -53,6 +56,9 @@ int main(int argc, char** argv) {
   std::string strategy_list = "greedy,tour";
   app.add_option("--strategies", strategy_list, "goal strategies to compare, comma-separated (greedy,tour)");
   app.add_option("--max-travel-m", max_travel_m, "give a mission up after this much driving")->check(CLI::PositiveNumber);
+  app.add_option("--map-wkt-dir", map_wkt_dir,
+                 "write each run's final map (MAP_FREE) there as WORLD-STRATEGY.wkt, one POLYGON per line (world frame)")
+      ->check(CLI::ExistingDirectory);
   app.add_option("worlds", worlds, "world files (default: every worlds/*.wkt)")->check(CLI::ExistingFile);
   app.set_version_flag("--version", std::string("pex-bench-strategies ") + PEX_VERSION);
   try {
@@ -144,6 +150,15 @@ int main(int argc, char** argv) {
         return 70;
       }
       if (maps.done) path_of[name][strategy_name] = maps.travelled_m;
+      if (!map_wkt_dir.empty()) {
+        const auto out_path = std::filesystem::path(map_wkt_dir) / (name + "-" + strategy_name + ".wkt");
+        std::ofstream out(out_path);
+        for (const auto& piece : maps.free_space) out << boost::geometry::wkt(piece.geometry) << '\n';
+        if (!out) {
+          std::fprintf(stderr, "pex-bench-strategies: cannot write %s\n", out_path.c_str());
+          return 73;
+        }
+      }
       // Poses are the world's (the emulated robot starts at START in world coordinates).
       const auto score = pex::evaluation::score_map(maps.free_space, pex::geometry::Pose2{0.0, 0.0, 0.0}, reachable,
                                                     walls, kWallToleranceM);

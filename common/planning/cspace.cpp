@@ -597,9 +597,12 @@ std::optional<Point> ConfigurationSpace::inward(const Point& q, std::uint32_t ed
   return candidate;
 }
 
-std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, double max_distance_m) const {
+std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, double max_distance_m,
+                                                               int skip_piece) const {
   if (!tree_ || !std::isfinite(p.x()) || !std::isfinite(p.y())) return std::nullopt;
-  if (!boundary_within(p, 0.5 * options_.interior_offset_m) && covers(p)) return p;
+  if (!boundary_within(p, 0.5 * options_.interior_offset_m) && covers(p) &&
+      (skip_piece < 0 || piece_of(p) != skip_piece))
+    return p;
   const mapping::Box window(Point(p.x() - max_distance_m, p.y() - max_distance_m),
                             Point(p.x() + max_distance_m, p.y() + max_distance_m));
   double best = std::numeric_limits<double>::infinity();
@@ -607,6 +610,7 @@ std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, 
   Point best_point;
   for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) {
     const Edge& e = edges_[it->second];
+    if (skip_piece >= 0 && e.polygon == static_cast<std::uint32_t>(skip_piece)) continue;
     const Point q = closest_point_on_segment(p, e.a, e.b);
     const double d = distance(p, q);
     // Ties go to the lower edge index: the answer does not depend on the tree's order.

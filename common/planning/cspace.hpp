@@ -125,7 +125,8 @@ class ConfigurationSpace {
   // A point of the interior within `max_distance_m` of p, at least about
   // interior_offset_m from the boundary: p itself if it is such a point, else
   // the nearest boundary point moved inward. nullopt if there is none.
-  std::optional<Point> nearest_interior_point(const Point& p, double max_distance_m) const;
+  // With `skip_piece` (an index into polygons()), a point of any other piece.
+  std::optional<Point> nearest_interior_point(const Point& p, double max_distance_m, int skip_piece = -1) const;
 
   // The reflex vertices (interior angle > 180 degrees), each moved
   // interior_offset_m inward along its bisector: the nodes through which

@@ -213,6 +213,17 @@ bool disk_reaches_past(const ConfigurationSpace& cspace, const ObstacleEdges& ob
   return false;
 }
 
+// True if the segment a-b crosses or touches an edge of `map`, of either
+// type: it leaves the free space the map knows. Looks at every edge: for the
+// rare question only (a start moved off a sliver).
+bool crosses_an_edge(const TypedMultiPolygon& map, const Point& a, const Point& b) {
+  bool crosses = false;
+  mapping::for_each_edge(map, [&](const Point& p, const Point& q, EdgeType) {
+    crosses = crosses || segments_intersect(a, b, p, q);
+  });
+  return crosses;
+}
+
 // The C-space of `map` and the robot's node in it, with their statistics in
 // `plan`; nullopt (and plan.error) when there is none.
 struct Setup {
@@ -243,6 +254,23 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
     return std::nullopt;
   }
   s.start = *start;
+  if (options.start_sliver_area_m2 > 0.0) {
+    const int piece = s.cspace.piece_of(s.start);
+    if (piece >= 0 && bg::area(s.cspace.polygons()[static_cast<std::size_t>(piece)].geometry) <
+                          options.start_sliver_area_m2) {
+      // The nearest point of another piece, if that piece is no sliver and
+      // nothing of the map stands between it and the robot.
+      const auto other = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m, piece);
+      const int other_piece = other ? s.cspace.piece_of(*other) : -1;
+      if (other_piece >= 0 &&
+          bg::area(s.cspace.polygons()[static_cast<std::size_t>(other_piece)].geometry) >=
+              options.start_sliver_area_m2 &&
+          !crosses_an_edge(map, s.robot_point, *other)) {
+        s.start = *other;
+        ++plan.stats.start_sliver_skipped;
+      }
+    }
+  }
   return s;
 }
 

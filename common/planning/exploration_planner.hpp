@@ -52,6 +52,12 @@ struct PlannerOptions {
   // The robot's own position is moved into the C-space when it is outside
   // (pushed against a wall, map noise) by at most this much.
   double start_snap_distance_m = 0.5;
+  // ... but not into a sliver: a C-space piece smaller than this (a speck the
+  // live view's or the map's jags cut off beside the robot) when a larger
+  // piece is also within start_snap_distance_m, in view of the robot. From a
+  // 0.03 m2 sliver 2 cm away every goal had "no path", and the goal followed
+  // was given up (floor90, b65's binaries: 58 m back for it at the end). 0: off.
+  double start_sliver_area_m2 = 0.05;
   // Candidates within this radius of a blacklisted point are not goals.
   double blacklist_radius_m = 0.5;
   // A frontier whose nearby C-space is cut off from the robot (seen through
@@ -177,6 +183,7 @@ struct PlanStats {
   // The robot's piece of the C-space is not its largest (a nook the map
   // shut behind it: Mission backs out before it calls the rest unreachable).
   bool robot_in_a_lesser_piece = false;
+  int start_sliver_skipped = 0;  // 1: the robot's start moved off a sliver of C-space (start_sliver_area_m2)
   std::int64_t segment_tests = 0;
 };
 

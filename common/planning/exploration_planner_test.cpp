@@ -518,6 +518,57 @@ TEST(PlanExploration, ARobotInTheLesserPartOfTheMapLeavesTheFrontierWithoutAPath
   EXPECT_TRUE(plan.stats.robot_in_a_lesser_piece);
 }
 
+// A 10 x 4 m room, its east wall a frontier, with a 0.8 m square chamber
+// north of it, joined by a neck 0.5 m wide and 0.2 m long: the chamber's
+// C-space (0.32 m offset) is a speck of about 0.03 m2 of its own, the
+// room's comes to 0.2 m below the neck.
+mapping::TypedMultiPolygon a_room_with_a_speck_beside_the_robot() {
+  return {typed_polygon(testing::RingSpec{
+      {Point(0, 0), Point(10, 0), Point(10, 4), Point(5.25, 4), Point(5.25, 4.2), Point(5.4, 4.2), Point(5.4, 5.0),
+       Point(4.6, 5.0), Point(4.6, 4.2), Point(4.75, 4.2), Point(4.75, 4), Point(0, 4)},
+      {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle,
+       E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}})};
+}
+
+TEST(PlanExploration, TheRobotsStartIsNotASliverOfCSpaceBesideIt) {
+  // The robot in the neck, 0.25 m from the speck and 0.35 m from the room's
+  // C-space (found on floor90: a 0.03 m2 speck 2 cm from the robot, every
+  // goal "no path", the goal followed given up).
+  const auto map = a_room_with_a_speck_beside_the_robot();
+  const Pose2 robot{5.0, 4.15, -M_PI / 2};
+  PlannerOptions o = options();
+  o.start_sliver_area_m2 = 0.0;
+  const Plan stranded = plan_exploration(map, robot, {}, o);
+  ASSERT_TRUE(stranded.ok) << stranded.error;
+  EXPECT_EQ(stranded.best_candidate(), nullptr);
+  EXPECT_GE(candidates_without_a_path(stranded), 1);
+
+  o.start_sliver_area_m2 = 0.05;
+  const Plan plan = plan_exploration(map, robot, {}, o);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.start_sliver_skipped, 1);
+  ASSERT_NE(plan.best_candidate(), nullptr);
+  EXPECT_EQ(candidates_without_a_path(plan), 0);
+  const auto& path = plan.best_candidate()->path;
+  ASSERT_GE(path.size(), 2u);
+  // From the robot down into the room, not up into the chamber.
+  EXPECT_LT(path[1].y(), 3.85);
+  EXPECT_NEAR(plan.best_candidate()->frontier_point.x(), 10.0, 1e-6);
+}
+
+TEST(PlanExploration, TheRobotsStartStaysInASliverWhenAWallStandsBeforeTheLargerPiece) {
+  // The same chamber as a map polygon of its own behind a 5 cm wall: the
+  // room's C-space is within the snap distance, but not through the wall.
+  auto map = mapping::TypedMultiPolygon{typed_polygon(testing::rectangle(
+      0, 0, 10, 4, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}))};
+  map.push_back(typed_polygon(testing::rectangle(4.6, 4.05, 5.4, 4.85)));
+  const Plan plan = plan_exploration(map, Pose2{5.0, 4.06, 0.0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.start_sliver_skipped, 0);
+  EXPECT_EQ(plan.best_candidate(), nullptr);
+  EXPECT_GE(candidates_without_a_path(plan), 1);
+}
+
 TEST(PlanExploration, TourStrategyPlansTheOrderNotJustTheNearest) {
   PlannerOptions o = options();
   o.strategy = GoalStrategy::kGreedy;

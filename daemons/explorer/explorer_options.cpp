@@ -53,6 +53,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("candidate_snap_distance_m", planner.candidate_snap_distance_m, positive<double>());
   planner.start_snap_distance_m =
       config.get<double>("start_snap_distance_m", planner.start_snap_distance_m, positive<double>());
+  planner.start_sliver_area_m2 =
+      config.get<double>("start_sliver_area_m2", planner.start_sliver_area_m2, in_range(0.0, 10.0));
   planner.blacklist_radius_m =
       config.get<double>("blacklist_radius_m", planner.blacklist_radius_m, non_negative<double>());
   planner.turn_cost_m_per_rad =

@@ -255,8 +255,9 @@ int main(int argc, char** argv) {
   std::string log_path, config_path, map_channel{pex::runtime::channels::kMap}, pose_channel{"SLAM_POSE"}, svg_path,
       csv_path;
   std::int64_t at_utime = -1, from_utime = 0;
-  bool tight = false, every_map = false, no_cache = false, blacklist_from_log = false;
+  bool tight = false, every_map = false, no_cache = false, blacklist_from_log = false, request_at_utime = false;
   std::string strategy;
+  std::vector<double> focus_xy;
   app.add_option("--log", log_path, "LCM log with MAP and pose messages")->required();
   app.add_option("--config", config_path, "explorer config (planner options); default: the defaults in code");
   app.add_option("--map-channel", map_channel, "channel of the pex.polygon_map_t messages");
@@ -280,6 +281,13 @@ int main(int argc, char** argv) {
                "plans must not change)");
   app.add_option("--strategy", strategy, "goal strategy (greedy | tour); default: the config's")
       ->check(CLI::IsMember({"greedy", "tour"}));
+  app.add_flag("--request-at-utime", request_at_utime,
+               "with --utime: the robot's pose, the live view's scan and the blacklist as they were at --utime (a plan "
+               "the explorer requested then), not as they were when the map came");
+  app.add_option("--focus", focus_xy,
+                 "plan as while following a goal: GOAL_X GOAL_Y FRONTIER_X FRONTIER_Y (m, map frame; EXPLORE_STATE's "
+                 "goal and the frontier it looks at), matched within the config's goal_match_radius_m")
+      ->expected(4);
   if (const auto code = pex::cli::parse_command_line(app, "pex-plan", argc, argv)) return *code;
 
   pex::explorer::ExplorerOptions options;
@@ -346,6 +354,11 @@ int main(int argc, char** argv) {
       blacklist = blacklist_pending;
     }
   }
+  if (request_at_utime && map) {
+    pose = pose_pending;
+    scan = scan_pending;
+    blacklist = blacklist_pending;
+  }
   if (!map || !pose) {
     std::fprintf(stderr, "pex-plan: no %s with a %s before it in %s\n", map_channel.c_str(), pose_channel.c_str(),
                  log_path.c_str());
@@ -367,8 +380,12 @@ int main(int argc, char** argv) {
   if (trail) way = {*trail, planner.trail_corridor_m};
   const auto* driven = way.points.empty() ? nullptr : &way;
   const double plan_started_ms = pex::explorer::thread_cpu_ms();
+  std::optional<pex::planning::GoalFocus> focus;
+  if (focus_xy.size() == 4)
+    focus = pex::planning::GoalFocus{{focus_xy[0], focus_xy[1]}, {focus_xy[2], focus_xy[3]},
+                                     options.mission.goal_match_radius_m};
   const auto plan = pex::planning::plan_exploration(decoded.polygons, robot, blacklist, planner, live ? &planned_on : nullptr,
-                                                    nullptr, nullptr, driven);
+                                                    focus ? &*focus : nullptr, nullptr, driven);
   const double plan_cpu_ms = pex::explorer::thread_cpu_ms() - plan_started_ms;
   pex::planning::ConfigurationSpace cspace;
   cspace.build(planned_on, planner.cspace, nullptr, driven);

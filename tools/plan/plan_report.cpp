@@ -39,6 +39,8 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
   const auto& pieces = cspace.polygons();
   out += format("C-space: %zu pieces, %d vertices, %d reflex nodes\n", pieces.size(), plan.stats.cspace_vertices,
                 plan.stats.reflex_nodes);
+  if (plan.stats.start_sliver_skipped > 0)
+    out += "start: moved off a sliver of C-space beside the robot (start_sliver_area_m2) to the nearest larger piece\n";
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const double d = bg::distance(robot, pieces[i].geometry);
     out += format("  piece %zu: %.2f m2, %zu holes, %.3f m from the robot%s\n", i, bg::area(pieces[i].geometry),
