@@ -121,6 +121,7 @@ int main(int argc, char** argv) {
       mission.replan_on_the_way = true;
       mission.goal_match_radius_m = explorer.mission.goal_match_radius_m;
       mission.back_out_m = explorer.mission.back_out_m;
+      mission.robot_radius_m = kSimRobotRadiusM;  // stopped short of what the map does not hold, as the guard stops
       mission.keep_snapshots = false;
       mission.scan = mapper.scan;
       mission.map = mapper.map;
@@ -164,9 +165,9 @@ int main(int argc, char** argv) {
                                                     walls, kWallToleranceM);
       std::printf(
           "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"backs_out\":%d,"
-          "\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f,\"plan_cpu_ms_p50\":%.3f,\"plan_cpu_ms_p99\":%.3f}\n",
+          "\"guard_stops\":%d,\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f,\"plan_cpu_ms_p50\":%.3f,\"plan_cpu_ms_p99\":%.3f}\n",
           name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
-          maps.goals_seen, maps.backs_out, maps.plans, score.coverage, score.iou, plan_cpu_ms.quantile(0.5),
+          maps.goals_seen, maps.backs_out, maps.guard_stops, maps.plans, score.coverage, score.iou, plan_cpu_ms.quantile(0.5),
           plan_cpu_ms.quantile(0.99));
       std::fflush(stdout);
     }

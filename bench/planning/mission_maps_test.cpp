@@ -1,0 +1,69 @@
+// The emulated mission of pex-bench-strategies and pex-bench-planning
+// (mission_maps.hpp): what its robot does with a path through something.
+#include <gtest/gtest.h>
+
+#include "mission_maps.hpp"
+
+namespace pex::bench {
+namespace {
+
+using mapping::Point;
+
+// A 12 x 3 m corridor with a 4 cm post on its axis at x = 6, from its west end.
+sim::World corridor_with_a_post() {
+  std::string error;
+  auto parsed = sim::parse_world(
+      "START 1 1.5 0\n"
+      "LINESTRING(0 0, 12 0, 12 3, 0 3, 0 0)\n"
+      "POLYGON((5.98 1.48, 6.02 1.48, 6.02 1.52, 5.98 1.52, 5.98 1.48))\n",
+      "corridor_with_a_post");
+  return std::get<sim::World>(std::move(parsed));
+}
+
+// One goal at the corridor's east end, straight through the post; then none.
+MissionPlanner through_the_post() {
+  return [](const mapping::TypedMultiPolygon&, const planning::Pose2& pose, const std::vector<Point>& blacklist) {
+    planning::Plan plan;
+    plan.ok = true;
+    const Point goal(11, 1.5);
+    for (const auto& b : blacklist)
+      if (boost::geometry::distance(b, goal) < 0.5) return plan;
+    planning::GoalCandidate c;
+    c.position = goal;
+    c.frontier_point = Point(12, 1.5);
+    c.reachable = true;
+    c.path = {Point(pose.x_m, pose.y_m), goal};
+    c.path_length_m = boost::geometry::distance(c.path[0], goal);
+    c.cost = c.path_length_m;
+    plan.candidates.push_back(c);
+    plan.best = 0;
+    return plan;
+  };
+}
+
+TEST(EmulatedMission, APathThroughAWallTheMapDoesNotHoldStopsShortOfIt) {
+  const auto world = corridor_with_a_post();
+  MissionMapsOptions o;
+  o.max_goals = 5;
+  o.robot_radius_m = 0.25;
+  const auto maps = emulate_mission(world, o, through_the_post());
+  ASSERT_TRUE(maps.error.empty()) << maps.error;
+  EXPECT_EQ(maps.guard_stops, 1);
+  EXPECT_TRUE(maps.done);
+  // Stopped with the disk clear of the post: from x = 1 to at most 6 - 0.02 - 0.25.
+  EXPECT_GT(maps.travelled_m, 4.0);
+  EXPECT_LE(maps.travelled_m, 4.73 + 1e-9);
+}
+
+TEST(EmulatedMission, WithoutARadiusThePathIsFollowedThroughIt) {
+  const auto world = corridor_with_a_post();
+  MissionMapsOptions o;
+  o.max_goals = 5;
+  const auto maps = emulate_mission(world, o, through_the_post());
+  ASSERT_TRUE(maps.error.empty()) << maps.error;
+  EXPECT_EQ(maps.guard_stops, 0);
+  EXPECT_NEAR(maps.travelled_m, 10.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace pex::bench
