@@ -396,6 +396,9 @@ class Mission {
   // The map on which the goal's frontier dropped out while no other goal was
   // reachable (-1: it has not): the goal is kept until a newer map confirms.
   std::int64_t goal_missing_map_utime_ = -1;
+  // The map on which the goal followed first had no path (-1: it has one):
+  // given up only when a newer map confirms.
+  std::int64_t goal_blocked_map_utime_ = -1;
   int empty_plans_ = 0;
   int goal_failures_ = 0;
   int plan_failures_ = 0;

@@ -421,6 +421,16 @@ TEST(Mission, BlockedGoalIsBlacklisted) {
   m.on_map({typed_polygon(blocked)}, 900'000);
   m.on_pose(Pose2{12.5, 1.5, 0}, 1'000'000);
   out = step_with_inline_planning(m, 1'000'000);
+  // No path on one map: kept, on the path it had, until a newer map confirms.
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_GT(out.goal->x(), 16.0);
+  EXPECT_NE(out.status.find("newer map confirms"), std::string::npos) << out.status;
+  EXPECT_TRUE(m.blacklist().empty());
+  EXPECT_EQ(m.goal_outcomes().blocked, 0);
+  // No path on the newer map either.
+  m.on_map({typed_polygon(blocked)}, 1'900'000);
+  m.on_pose(Pose2{12.9, 1.5, 0}, 2'000'000);
+  out = step_with_inline_planning(m, 2'000'000);
   // Given up and blacklisted, and (planning inline) the next goal chosen at once.
   ASSERT_EQ(m.blacklist().size(), 1u);
   EXPECT_GT(m.blacklist()[0].x(), 16.0);
@@ -428,6 +438,50 @@ TEST(Mission, BlockedGoalIsBlacklisted) {
   EXPECT_EQ(m.goal_outcomes().reached, 0);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_LT(out.goal->x(), 1.0);
+}
+
+// A plan of the followed goal without a path, then one with it on the same
+// map (another pose, another live view): kept, nothing counted, and the
+// next map without a path starts the wait afresh.
+TEST(Mission, AGoalWithoutAPathOnOnePlanIsKeptWhenTheNextHasOne) {
+  Mission m(test_options());
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  const Point goal = *out.goal;
+  // The plan asked for at t (a new map first when map_utime >= 0), without its paths when pathless.
+  auto replan = [&](std::int64_t map_utime, std::int64_t t, bool pathless) {
+    if (map_utime >= 0) m.on_map(corridor(false, true), map_utime);
+    m.on_pose(Pose2{10.2, 1.5, 0}, t);
+    auto o = m.step(t);
+    EXPECT_TRUE(o.plan_request.has_value()) << o.status;
+    if (!o.plan_request) return o;
+    PlanResult result = compute_plan(*o.plan_request);
+    if (pathless) {
+      for (auto& c : result.plan.candidates) {
+        c.reachable = false;
+        c.path.clear();
+      }
+      result.plan.best = -1;
+    }
+    m.on_plan(result, t + 1);
+    return m.step(t + 2);
+  };
+  out = replan(900'000, kSecond, true);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_NE(out.status.find("newer map confirms"), std::string::npos) << out.status;
+  out = replan(-1, 2 * kSecond, false);  // the same map, a path again
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_LT(distance(*out.goal, goal), 0.01);
+  out = replan(2'900'000, 3 * kSecond, true);  // a newer map without one: waits again
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_EQ(m.goal_outcomes().blocked, 0);
+  EXPECT_TRUE(m.blacklist().empty());
+  out = replan(3'900'000, 4 * kSecond, true);  // and the next map confirms
+  EXPECT_EQ(m.goal_outcomes().blocked, 1);
+  ASSERT_EQ(m.blacklist().size(), 1u);
+  EXPECT_LT(distance(m.blacklist()[0], goal), 0.01);
 }
 
 // A mission set off towards the corridor's right end, and the plan it asks
@@ -480,19 +534,22 @@ TEST(Mission, AnUnreachableMatchDoesNotBlockAGoalAReachableMatchStillHas) {
   EXPECT_EQ(out.phase, Phase::kMoving) << out.status;
   EXPECT_EQ(m.goal_outcomes().blocked, 0);
   EXPECT_TRUE(m.blacklist().empty());
-  // With no reachable match left the goal is blocked.
-  m.on_map(corridor(false, true), 2 * kSecond);
-  m.on_pose(Pose2{11, 1.5, 0}, 2 * kSecond);
-  out = m.step(2 * kSecond + 4);
-  ASSERT_TRUE(out.plan_request.has_value());
-  result = compute_plan(*out.plan_request);
-  for (auto& c : result.plan.candidates) {
-    c.reachable = false;
-    c.path.clear();
+  // With no reachable match left, on two maps, the goal is blocked.
+  for (int k = 2; k <= 3; ++k) {
+    EXPECT_EQ(m.goal_outcomes().blocked, 0);
+    m.on_map(corridor(false, true), k * kSecond);
+    m.on_pose(Pose2{11, 1.5, 0}, k * kSecond);
+    out = m.step(k * kSecond + 4);
+    ASSERT_TRUE(out.plan_request.has_value());
+    result = compute_plan(*out.plan_request);
+    for (auto& c : result.plan.candidates) {
+      c.reachable = false;
+      c.path.clear();
+    }
+    result.plan.best = -1;
+    m.on_plan(result, k * kSecond + 5);
+    m.step(k * kSecond + 6);
   }
-  result.plan.best = -1;
-  m.on_plan(result, 2 * kSecond + 5);
-  m.step(2 * kSecond + 6);
   EXPECT_EQ(m.goal_outcomes().blocked, 1);
 }
 
@@ -530,19 +587,22 @@ TEST(Mission, GoalsBlockedInARowDoNotFailTheMission) {
   MissionOptions o = test_options();
   o.max_consecutive_failures = 2;
   Mission m(o);
-  // The goal followed finds no path at its next plan on a newer map.
+  // The goal followed finds no path at its next plans, on two newer maps
+  // (t and t + 1 s; the robot at its start).
   auto block_followed_goal = [&](std::int64_t t) {
-    m.on_map(corridor(true, true), t);
-    m.on_pose(Pose2{10, 1.5, 0}, t);
-    auto out = m.step(t + 1);  // replan period reached
-    ASSERT_TRUE(out.plan_request.has_value()) << out.status;
-    PlanResult result = compute_plan(*out.plan_request);
-    for (auto& c : result.plan.candidates) {
-      c.reachable = false;
-      c.path.clear();
+    for (const std::int64_t at : {t, t + kSecond}) {
+      m.on_map(corridor(true, true), at);
+      m.on_pose(Pose2{10, 1.5, 0}, at);
+      auto out = m.step(at + 1);  // replan period reached
+      ASSERT_TRUE(out.plan_request.has_value()) << out.status;
+      PlanResult result = compute_plan(*out.plan_request);
+      for (auto& c : result.plan.candidates) {
+        c.reachable = false;
+        c.path.clear();
+      }
+      result.plan.best = -1;
+      m.on_plan(result, at + 2);
     }
-    result.plan.best = -1;
-    m.on_plan(result, t + 2);
   };
   m.on_map(corridor(true, true), 0);
   m.on_pose(Pose2{10, 1.5, 0}, 0);
@@ -550,11 +610,11 @@ TEST(Mission, GoalsBlockedInARowDoNotFailTheMission) {
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
   const Point first = *out.goal;
   block_followed_goal(kSecond);
-  out = step_with_inline_planning(m, kSecond + 3);
+  out = step_with_inline_planning(m, 2 * kSecond + 3);
   ASSERT_EQ(out.phase, Phase::kMoving) << out.status;  // the other end
   EXPECT_GT(distance(*out.goal, first), 5.0);
-  block_followed_goal(3 * kSecond);
-  out = m.step(3 * kSecond + 3);
+  block_followed_goal(4 * kSecond);
+  out = m.step(5 * kSecond + 3);
   EXPECT_EQ(m.goal_outcomes().blocked, 2);
   EXPECT_EQ(m.blacklist().size(), 2u);
   EXPECT_NE(out.phase, Phase::kFailed) << out.status;
