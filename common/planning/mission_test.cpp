@@ -440,6 +440,15 @@ TEST(Mission, BlockedGoalIsBlacklisted) {
   EXPECT_LT(out.goal->x(), 1.0);
 }
 
+// The plan with no path to any candidate (what a newer map that blocks the goal gives).
+void take_the_paths_away(PlanResult& result) {
+  for (auto& c : result.plan.candidates) {
+    c.reachable = false;
+    c.path.clear();
+  }
+  result.plan.best = -1;
+}
+
 // A plan of the followed goal without a path, then one with it on the same
 // map (another pose, another live view): kept, nothing counted, and the
 // next map without a path starts the wait afresh.
@@ -459,11 +468,7 @@ TEST(Mission, AGoalWithoutAPathOnOnePlanIsKeptWhenTheNextHasOne) {
     if (!o.plan_request) return o;
     PlanResult result = compute_plan(*o.plan_request);
     if (pathless) {
-      for (auto& c : result.plan.candidates) {
-        c.reachable = false;
-        c.path.clear();
-      }
-      result.plan.best = -1;
+      take_the_paths_away(result);
     }
     m.on_plan(result, t + 1);
     return m.step(t + 2);
@@ -542,11 +547,7 @@ TEST(Mission, AnUnreachableMatchDoesNotBlockAGoalAReachableMatchStillHas) {
     out = m.step(k * kSecond + 4);
     ASSERT_TRUE(out.plan_request.has_value());
     result = compute_plan(*out.plan_request);
-    for (auto& c : result.plan.candidates) {
-      c.reachable = false;
-      c.path.clear();
-    }
-    result.plan.best = -1;
+    take_the_paths_away(result);
     m.on_plan(result, k * kSecond + 5);
     m.step(k * kSecond + 6);
   }
@@ -596,11 +597,7 @@ TEST(Mission, GoalsBlockedInARowDoNotFailTheMission) {
       auto out = m.step(at + 1);  // replan period reached
       ASSERT_TRUE(out.plan_request.has_value()) << out.status;
       PlanResult result = compute_plan(*out.plan_request);
-      for (auto& c : result.plan.candidates) {
-        c.reachable = false;
-        c.path.clear();
-      }
-      result.plan.best = -1;
+      take_the_paths_away(result);
       m.on_plan(result, at + 2);
     }
   };
