@@ -129,6 +129,12 @@ std::vector<Point> cluster_polyline(const std::vector<Point>& points, int level,
 
 }  // namespace
 
+int count_returns(std::span<const float> ranges, double range_min_m, double range_max_m) {
+  int n = 0;
+  for (const float r : ranges) n += is_return(r, range_min_m, range_max_m) ? 1 : 0;
+  return n;
+}
+
 ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_min,
                                   double angle_increment, const geometry::Pose2& pose,
                                   const ScanPolygonOptions& o) {
@@ -174,7 +180,7 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
   std::vector<Point> sensor_points(n);
   for (std::size_t k = 0; k < n; ++k) {
     const double r = range_at(k);
-    const bool returned = std::isfinite(r) && r >= o.range_min_m && r < o.range_max_m;
+    const bool returned = is_return(r, o.range_min_m, o.range_max_m);
     if (returned && far_cut && r >= o.obstacle_range_m) {
       beam[k] = Beam::kFar;
       ++result.beams_beyond_obstacle_range;

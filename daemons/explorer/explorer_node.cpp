@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "archive/byte_archive.hpp"
+#include "mapping/scan_polygon.hpp"
 
 namespace pex::explorer {
 
@@ -152,6 +153,14 @@ void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime)
   if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) || !std::isfinite(msg.sensor_x) ||
       !std::isfinite(msg.sensor_y) || !std::isfinite(msg.sensor_theta))
     throw std::invalid_argument("scan geometry is not finite");
+  if (options_.min_scan_returns > 0) {
+    const int returns = mapping::count_returns(msg.ranges, msg.range_min, msg.range_max);
+    if (returns < options_.min_scan_returns)
+      throw std::invalid_argument("scan has " + std::to_string(returns) + " returns of " +
+                                  std::to_string(msg.ranges.size()) + " beams, fewer than min_scan_returns " +
+                                  std::to_string(options_.min_scan_returns) +
+                                  ": a laser covered or dazzled is no view; the robot stops as without scans");
+  }
   // Returns in the robot's frame (the laser's mounting), for the guard.
   scan_points_ = planning::guard_points(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max,
                                         {msg.sensor_x, msg.sensor_y, msg.sensor_theta}, options_.guard_scan);

@@ -34,6 +34,10 @@ struct ExplorerOptions {
   planning::ScanGuardOptions guard;
   planning::GuardScanOptions guard_scan;  // how the guard reads a scan (wall ends, corners)
   std::size_t max_beams = 8192;           // a LIDAR_SCAN with more beams is refused as bad input
+  // A LIDAR_SCAN with fewer returns is refused as no view (a laser covered
+  // or dazzled): it keeps no scan fresh, so the robot stops as without
+  // scans. 0: off.
+  int min_scan_returns = 0;
   // The newest scan opens the planning map near the robot (planning/live_view.hpp).
   planning::LiveViewOptions live_view;
 };

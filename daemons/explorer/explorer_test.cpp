@@ -306,6 +306,46 @@ TEST(ExplorerNode, StopsWithoutLaserScans) {
   EXPECT_FALSE(node.last_output().degraded);
 }
 
+// A laser covered or dazzled (no echo on every beam) is no view: with
+// min_scan_returns its scans are refused and the robot stops as without
+// scans; a scan with returns again sets it going.
+TEST(ExplorerNode, StopsWhenTheLaserSeesNothing) {
+  ExplorerOptions options;
+  options.mission.scan_timeout_us = 500'000;
+  options.min_scan_returns = 5;
+  ExplorerNode node(options);
+  pex::pose_t pose{};
+  pose.x = 10;
+  pose.y = 1.5;
+  pex::laser_scan_t seeing{};
+  seeing.range_max = 20.0f;
+  seeing.angle_increment = 0.01f;
+  seeing.ranges.assign(100, 1.2f);
+  seeing.nranges = 100;
+  pex::laser_scan_t blind = seeing;
+  blind.ranges.assign(100, std::numeric_limits<float>::quiet_NaN());
+  blind.ranges[0] = 1.2f;  // a few returns are not a view either
+  ASSERT_NO_THROW(node.on_map(corridor(), 0));
+  ASSERT_NO_THROW(node.on_scan(seeing, 0));
+  for (std::int64_t t = 0; t <= 200'000; t += 100'000) {
+    ASSERT_NO_THROW(node.on_pose(pose, t));
+    node.step(t);
+  }
+  EXPECT_FALSE(node.last_output().degraded) << node.last_output().degraded_reason;
+  for (std::int64_t t = 300'000; t <= 900'000; t += 100'000) {
+    ASSERT_NO_THROW(node.on_pose(pose, t));
+    EXPECT_THROW(node.on_scan(blind, t), std::invalid_argument);
+    node.step(t);
+  }
+  EXPECT_TRUE(node.last_output().degraded);
+  EXPECT_EQ(node.last_output().degraded_reason, "no laser scans");
+  EXPECT_EQ(node.step(1'000'000).v, 0.0);
+  ASSERT_NO_THROW(node.on_scan(seeing, 1'100'000));
+  ASSERT_NO_THROW(node.on_pose(pose, 1'100'000));
+  node.step(1'100'000);
+  EXPECT_FALSE(node.last_output().degraded) << node.last_output().degraded_reason;
+}
+
 // Something the map does not show (or SLAM puts elsewhere) right in front of
 // the robot: the scan guard holds the forward speed to what can stop before it.
 // The robot held in the corridor at (10, 1.5) for 2 s of control steps with

@@ -53,6 +53,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.scan.refit_max_shift_m = scan.get<double>("refit_max_shift_m", o.scan.refit_max_shift_m, non_negative<double>());
   o.scan.free_arc_step_rad = scan.get<double>("free_arc_step_rad", o.scan.free_arc_step_rad, runtime::in_range(0.001, 1.0));
   o.scan.max_beams = scan.get<int>("max_beams", o.scan.max_beams, runtime::in_range(2, 1000000));
+  o.scan.min_returns = scan.get<int>("min_returns", o.scan.min_returns, runtime::in_range(0, 1000000));
   auto map = config.section("map");
   o.map.tile_size_m = map.get<double>("tile_size_m", o.map.tile_size_m, runtime::in_range(1.0, 1000.0));
   o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m, runtime::in_range(-1e5, 1e5));
@@ -231,6 +232,15 @@ void Mapper::on_scan(const pex::laser_scan_t& scan) {
       !finite(scan.range_min) || !finite(scan.range_max) || !finite(scan.sensor_x) ||
       !finite(scan.sensor_y) || !finite(scan.sensor_theta))
     throw std::invalid_argument("scan has non-finite or zero angle/range/sensor fields");
+  if (options_.scan.min_returns > 0) {
+    const auto limits = scan_options_for(scan);
+    const int returns = mapping::count_returns(scan.ranges, limits.range_min_m, limits.range_max_m);
+    if (returns < options_.scan.min_returns)
+      throw std::invalid_argument("scan has " + std::to_string(returns) + " returns of " +
+                                  std::to_string(scan.nranges) + " beams, fewer than min_returns " +
+                                  std::to_string(options_.scan.min_returns) +
+                                  ": a laser covered or dazzled; not mapped (its no-echo beams would clear walls)");
+  }
   ++counters_.scans_received;
   pending_.push_back(scan);
   while (static_cast<int>(pending_.size()) > options_.max_pending_scans) {

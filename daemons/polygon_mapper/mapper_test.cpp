@@ -129,6 +129,45 @@ TEST(Mapper, MalformedScansAreRefusedAndTheMapKept) {
   EXPECT_FALSE(mapper.map_message(0).has_value());
 }
 
+// A laser covered or dazzled answers "no echo" on every beam. Mapped, each
+// such beam would be free space for free_range_m through the room's walls;
+// with min_returns the scan is refused and the room is what it was.
+TEST(Mapper, AScanWithoutReturnsIsRefusedAndTheWallsKept) {
+  std::vector<mapping::testing::Wall> walls;
+  mapping::testing::add_box(walls, 0, 0, 4, 3);
+  MapperOptions options;
+  options.scan.min_returns = 5;
+  Mapper mapper(options);
+  const geometry::Pose2 at{2.0, 1.5, 0.0};
+  mapper.on_pose({1'000'000, at});
+  mapper.on_scan(make_scan(walls, at, 1'010'000));
+  mapper.on_pose({1'020'000, at});
+  ASSERT_EQ(mapper.counters().scans_inserted, 1);
+  const double room_m2 = mapper.free_space_message(2'000'000)->free_area_m2;
+  EXPECT_LE(room_m2, 12.0 + 1e-6);
+  auto blind = make_scan(walls, {2.0, 1.5, 1.0}, 3'010'000);
+  for (auto& r : blind.ranges) r = 0.0f;  // no echo (the reader's NaN is the same)
+  blind.ranges[7] = 1.0f;                 // four returns are not a view either
+  blind.ranges[8] = 1.0f;
+  blind.ranges[9] = 1.0f;
+  blind.ranges[10] = 1.0f;
+  mapper.on_pose({3'000'000, {2.0, 1.5, 1.0}});
+  EXPECT_THROW(mapper.on_scan(blind), std::invalid_argument);
+  mapper.on_pose({3'020'000, {2.0, 1.5, 1.0}});
+  EXPECT_EQ(mapper.counters().scans_inserted, 1);
+  EXPECT_EQ(mapper.free_space_message(4'000'000)->free_area_m2, room_m2);
+  // Without the check the same scan goes in and clears the walls around.
+  Mapper unchecked(MapperOptions{});
+  unchecked.on_pose({1'000'000, at});
+  unchecked.on_scan(make_scan(walls, at, 1'010'000));
+  unchecked.on_pose({1'020'000, at});
+  unchecked.on_pose({3'000'000, {2.0, 1.5, 1.0}});
+  unchecked.on_scan(blind);
+  unchecked.on_pose({3'020'000, {2.0, 1.5, 1.0}});
+  EXPECT_EQ(unchecked.counters().scans_inserted, 2);
+  EXPECT_GT(unchecked.free_space_message(4'000'000)->free_area_m2, 12.0 + 1.0);
+}
+
 TEST(Mapper, ScanNewerThanEveryPoseWaitsForOne) {
   std::vector<mapping::testing::Wall> walls;
   mapping::testing::add_box(walls, 0, 0, 10, 5);
