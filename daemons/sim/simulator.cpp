@@ -293,12 +293,16 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   node_.counter("collision_steps") = 0;
   node_.watch_fd(can_->fd(), [this] { receive_can(); });
   node_.subscribe<pex::sim_fault_t>(runtime::channels::kSimFault, [this](const pex::sim_fault_t& msg) {
-    if (msg.fault != pex::sim_fault_t::FAULT_LASER_STALL && msg.fault != pex::sim_fault_t::FAULT_LASER_REFUSE)
+    if (msg.fault != pex::sim_fault_t::FAULT_LASER_STALL && msg.fault != pex::sim_fault_t::FAULT_LASER_REFUSE &&
+        msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND)
       throw std::invalid_argument("unknown fault " + std::to_string(msg.fault));
     if (!std::isfinite(msg.duration_s) || msg.duration_s < 0.0 || msg.duration_s > 3600.0)
       throw std::invalid_argument("fault duration " + std::to_string(msg.duration_s) + " s not in [0, 3600]");
     spdlog::warn("fault from {}: laser {} for {} s", msg.source,
-                 msg.fault == pex::sim_fault_t::FAULT_LASER_STALL ? "stall" : "refuses connections", msg.duration_s);
+                 msg.fault == pex::sim_fault_t::FAULT_LASER_STALL    ? "stall"
+                 : msg.fault == pex::sim_fault_t::FAULT_LASER_REFUSE ? "refuses connections"
+                                                                     : "blind (no echo on any beam)",
+                 msg.duration_s);
     start_laser_fault(msg.fault, msg.duration_s);
   });
   // The sim is the clock source: its node runs on the system clock (run_daemon
@@ -483,7 +487,10 @@ void Simulator::send_scan() {
   if (laser_fault_ == pex::sim_fault_t::FAULT_LASER_STALL) return;  // a hung device sends nothing
   // One telegram per channel configuration among the streaming clients.
   std::string encoded[2][2];
-  const std::vector<float>& ranges = pending_scan_;
+  // Blind: the same telegrams, every beam at the laser's range (no echo).
+  const std::vector<float> no_echo(laser_fault_ == pex::sim_fault_t::FAULT_LASER_BLIND ? pending_scan_.size() : 0,
+                                   static_cast<float>(options_.laser.max_range_m));
+  const std::vector<float>& ranges = no_echo.empty() ? pending_scan_ : no_echo;
   const std::uint32_t device_time = pending_scan_device_us_;
   for (auto& client : clients_) {
     if (!client->streaming || client->closed) continue;

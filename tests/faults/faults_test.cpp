@@ -35,6 +35,10 @@
 //   (SIM_FAULT, played by pex-sim over CoLa-A/TCP): the same stop, the
 //   reader reconnects by itself, the mission ends DONE.
 //
+//   the laser goes blind 10 s (scans as ever, no echo on any beam): the
+//   explorer and the mapper refuse them, the same stop, the map keeps its
+//   walls, the mission ends DONE.
+//
 //   the simulator frozen 5 s (SIGSTOP): every daemon on its clock says ERROR
 //   and is OK again when it goes on; the mission ends DONE.
 //
@@ -337,7 +341,7 @@ TEST(Faults, KilledMapperPublishesItsMapFromTheCheckpointAndGoesOnWithSlam) {
 // The laser misbehaves on its own (pex-sim plays it over CoLa-A/TCP): the
 // robot stands while no scan comes, the reader reconnects by itself once the
 // device is back, and the mission ends DONE.
-void laser_fault_then_done(std::int8_t fault, double duration_s) {
+void laser_fault_then_done(std::int8_t fault, double duration_s, bool reader_reconnects = true) {
   ExplorationSet set("faults-laser", {.speed = 2.0});
   Truth truth(set.bus());
   ASSERT_TRUE(set.spin_sim(
@@ -363,7 +367,16 @@ void laser_fault_then_done(std::int8_t fault, double duration_s) {
   }
   EXPECT_LT(wandered, 0.05) << "the robot moved during the laser fault";
   expect_done_with_the_world_mapped(set);
-  EXPECT_GE(counter_of(set.bus().status().at("lidar_reader"), "disconnects"), 1);
+  if (reader_reconnects) {
+    EXPECT_GE(counter_of(set.bus().status().at("lidar_reader"), "disconnects"), 1);
+  } else {
+    // The device streamed on: the scans came, and the explorer and the
+    // mapper refused them (min_scan_returns, min_returns), so the map kept
+    // its walls (expect_done_with_the_world_mapped scores it against them).
+    EXPECT_LT(counter_of(set.bus().status().at("lidar_reader"), "disconnects"), 1);  // -1: never counted
+    EXPECT_GE(set.bus().status().at("explorer").msgs_rejected, 10);
+    EXPECT_GE(set.bus().status().at("polygon_mapper").msgs_rejected, 10);
+  }
   EXPECT_EQ(counter_of(set.bus().status().at("sim"), "laser_faults"), 1);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
@@ -375,6 +388,10 @@ TEST(Faults, LaserStreamStalled15sTheRobotStandsAndTheMissionEndsDone) {
 
 TEST(Faults, LaserRefusingConnections5sTheRobotStandsAndTheMissionEndsDone) {
   laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_REFUSE, 5.0);
+}
+
+TEST(Faults, LaserBlind10sTheRobotStandsTheMapKeepsItsWallsAndTheMissionEndsDone) {
+  laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_BLIND, 10.0, false);
 }
 
 // Any start order brings the mission up (systemd orders none of the daemons
