@@ -777,7 +777,7 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
     // Without a path on one plan: kept, on the path it had, until a newer
     // map confirms. Plans on one map differ in the robot's pose and the
     // live view's scan, and at a passage about the margin's width one of
-    // them splits the C-space where the next joins it again (b66, intel:
+    // them splits the C-space where the next joins it again (session 43, d1, intel:
     // the robot in a 0.14 m2 piece, the rest 0.52 m away, 40 ms before and
     // after a plan with the path; ten goals given up so in one run, each a
     // goal switch and, at the end, a trip back for the retry round).
