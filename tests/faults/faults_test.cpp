@@ -37,7 +37,7 @@
 //
 //   the laser goes blind 10 s (scans as ever, no echo on any beam): the
 //   explorer and the mapper refuse them, the same stop, the map keeps its
-//   walls, the mission ends DONE.
+//   walls, the mission ends DONE; the same with pex-slam in the set.
 //
 //   the simulator frozen 5 s (SIGSTOP): every daemon on its clock says ERROR
 //   and is OK again when it goes on; the mission ends DONE.
@@ -341,8 +341,8 @@ TEST(Faults, KilledMapperPublishesItsMapFromTheCheckpointAndGoesOnWithSlam) {
 // The laser misbehaves on its own (pex-sim plays it over CoLa-A/TCP): the
 // robot stands while no scan comes, the reader reconnects by itself once the
 // device is back, and the mission ends DONE.
-void laser_fault_then_done(std::int8_t fault, double duration_s, bool reader_reconnects = true) {
-  ExplorationSet set("faults-laser", {.speed = 2.0});
+void laser_fault_then_done(std::int8_t fault, double duration_s, bool reader_reconnects = true, bool slam = false) {
+  ExplorationSet set("faults-laser", {.speed = 2.0, .slam = slam});
   Truth truth(set.bus());
   ASSERT_TRUE(set.spin_sim(
       [&] { return set.phase() == pex::explore_state_t::PHASE_MOVING && truth.speed() > 0.2; }, 120.0))
@@ -392,6 +392,13 @@ TEST(Faults, LaserRefusingConnections5sTheRobotStandsAndTheMissionEndsDone) {
 
 TEST(Faults, LaserBlind10sTheRobotStandsTheMapKeepsItsWallsAndTheMissionEndsDone) {
   laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_BLIND, 10.0, false);
+}
+
+// The same on SLAM, as on the robot: SLAM gets the blind scans too (it
+// takes no-echo beams as nothing), and the mapper, which refuses them,
+// still follows SLAM's updates after the fault.
+TEST(Faults, LaserBlind10sOnSlamTheRobotStandsAndTheMissionEndsDone) {
+  laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_BLIND, 10.0, false, true);
 }
 
 // Any start order brings the mission up (systemd orders none of the daemons
