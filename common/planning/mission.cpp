@@ -702,6 +702,11 @@ void Mission::give_up_goal(GiveUp kind, const std::string& why) {
   }
 }
 
+bool Mission::awaits_a_newer_map(std::int64_t& noted_map_utime) const {
+  if (noted_map_utime < 0) noted_map_utime = last_request_map_utime_;
+  return last_request_map_utime_ == noted_map_utime;
+}
+
 void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   list_frontiers(plan);
   // The same match the planner searched paths for (PlanRequest::focus).
@@ -736,8 +741,7 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
     // shrank, MOVING and "no goal on this map" by turns, each turn a stop;
     // with other goals in reach, a switch to one of them and back, 10-18 m
     // each way). The goal and its path are kept until a newer map confirms.
-    if (goal_missing_map_utime_ < 0) goal_missing_map_utime_ = last_request_map_utime_;
-    if (last_request_map_utime_ == goal_missing_map_utime_) {
+    if (awaits_a_newer_map(goal_missing_map_utime_)) {
       status_ = "goal's frontier not on this map: going on until a newer map confirms";
       return;
     }
@@ -781,8 +785,7 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
     // the robot in a 0.14 m2 piece, the rest 0.52 m away, 40 ms before and
     // after a plan with the path; ten goals given up so in one run, each a
     // goal switch and, at the end, a trip back for the retry round).
-    if (goal_blocked_map_utime_ < 0) goal_blocked_map_utime_ = last_request_map_utime_;
-    if (last_request_map_utime_ == goal_blocked_map_utime_) {
+    if (awaits_a_newer_map(goal_blocked_map_utime_)) {
       status_ = "no path to the goal on this map: going on until a newer map confirms";
       return;
     }

@@ -325,6 +325,10 @@ class Mission {
   // is the map changing, not the robot failing.
   enum class GiveUp { kBlocked, kNoProgress, kOverdue };
   void give_up_goal(GiveUp kind, const std::string& why);
+  // What the last plan said of the goal (its frontier gone, no path to it)
+  // is kept from acting on until a plan on a newer map says it too: true
+  // while the plan is on the map `noted_map_utime` holds (noted now if -1).
+  bool awaits_a_newer_map(std::int64_t& noted_map_utime) const;
   void count_plan_failure(const Plan& plan);
   // When a drive along a path of this length is over, however it seems to
   // progress: the progress timeout plus four times the path at full speed.
