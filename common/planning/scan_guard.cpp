@@ -9,6 +9,7 @@
 
 #include "geometry/angle.hpp"
 #include "geometry/point.hpp"
+#include "mapping/scan_polygon.hpp"
 
 namespace pex::planning {
 namespace {
@@ -88,10 +89,7 @@ std::vector<mapping::Point> guard_points(std::span<const float> ranges, double a
                                          const GuardScanOptions& options) {
   const auto n = static_cast<std::ptrdiff_t>(ranges.size());
   const auto range = [&](std::ptrdiff_t i) { return static_cast<double>(ranges[static_cast<std::size_t>(i)]); };
-  const auto has_return = [&](std::ptrdiff_t i) {
-    const double r = range(i);
-    return std::isfinite(r) && r >= range_min && r < range_max;
-  };
+  const auto has_return = [&](std::ptrdiff_t i) { return mapping::is_return(range(i), range_min, range_max); };
   // Every return in the sensor's frame (NaN where a beam has none).
   std::vector<mapping::Point> beam(ranges.size(), mapping::Point(kNan, kNan));
   std::vector<mapping::Point> points;
