@@ -187,15 +187,16 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
       const double length = std::hypot(dx, dy);
       if (length <= 0.0) continue;
       const double heading = std::atan2(dy, dx);
+      double clear_m = 0.0;  // along this segment, to the last pose that was clear
       for (double s_m = std::min(options.scan_step_m, length);; s_m = std::min(s_m + options.scan_step_m, length)) {
         const double t = s_m / length;
         const double x = path[k - 1].x() + t * dx, y = path[k - 1].y() + t * dy;
         if (options.robot_radius_m > 0.0 && caster.clearance(x, y, options.robot_radius_m) < options.robot_radius_m) {
-          // The travel up to the last pose, which was clear.
           stopped = true;
-          out.travelled_m += std::max(0.0, s_m - options.scan_step_m);
+          out.travelled_m += clear_m;
           break;
         }
+        clear_m = s_m;
         pose = {x, y, heading};
         insert_at(pose.x_m, pose.y_m, pose.theta_rad);
         trail.emplace_back(pose.x_m, pose.y_m);

@@ -20,12 +20,13 @@ sim::World corridor_with_a_post() {
   return std::get<sim::World>(std::move(parsed));
 }
 
-// One goal at the corridor's east end, straight through the post; then none.
-MissionPlanner through_the_post() {
-  return [](const mapping::TypedMultiPolygon&, const planning::Pose2& pose, const std::vector<Point>& blacklist) {
+// One goal on the corridor's axis at goal_x (by default its east end,
+// straight through the post); then none.
+MissionPlanner through_the_post(double goal_x = 11.0) {
+  return [goal_x](const mapping::TypedMultiPolygon&, const planning::Pose2& pose, const std::vector<Point>& blacklist) {
     planning::Plan plan;
     plan.ok = true;
-    const Point goal(11, 1.5);
+    const Point goal(goal_x, 1.5);
     for (const auto& b : blacklist)
       if (boost::geometry::distance(b, goal) < 0.5) return plan;
     planning::GoalCandidate c;
@@ -53,6 +54,19 @@ TEST(EmulatedMission, APathThroughAWallTheMapDoesNotHoldStopsShortOfIt) {
   // Stopped with the disk clear of the post: from x = 1 to at most 6 - 0.02 - 0.25.
   EXPECT_GT(maps.travelled_m, 4.0);
   EXPECT_LE(maps.travelled_m, 4.73 + 1e-9);
+}
+
+// A path whose last pose (not a whole scan step on) already touches the
+// post: the travel counted ends at the pose before it, 4.5 m from START.
+TEST(EmulatedMission, TheTravelCountedEndsAtTheLastClearPose) {
+  const auto world = corridor_with_a_post();
+  MissionMapsOptions o;
+  o.max_goals = 5;
+  o.robot_radius_m = 0.25;
+  const auto maps = emulate_mission(world, o, through_the_post(5.74));
+  ASSERT_TRUE(maps.error.empty()) << maps.error;
+  EXPECT_EQ(maps.guard_stops, 1);
+  EXPECT_NEAR(maps.travelled_m, 4.5, 1e-9);
 }
 
 TEST(EmulatedMission, WithoutARadiusThePathIsFollowedThroughIt) {
