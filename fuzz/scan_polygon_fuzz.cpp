@@ -21,6 +21,7 @@
 
 #include "fuzz_check.hpp"
 #include "fuzz_input.hpp"
+#include "mapping/known_walls.hpp"
 #include "mapping/scan_polygon.hpp"
 
 namespace {
@@ -62,9 +63,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::uint8_t r = in.byte();
     ranges.push_back(r == 255 ? any_float(in) : static_cast<float>(r * 0.1));
   }
+  // Walls the map holds, from what input is left: the beams without a
+  // return stop at them (known_walls.hpp).
+  std::vector<mapping::KnownWall> walls;
+  for (int k = in.empty() ? 0 : in.byte() % 8; k > 0 && !in.empty(); --k) {
+    auto near = [&] { return static_cast<std::int8_t>(in.byte()) * 0.05; };
+    const double ax = sensor.x_m + near(), ay = sensor.y_m + near(), bx = sensor.x_m + near(), by = sensor.y_m + near();
+    walls.push_back({mapping::Point(ax, ay), mapping::Point(bx, by)});
+  }
+  mapping::NoReturnExtents stopped;
+  try {
+    stopped = mapping::no_return_extents(ranges, angle_min, angle_increment, sensor, options, walls);
+  } catch (...) {
+    PEX_FUZZ_CHECK(false, "no_return_extents threw");
+  }
+  PEX_FUZZ_CHECK(stopped.extent_m.empty() || stopped.extent_m.size() == ranges.size(), "extents not one per beam");
+  for (const float e : stopped.extent_m)
+    PEX_FUZZ_CHECK(e <= options.free_range_m * (1.0 + 1e-6) && e >= 0.0f, "an extent beyond the free range");
   mapping::ScanPolygonResult result;
   try {
-    result = mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor, options);
+    result = mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor, options, stopped.extent_m);
   } catch (...) {
     PEX_FUZZ_CHECK(false, "scan_to_polygon threw (it must refuse with a reason instead)");
   }

@@ -137,7 +137,7 @@ int count_returns(std::span<const float> ranges, double range_min_m, double rang
 
 ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_min,
                                   double angle_increment, const geometry::Pose2& pose,
-                                  const ScanPolygonOptions& o) {
+                                  const ScanPolygonOptions& o, std::span<const float> no_return_extent_m) {
   ScanPolygonResult result;
   auto fail = [&](std::string why) {
     result.ok = false;
@@ -146,6 +146,9 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
   };
   if (ranges.size() < 2) return fail("fewer than 2 beams");
   if (ranges.size() > static_cast<std::size_t>(o.max_beams)) return fail("too many beams");
+  if (!no_return_extent_m.empty() && no_return_extent_m.size() != ranges.size())
+    return fail("no_return_extent_m has " + std::to_string(no_return_extent_m.size()) + " values for " +
+                std::to_string(ranges.size()) + " beams");
   if (!std::isfinite(angle_min) || !std::isfinite(angle_increment) || angle_increment == 0.0)
     return fail("angle_min / angle_increment not finite or increment zero");
   if (!geometry::is_finite(pose))
@@ -170,6 +173,13 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
   const bool reversed = angle_increment < 0.0;
   const double first_angle = reversed ? angle_min + angle_increment * static_cast<double>(n - 1) : angle_min;
   auto range_at = [&](std::size_t k) { return ranges[reversed ? n - 1 - k : k]; };
+  // A beam without a return stopped short of the free range (at a wall the
+  // map holds): its extent, else 0.
+  auto stopped_at = [&](std::size_t k) -> double {
+    if (no_return_extent_m.empty()) return 0.0;
+    const double e = no_return_extent_m[reversed ? n - 1 - k : k];
+    return std::isfinite(e) && e > 0.0 && e < o.free_range_m ? e : 0.0;
+  };
   auto angle_at = [&](std::size_t k) { return first_angle + step * static_cast<double>(k); };
 
   // What each beam gives: an obstacle point, free space to the free range (no
@@ -236,12 +246,32 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
         inner_type = EdgeType::kObstacle;
       } else {
         const double extent = piece.kind == Beam::kFar ? o.obstacle_range_m : o.free_range_m;
-        const double a0 = angle_at(piece.first), a1 = angle_at(piece.last);
-        const int steps = std::max(1, static_cast<int>(std::ceil((a1 - a0) / o.free_arc_step_rad)));
-        for (int j = 0; j <= steps; ++j) {
-          const double a = (piece.first == piece.last) ? a0 : a0 + (a1 - a0) * j / steps;
-          chain.emplace_back(extent * std::cos(a), extent * std::sin(a));
-          if (piece.first == piece.last) break;
+        // An arc at the extent over beams first..last.
+        auto arc = [&](std::size_t first, std::size_t last) {
+          const double a0 = angle_at(first), a1 = angle_at(last);
+          const int steps = std::max(1, static_cast<int>(std::ceil((a1 - a0) / o.free_arc_step_rad)));
+          for (int j = 0; j <= steps; ++j) {
+            const double a = (first == last) ? a0 : a0 + (a1 - a0) * j / steps;
+            chain.emplace_back(extent * std::cos(a), extent * std::sin(a));
+            if (first == last) break;
+          }
+        };
+        if (piece.kind == Beam::kFar) {
+          arc(piece.first, piece.last);
+        } else {
+          // Runs of beams at the free range get their arc; a beam stopped at
+          // a wall its own vertex (the polygon stays a star around the sensor).
+          for (std::size_t k = piece.first; k <= piece.last;) {
+            if (const double e = stopped_at(k); e > 0.0) {
+              chain.emplace_back(e * std::cos(angle_at(k)), e * std::sin(angle_at(k)));
+              ++k;
+              continue;
+            }
+            std::size_t last = k;
+            while (last + 1 <= piece.last && stopped_at(last + 1) == 0.0) ++last;
+            arc(k, last);
+            k = last + 1;
+          }
         }
       }
       for (std::size_t j = 0; j < chain.size(); ++j) {

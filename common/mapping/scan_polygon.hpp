@@ -74,6 +74,12 @@ struct ScanPolygonOptions {
   // stands there. The shipped worlds' scans have 24 returns at the fewest
   // (campus, open ground), 371 indoors. 0: off.
   int min_returns = 0;
+  // A beam without a return ends where it runs into a wall the map already
+  // holds (known_walls.hpp): a laser blind in one sector (part of the window
+  // covered, a cable in front of it) would otherwise carve the walls there
+  // away. Read by the callers that have a map (the mapper, SLAM's particle
+  // maps); scan_to_polygon takes the extents they give it.
+  bool no_return_stops_at_walls = true;
 };
 
 // A beam's reading is a return: finite, at least range_min_m and below
@@ -101,8 +107,13 @@ struct ScanPolygonResult {
 // The free-space polygon of one scan. Beam i points at angle_min +
 // i * angle_increment in the sensor frame; `sensor_pose` is the sensor's pose
 // in the map frame. Never throws; bad input gives ok == false and an error.
+// `no_return_extent_m`, when not empty (one value per beam of `ranges`, as
+// no_return_extents in known_walls.hpp gives them): a beam without a return
+// marks free space only that far (at most free_range_m), its own vertex
+// where that is short of free_range_m, in place of the arc.
 ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_min,
                                   double angle_increment, const geometry::Pose2& sensor_pose,
-                                  const ScanPolygonOptions& options);
+                                  const ScanPolygonOptions& options,
+                                  std::span<const float> no_return_extent_m = {});
 
 }  // namespace pex::mapping

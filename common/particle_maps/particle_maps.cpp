@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "geometry/point.hpp"
+#include "mapping/known_walls.hpp"
 
 namespace pex::particle_maps {
 
@@ -87,14 +88,37 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   }
   // The inserts: each touches its own map only, so they can run side by side.
   std::vector<char> failed(particles.size(), 0);
+  std::vector<int> stopped(particles.size(), 0);
+  // A beam without a return ends at a wall of the particle's own map (its
+  // parent's, before this scan): each particle whose map stops one gets its
+  // own polygon, built at its pose; the rest share the one above.
+  const bool stop_at_walls =
+      scan_options.no_return_stops_at_walls && !first &&
+      mapping::count_returns(scan.ranges, scan_options.range_min_m, scan_options.range_max_m) <
+          static_cast<int>(scan.ranges.size());
   // Inserts differ in cost (a particle's scan may touch more tiles), so each
   // worker takes the next one as it is free rather than a fixed share.
   std::atomic<std::size_t> next_insert{0};
   auto work = [&] {
     for (std::size_t k; (k = next_insert.fetch_add(1)) < to_insert.size();) {
       const std::size_t i = to_insert[k];
-      const auto result =
-          next[i].insert(transformed(prepared, geometry::compose(particles[i].pose, scan.sensor_in_base)));
+      const Pose2 sensor = geometry::compose(particles[i].pose, scan.sensor_in_base);
+      if (stop_at_walls) {
+        const auto walls = mapping::known_walls(next[i], {sensor.x_m, sensor.y_m}, scan_options.free_range_m);
+        const auto extents =
+            mapping::no_return_extents(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options, walls);
+        stopped[i] = extents.beams_stopped;
+        if (extents.beams_stopped > 0) {
+          const auto own = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor,
+                                                    scan_options, extents.extent_m);
+          if (own.ok) {
+            const auto result = next[i].insert(mapping::prepare_scan(own.polygon, options_.map));
+            failed[i] = result.ok ? 0 : 1;
+            continue;
+          }
+        }
+      }
+      const auto result = next[i].insert(transformed(prepared, sensor));
       failed[i] = result.ok ? 0 : 1;
     }
   };
@@ -105,7 +129,11 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   work();
   for (auto& t : pool) t.join();
   for (std::size_t i = 0; i < particles.size(); ++i)
-    if (copy_of[i] != i) next[i] = next[copy_of[i]];
+    if (copy_of[i] != i) {
+      next[i] = next[copy_of[i]];
+      stopped[i] = stopped[copy_of[i]];
+    }
+  r.no_return_beams_stopped = std::move(stopped);
   r.inserts = static_cast<int>(to_insert.size());
   for (char f : failed) r.insert_failures += f;
   maps_ = std::move(next);

@@ -46,6 +46,9 @@ struct UpdateResult {
   bool scan_inserted = false;  // false: the scan gave no polygon (maps copied only)
   int inserts = 0;             // distinct inserts done (equal children share one)
   int insert_failures = 0;     // inserts where some tile kept its old state
+  // Per particle (as `particles`): beams without a return stopped at a wall
+  // of the particle's map (ScanPolygonOptions::no_return_stops_at_walls).
+  std::vector<int> no_return_beams_stopped;
 };
 
 // The scan polygon moved by a rigid transform (rotation about the origin by

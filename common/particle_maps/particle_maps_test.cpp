@@ -197,3 +197,40 @@ TEST(ParticleMaps, ThreadCountDoesNotChangeTheMaps) {
   };
   EXPECT_EQ(run(1), run(3));
 }
+
+// Part of the window covered: each particle's blind beams stop at the walls
+// of its own map, so no particle's room grows through them; with the stop
+// off the same scan carves the walls away.
+TEST(ParticleMaps, ABlindSectorsBeamsStopAtEachParticlesWalls) {
+  auto run = [](bool stop_at_walls, std::vector<int>* stopped) {
+    ParticleMaps maps(options());
+    auto o = scan_options();
+    o.no_return_stops_at_walls = stop_at_walls;
+    // Both at the scans' true poses (the returns put the wall where it is),
+    // two lines of descent, so the second scan goes into two maps.
+    const std::vector<ParticleState> first{{{3.0, 2.0, 0.0}, -1}, {{3.0, 2.0, 0.0}, -1}};
+    EXPECT_TRUE(maps.update(first, scan_of(room_scan({3.0, 2.0, 0.0}, 6, 4)), o).ok);
+    auto blind = room_scan({3.2, 2.0, 0.1}, 6, 4);
+    for (int i = 0; i <= 180; ++i)
+      if (std::abs(-M_PI / 2 + i * M_PI / 180) < 0.5) blind[static_cast<std::size_t>(i)] = 0.0f;
+    const std::vector<ParticleState> second{{{3.2, 2.0, 0.1}, 0}, {{3.2, 2.0, 0.1}, 1}};
+    const auto r = maps.update(second, scan_of(blind), o);
+    EXPECT_TRUE(r.ok && r.scan_inserted) << r.error;
+    *stopped = r.no_return_beams_stopped;
+    // How far the farther of the two maps reaches past the room's east wall (x = 6).
+    double past = -1e9;
+    for (std::size_t i = 0; i < 2; ++i) {
+      const auto merged = maps.map(i).free_space();
+      EXPECT_TRUE(merged.ok) << merged.error;
+      for (const auto& p : merged.polygons)
+        for (const auto& q : p.geometry.outer()) past = std::max(past, q.x() - 6.0);
+    }
+    return past;
+  };
+  std::vector<int> stopped, stopped_off;
+  EXPECT_LE(run(true, &stopped), 0.01);
+  ASSERT_EQ(stopped.size(), 2u);
+  EXPECT_GT(stopped[0], 40);
+  EXPECT_GT(stopped[1], 40);
+  EXPECT_GT(run(false, &stopped_off), 0.5) << "the blind sector carves the wall away";
+}

@@ -1,5 +1,6 @@
 #include "planning/live_view.hpp"
 
+#include "mapping/known_walls.hpp"
 #include "mapping/obstacle_band.hpp"
 #include "mapping/typed_ops.hpp"
 
@@ -7,14 +8,20 @@ namespace pex::planning {
 
 mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle_min, double angle_increment,
                                      double range_min_m, const geometry::Pose2& sensor_pose,
-                                     const LiveViewOptions& options) {
+                                     const LiveViewOptions& options, const mapping::TypedMultiPolygon* map) {
   if (!(options.range_m > 0.0)) return {};
   mapping::ScanPolygonOptions scan;
   scan.range_min_m = range_min_m;
   scan.range_max_m = 1e3;  // every return counts; farther than range_m ends the view there
   scan.free_range_m = options.range_m;
   scan.obstacle_range_m = options.range_m;
-  const auto polygon = mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, scan);
+  mapping::NoReturnExtents stopped;
+  if (options.no_return_stops_at_walls && map) {
+    const auto walls = mapping::known_walls(*map, {sensor_pose.x_m, sensor_pose.y_m}, scan.free_range_m);
+    stopped = mapping::no_return_extents(ranges, angle_min, angle_increment, sensor_pose, scan, walls);
+  }
+  const auto polygon =
+      mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, scan, stopped.extent_m);
   if (!polygon.ok) return {};
   const mapping::TypedMultiPolygon free{polygon.polygon};
   const auto band = mapping::obstacle_band(polygon.polygon, options.obstacle_inner_m, options.obstacle_outer_m);

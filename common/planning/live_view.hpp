@@ -28,14 +28,21 @@ struct LiveViewOptions {
   // The band cut around the scan's own returns, as the mapper's (polygon_mapper [map]).
   double obstacle_inner_m = 0.02;
   double obstacle_outer_m = 0.10;
+  // A beam without a return opens the view only up to the first wall of the
+  // planning map it runs into (known_walls.hpp): a laser blind in one sector
+  // must not reopen the walls there for the planner. A return past a wall
+  // still opens it (the laser sees through: a door opened).
+  bool no_return_stops_at_walls = true;
 };
 
 // The live view of one scan (ranges as in LIDAR_SCAN, the sensor's pose in the
 // map frame), every edge typed obstacle; empty when off or when the scan gives
-// no polygon.
+// no polygon. `map`: the planning map the view will be united into, whose
+// walls stop the beams without a return (no_return_stops_at_walls); null:
+// none known.
 mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle_min, double angle_increment,
                                      double range_min_m, const geometry::Pose2& sensor_pose,
-                                     const LiveViewOptions& options);
+                                     const LiveViewOptions& options, const mapping::TypedMultiPolygon* map = nullptr);
 
 // `map` with `live` united in; `map` itself when `live` is empty or the union
 // fails (the plan then is the map's own).

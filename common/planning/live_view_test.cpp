@@ -95,6 +95,34 @@ TEST(LiveView, TheNewestScanReopensADoorTheMapClosed) {
   EXPECT_TRUE(through_door);
 }
 
+// Part of the window covered: the beams toward the door have no echo. The
+// laser does not see through the door, so the view does not reopen it: those
+// beams stop at the map's wall. Without the map they would open 3 m through it.
+TEST(LiveView, ABlindSectorDoesNotReopenTheMapsWalls) {
+  const mapping::testing::ScanSpec spec;
+  const Pose2 robot{2.0, 2.0, 0.0};
+  auto ranges = mapping::testing::cast_scan(two_rooms_walls(), robot, spec);
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    if (std::abs(spec.angle_min + spec.angle_increment * static_cast<double>(i)) < 0.4) ranges[i] = 0.0f;
+  LiveViewOptions o;
+  o.range_m = 3.0;
+  const auto map = map_with_the_door_closed();
+  auto farthest_x = [](const mapping::TypedMultiPolygon& view) {
+    double x = -1e9;
+    for (const auto& p : view)
+      for (const auto& q : p.geometry.outer()) x = std::max(x, q.x());
+    return x;
+  };
+  const auto stopped = live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, robot, o, &map);
+  ASSERT_FALSE(stopped.empty());
+  EXPECT_LE(farthest_x(stopped), 4.0 + 1e-6);
+  EXPECT_EQ(with_live_view(map, stopped).size(), 2u) << "the door stays cut";
+  const auto open = live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, robot, o, nullptr);
+  EXPECT_GT(farthest_x(open), 4.5);
+  o.no_return_stops_at_walls = false;
+  EXPECT_GT(farthest_x(live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, robot, o, &map)), 4.5);
+}
+
 TEST(LiveView, AWallTheLaserSeesStaysClosed) {
   // The same map, but the door really is shut: the laser sees the wall, the
   // live view ends at it, with the band of its own returns, and nothing opens.

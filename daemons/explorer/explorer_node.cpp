@@ -127,7 +127,7 @@ void ExplorerNode::on_slam_update(const pex::slam_update_t& msg) {
 }
 
 void ExplorerNode::complete(planning::PlanRequest& request) {
-  request.live_view = live_view_at(request.pose);
+  request.live_view = live_view_at(request.pose, request.map.get());
   if (request.tight && request.options.trail_corridor_m > 0.0) {
     request.trail = trails_.trail_for_map();
     if (!request.trail) ++counters_.tight_plans_without_trail;
@@ -238,17 +238,20 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
 
 std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
                                                                const planning::Pose2& robot,
-                                                               const planning::LiveViewOptions& options) {
+                                                               const planning::LiveViewOptions& options,
+                                                               const mapping::TypedMultiPolygon* map) {
   if (!(options.range_m > 0.0)) return nullptr;
   // The sensor's pose in the map frame: the robot's, composed with the mounting.
   const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
-  auto view = planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor, options);
+  auto view =
+      planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor, options, map);
   if (view.empty()) return nullptr;
   return std::make_shared<const mapping::TypedMultiPolygon>(std::move(view));
 }
 
-std::shared_ptr<const mapping::TypedMultiPolygon> ExplorerNode::live_view_at(const planning::Pose2& robot) const {
-  return last_scan_ ? live_view_of(*last_scan_, robot, options_.live_view) : nullptr;
+std::shared_ptr<const mapping::TypedMultiPolygon> ExplorerNode::live_view_at(
+    const planning::Pose2& robot, const mapping::TypedMultiPolygon* map) const {
+  return last_scan_ ? live_view_of(*last_scan_, robot, options_.live_view, map) : nullptr;
 }
 
 pex::velocity_cmd_t ExplorerNode::stop_command(std::int64_t now_utime) {

@@ -55,10 +55,13 @@ struct ExplorerCounters {
 };
 
 // The live view (planning/live_view.hpp) of a LIDAR_SCAN taken at `robot`
-// (the laser's mounting applied); null when off or when it gives no polygon.
+// (the laser's mounting applied), its beams without a return stopped at the
+// walls of `map` (the planning map it is for; null: none); null when off or
+// when it gives no polygon.
 std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
                                                                const planning::Pose2& robot,
-                                                               const planning::LiveViewOptions& options);
+                                                               const planning::LiveViewOptions& options,
+                                                               const mapping::TypedMultiPolygon* map);
 
 // A SLAM_UPDATE as the driven trails take it (planning/driven_trail.hpp).
 planning::TrailUpdate trail_update_of(const pex::slam_update_t& msg);
@@ -183,9 +186,10 @@ class ExplorerNode {
   }
 
  private:
-  // The newest scan's live view (planning/live_view.hpp) from `robot`; null
-  // when off or without a scan.
-  std::shared_ptr<const mapping::TypedMultiPolygon> live_view_at(const planning::Pose2& robot) const;
+  // The newest scan's live view (planning/live_view.hpp) from `robot`, for
+  // `map`; null when off or without a scan.
+  std::shared_ptr<const mapping::TypedMultiPolygon> live_view_at(const planning::Pose2& robot,
+                                                                 const mapping::TypedMultiPolygon* map) const;
   // What the mission's request leaves to the explorer: the live view, and
   // for a tight plan the trail.
   void complete(planning::PlanRequest& request);

@@ -155,6 +155,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   // last command: the guard starts from the top speed the explorer commands.
   o.guard.start_speed_mps = o.mission.follower.max_speed_mps;
   o.live_view.range_m = config.get<double>("live_view_range_m", o.live_view.range_m, in_range(0.0, 30.0));
+  o.live_view.no_return_stops_at_walls =
+      config.get<bool>("live_view_no_return_stops_at_walls", o.live_view.no_return_stops_at_walls);
   return o;
 }
 

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "archive/byte_archive.hpp"
+#include "mapping/known_walls.hpp"
 #include "mapping/map_archive.hpp"
 #include "runtime/config.hpp"
 
@@ -54,6 +55,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.scan.free_arc_step_rad = scan.get<double>("free_arc_step_rad", o.scan.free_arc_step_rad, runtime::in_range(0.001, 1.0));
   o.scan.max_beams = scan.get<int>("max_beams", o.scan.max_beams, runtime::in_range(2, 1000000));
   o.scan.min_returns = scan.get<int>("min_returns", o.scan.min_returns, runtime::in_range(0, 1000000));
+  o.scan.no_return_stops_at_walls = scan.get<bool>("no_return_stops_at_walls", o.scan.no_return_stops_at_walls);
   auto map = config.section("map");
   o.map.tile_size_m = map.get<double>("tile_size_m", o.map.tile_size_m, runtime::in_range(1.0, 1000.0));
   o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m, runtime::in_range(-1e5, 1e5));
@@ -208,6 +210,8 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   restored_any_epoch_ = false;
   epoch_ = update.epoch;
   if (!result.scan_inserted) ++counters_.scan_polygon_errors;
+  if (static_cast<std::size_t>(update.best) < result.no_return_beams_stopped.size())
+    counters_.no_return_beams_stopped += result.no_return_beams_stopped[static_cast<std::size_t>(update.best)];
   counters_.failed_tile_updates += result.insert_failures;
   ++counters_.slam_updates;
   ++counters_.scans_inserted;
@@ -288,7 +292,14 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   // Sensor pose in the map: the robot pose composed with the mounting.
   const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
   const mapping::ScanPolygonOptions scan_options = scan_options_for(scan);
-  const auto polygon = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options);
+  mapping::NoReturnExtents stopped;
+  if (scan_options.no_return_stops_at_walls) {
+    const auto walls = mapping::known_walls(map_, {sensor.x_m, sensor.y_m}, scan_options.free_range_m);
+    stopped = mapping::no_return_extents(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options, walls);
+    counters_.no_return_beams_stopped += stopped.beams_stopped;
+  }
+  const auto polygon = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options,
+                                                stopped.extent_m);
   if (!polygon.ok) {
     ++counters_.scan_polygon_errors;
     return true;

@@ -96,6 +96,11 @@ struct MapperCounters {
   // slam: a SLAM started afresh (another epoch, another map frame): the maps
   // of the old one were dropped, never mixed with the new.
   std::int64_t slam_epoch_changes = 0;
+  // Beams without a return that ran into a wall the map holds and were
+  // stopped there (ScanPolygonOptions::no_return_stops_at_walls; the best
+  // particle's, on SLAM). A steady climb while the robot drives is a laser
+  // blind in some sector; a few a scan are glass or dark surfaces.
+  std::int64_t no_return_beams_stopped = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -112,6 +117,7 @@ struct MapperCounters {
     v.total("best_switches", best_switches);
     v.total("slam_resyncs", slam_resyncs);
     v.total("slam_epoch_changes", slam_epoch_changes);
+    v.total("no_return_beams_stopped", no_return_beams_stopped);
   }
 };
 

@@ -156,8 +156,11 @@ TEST(Mapper, AScanWithoutReturnsIsRefusedAndTheWallsKept) {
   mapper.on_pose({3'020'000, {2.0, 1.5, 1.0}});
   EXPECT_EQ(mapper.counters().scans_inserted, 1);
   EXPECT_EQ(mapper.free_space_message(4'000'000)->free_area_m2, room_m2);
-  // Without the check the same scan goes in and clears the walls around.
-  Mapper unchecked(MapperOptions{});
+  // Without the check (and without stopping beams at the walls the map
+  // holds) the same scan goes in and clears the walls around.
+  MapperOptions unchecked_options;
+  unchecked_options.scan.no_return_stops_at_walls = false;
+  Mapper unchecked(unchecked_options);
   unchecked.on_pose({1'000'000, at});
   unchecked.on_scan(make_scan(walls, at, 1'010'000));
   unchecked.on_pose({1'020'000, at});
@@ -166,6 +169,40 @@ TEST(Mapper, AScanWithoutReturnsIsRefusedAndTheWallsKept) {
   unchecked.on_pose({3'020'000, {2.0, 1.5, 1.0}});
   EXPECT_EQ(unchecked.counters().scans_inserted, 2);
   EXPECT_GT(unchecked.free_space_message(4'000'000)->free_area_m2, 12.0 + 1.0);
+}
+
+// Part of the window covered: the beams of a sector have no echo, the rest
+// see. The scan has returns enough to go in; its blind beams stop at the
+// walls the map holds, so the room stays the room, and they are counted.
+TEST(Mapper, ABlindSectorsBeamsStopAtTheWallsTheMapHolds) {
+  std::vector<mapping::testing::Wall> walls;
+  mapping::testing::add_box(walls, 0, 0, 4, 3);
+  const geometry::Pose2 at{2.0, 1.5, 0.0};
+  auto blind = make_scan(walls, {2.5, 1.5, 0.5}, 3'010'000);
+  for (std::size_t i = 0; i < blind.ranges.size(); ++i) {
+    const double a = blind.angle_min + blind.angle_increment * static_cast<double>(i);
+    if (a > -0.6 && a < 0.6) blind.ranges[i] = 0.0f;
+  }
+  auto area_after_blind_scan = [&](bool stop_at_walls, std::int64_t* stopped) {
+    MapperOptions options;
+    options.scan.min_returns = 5;
+    options.scan.no_return_stops_at_walls = stop_at_walls;
+    Mapper mapper(options);
+    mapper.on_pose({1'000'000, at});
+    mapper.on_scan(make_scan(walls, at, 1'010'000));
+    mapper.on_pose({1'020'000, at});
+    mapper.on_pose({3'000'000, {2.5, 1.5, 0.5}});
+    mapper.on_scan(blind);
+    mapper.on_pose({3'020'000, {2.5, 1.5, 0.5}});
+    EXPECT_EQ(mapper.counters().scans_inserted, 2);
+    *stopped = mapper.counters().no_return_beams_stopped;
+    return mapper.free_space_message(4'000'000)->free_area_m2;
+  };
+  std::int64_t stopped = 0, stopped_off = 0;
+  EXPECT_LE(area_after_blind_scan(true, &stopped), 12.0 + 1e-6);
+  EXPECT_GT(stopped, 50);
+  EXPECT_GT(area_after_blind_scan(false, &stopped_off), 12.0 + 1.0) << "the blind sector carves the walls away";
+  EXPECT_EQ(stopped_off, 0);
 }
 
 TEST(Mapper, ScanNewerThanEveryPoseWaitsForOne) {

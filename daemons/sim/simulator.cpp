@@ -294,15 +294,25 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   node_.watch_fd(can_->fd(), [this] { receive_can(); });
   node_.subscribe<pex::sim_fault_t>(runtime::channels::kSimFault, [this](const pex::sim_fault_t& msg) {
     if (msg.fault != pex::sim_fault_t::FAULT_LASER_STALL && msg.fault != pex::sim_fault_t::FAULT_LASER_REFUSE &&
-        msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND)
+        msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND && msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR)
       throw std::invalid_argument("unknown fault " + std::to_string(msg.fault));
     if (!std::isfinite(msg.duration_s) || msg.duration_s < 0.0 || msg.duration_s > 3600.0)
       throw std::invalid_argument("fault duration " + std::to_string(msg.duration_s) + " s not in [0, 3600]");
+    const bool sector = msg.fault == pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR;
+    if (sector && !(std::isfinite(msg.sector_from_rad) && std::isfinite(msg.sector_to_rad) &&
+                    msg.sector_from_rad < msg.sector_to_rad && msg.sector_from_rad >= -std::numbers::pi &&
+                    msg.sector_to_rad <= std::numbers::pi))
+      throw std::invalid_argument("blind sector [" + std::to_string(msg.sector_from_rad) + ", " +
+                                  std::to_string(msg.sector_to_rad) + "] rad is not an interval within [-pi, pi]");
     spdlog::warn("fault from {}: laser {} for {} s", msg.source,
                  msg.fault == pex::sim_fault_t::FAULT_LASER_STALL    ? "stall"
                  : msg.fault == pex::sim_fault_t::FAULT_LASER_REFUSE ? "refuses connections"
-                                                                     : "blind (no echo on any beam)",
+                 : sector ? fmt::format("blind from {:.2f} to {:.2f} rad (no echo there)", msg.sector_from_rad,
+                                        msg.sector_to_rad)
+                          : std::string("blind (no echo on any beam)"),
                  msg.duration_s);
+    blind_from_rad_ = sector ? msg.sector_from_rad : -std::numbers::pi;
+    blind_to_rad_ = sector ? msg.sector_to_rad : std::numbers::pi;
     start_laser_fault(msg.fault, msg.duration_s);
   });
   // The sim is the clock source: its node runs on the system clock (run_daemon
@@ -487,9 +497,17 @@ void Simulator::send_scan() {
   if (laser_fault_ == pex::sim_fault_t::FAULT_LASER_STALL) return;  // a hung device sends nothing
   // One telegram per channel configuration among the streaming clients.
   std::string encoded[2][2];
-  // Blind: the same telegrams, every beam at the laser's range (no echo).
-  const std::vector<float> no_echo(laser_fault_ == pex::sim_fault_t::FAULT_LASER_BLIND ? pending_scan_.size() : 0,
-                                   static_cast<float>(options_.laser.max_range_m));
+  // Blind (in a sector): the same telegrams, the beams there at the laser's
+  // range (no echo).
+  std::vector<float> no_echo;
+  if (laser_fault_ == pex::sim_fault_t::FAULT_LASER_BLIND || laser_fault_ == pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR) {
+    no_echo = pending_scan_;
+    const double first = options_.laser.first_angle_rad(), step = options_.laser.step_deg * std::numbers::pi / 180.0;
+    for (std::size_t i = 0; i < no_echo.size(); ++i) {
+      const double a = first + step * static_cast<double>(i);
+      if (a >= blind_from_rad_ && a <= blind_to_rad_) no_echo[i] = static_cast<float>(options_.laser.max_range_m);
+    }
+  }
   const std::vector<float>& ranges = no_echo.empty() ? pending_scan_ : no_echo;
   const std::uint32_t device_time = pending_scan_device_us_;
   for (auto& client : clients_) {

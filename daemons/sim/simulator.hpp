@@ -155,6 +155,8 @@ class Simulator {
   int listener_watch_ = -1;
   std::int8_t laser_fault_ = 0;            // sim_fault_t::FAULT_*, 0: none
   std::int64_t laser_fault_until_us_ = 0;  // simulated time
+  // FAULT_LASER_BLIND(_SECTOR): the beams between these angles (sensor frame) have no echo.
+  double blind_from_rad_ = 0.0, blind_to_rad_ = 0.0;
 };
 
 }  // namespace pex::simd

@@ -401,6 +401,35 @@ TEST(Faults, LaserBlind10sOnSlamTheRobotStandsAndTheMissionEndsDone) {
   laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_BLIND, 10.0, false, true);
 }
 
+// Part of the laser's window covered (a cable hanging in front of it): the
+// beams of a sector have no echo for the rest of the mission, the others see.
+// The scans have returns enough to be taken; each blind beam would be free
+// space for 4 m through the walls beside the robot. They stop at the walls
+// the map holds (no_return_stops_at_walls, in the mapper and the explorer's
+// live view), so the map keeps its walls, the mission ends DONE without a
+// collision, and the mapper counts the stopped beams.
+TEST(Faults, LaserBlindInASectorTheMapKeepsItsWallsAndTheMissionEndsDone) {
+  ExplorationSet set("faults-sector", {.speed = 2.0});
+  std::vector<pex::polygon_map_t> maps;
+  set.bus().on<pex::polygon_map_t>(std::string(ch::kMap), [&](const pex::polygon_map_t& m) { maps.push_back(m); });
+  // Most of the world seen first: its walls are in the map.
+  ASSERT_TRUE(set.spin_sim([&] { return !maps.empty() && maps.back().free_area_m2 > 60.0; }, 300.0))
+      << set.report_with_logs();
+  pex::sim_fault_t msg{};
+  msg.utime = set.clock()->utime;
+  msg.fault = pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR;
+  msg.duration_s = 3600.0;
+  msg.sector_from_rad = 0.4;  // ahead to the left, 46 degrees wide
+  msg.sector_to_rad = 1.2;
+  msg.source = "faults_test";
+  set.bus().publish(std::string(ch::kSimFault), msg);
+  expect_done_with_the_world_mapped(set);
+  EXPECT_EQ(counter_of(set.bus().status().at("sim"), "laser_faults"), 1);
+  EXPECT_GT(counter_of(set.bus().status().at("polygon_mapper"), "no_return_beams_stopped"), 100);
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
+}
+
 // Any start order brings the mission up (systemd orders none of the daemons
 // after another, and restarts any of them alone): each daemon of the set
 // (with SLAM, as on the robot) started last, after the others have said they

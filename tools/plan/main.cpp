@@ -151,7 +151,7 @@ int time_every_map(lcm::LogFile& log, const std::string& log_path, const std::st
       request.map = std::make_shared<const pex::planning::TypedMultiPolygon>(decoded.polygons);
       request.pose = robot;
       request.options = planner;
-      if (scan) request.live_view = pex::explorer::live_view_of(*scan, robot, options.live_view);
+      if (scan) request.live_view = pex::explorer::live_view_of(*scan, robot, options.live_view, request.map.get());
       request.focus = focus;
       request.tight = tight;
       if (tight) request.trail = trails.trail_for_map();
@@ -371,7 +371,7 @@ int main(int argc, char** argv) {
   }
   const pex::geometry::Pose2 robot{pose->x, pose->y, pose->theta};
   // As the explorer plans: the newest scan's live view united in (live_view_range_m).
-  const auto live = scan ? pex::explorer::live_view_of(*scan, robot, options.live_view) : nullptr;
+  const auto live = scan ? pex::explorer::live_view_of(*scan, robot, options.live_view, &decoded.polygons) : nullptr;
   const auto planned_on = live ? pex::planning::with_live_view(decoded.polygons, *live) : decoded.polygons;
   // A tight plan also goes along the way the robot drove (trail_corridor_m).
   trails.on_map(*map);
