@@ -16,7 +16,8 @@ mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle
   scan.free_range_m = options.range_m;
   scan.obstacle_range_m = options.range_m;
   mapping::NoReturnExtents stopped;
-  if (options.no_return_stops_at_walls && map) {
+  if (options.no_return_stops_at_walls && map &&
+      mapping::count_returns(ranges, scan.range_min_m, scan.range_max_m) < static_cast<int>(ranges.size())) {
     const auto walls = mapping::known_walls(*map, {sensor_pose.x_m, sensor_pose.y_m}, scan.free_range_m);
     stopped = mapping::no_return_extents(ranges, angle_min, angle_increment, sensor_pose, scan, walls);
   }

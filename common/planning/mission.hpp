@@ -299,6 +299,9 @@ class Mission {
   // stay as they were; homing goes on homing.
   void restore(const MissionCheckpoint& checkpoint);
   const std::vector<Point>& blacklist() const { return blacklist_; }
+  // The newest planning map and robot pose the mission was given (null / none yet).
+  const std::shared_ptr<const TypedMultiPolygon>& map() const { return map_; }
+  const std::optional<Pose2>& pose() const { return pose_; }
   const std::vector<Point>& visited_goals() const { return visited_; }
   const GoalOutcomes& goal_outcomes() const { return outcomes_; }
   const MissionOptions& options() const { return options_; }

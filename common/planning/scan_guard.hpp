@@ -65,7 +65,22 @@ struct GuardScanOptions {
   // the one it is taken at (fewer than 3: at an end, across the beam toward
   // the gap; at a corner, none).
   double wall_fit_m = 0.10;
+  // A beam without a return that runs into a wall of the planning map within
+  // this reads that wall (ranges_with_map_walls): a laser blind in a sector
+  // (part of its window covered) sees nothing there, and the guard, which
+  // acts on returns, would let the robot drive into a wall the map holds. 0: off.
+  double map_walls_m = 2.0;
 };
+
+// The scan's ranges with each beam without a return (as guard_points reads
+// them) that runs into an obstacle edge of `map` (a planning map, free
+// interior on the left of its edges) within reach_m reading the distance to
+// that edge; `sensor_in_map` is the sensor's pose in the map's frame.
+// `filled`, if given, counts those beams. Returns fill in nothing. Built on
+// mapping::known_walls / no_return_extents, as the mapper stops such beams.
+std::vector<float> ranges_with_map_walls(std::span<const float> ranges, double angle_min, double angle_increment,
+                                         double range_min, double range_max, const geometry::Pose2& sensor_in_map,
+                                         const mapping::TypedMultiPolygon& map, double reach_m, int* filled = nullptr);
 
 // The points the guard checks, in the robot's frame: every return of the
 // scan (beam i at angle_min + i * angle_increment in the sensor's frame;

@@ -15,6 +15,33 @@ namespace {
 
 using mapping::Point;
 
+// The laser blind ahead (part of its window covered): no beam there has a
+// return, so the guard would see nothing. The planning map's wall 0.6 m
+// ahead is read for those beams: the guard sees it, 0.35 m from the body.
+TEST(GuardPoints, ABlindBeamReadsThePlanningMapsWallItRunsInto) {
+  mapping::TypedPolygon room;  // 4 x 2 m, the wall at x = 4 an obstacle edge, the rest frontier
+  room.geometry.outer() = {Point(0, 0), Point(4, 0), Point(4, 2), Point(0, 2), Point(0, 0)};
+  room.edge_types = {{mapping::EdgeType::kFrontier, mapping::EdgeType::kObstacle, mapping::EdgeType::kFrontier,
+                      mapping::EdgeType::kFrontier}};
+  const mapping::TypedMultiPolygon map{room};
+  const std::vector<float> blind(61, 0.0f);  // -30 .. 30 degrees, 1 degree apart
+  const double angle_min = -M_PI / 6, step = M_PI / 180;
+  const geometry::Pose2 sensor{3.4, 1.0, 0.0};
+  int filled = 0;
+  const auto ranges = ranges_with_map_walls(blind, angle_min, step, 0.05, 20.0, sensor, map, 2.0, &filled);
+  EXPECT_EQ(filled, 61);
+  EXPECT_NEAR(ranges[30], 0.6, 1e-6);
+  const auto seen = guard_points(ranges, angle_min, step, 0.05, 20.0, {}, GuardScanOptions{});
+  EXPECT_NEAR(free_distance_ahead(seen, 0.25), 0.35, 1e-3);
+  EXPECT_TRUE(std::isinf(free_distance_ahead(guard_points(blind, angle_min, step, 0.05, 20.0, {}, GuardScanOptions{}), 0.25)));
+  // Beyond the reach, facing away, or off: nothing is filled.
+  EXPECT_EQ(ranges_with_map_walls(blind, angle_min, step, 0.05, 20.0, sensor, map, 0.5, &filled), blind);
+  EXPECT_EQ(filled, 0);
+  ranges_with_map_walls(blind, angle_min, step, 0.05, 20.0, {3.4, 1.0, M_PI}, map, 2.0, &filled);
+  EXPECT_EQ(filled, 0);
+  EXPECT_EQ(ranges_with_map_walls(blind, angle_min, step, 0.05, 20.0, sensor, map, 0.0, &filled), blind);
+}
+
 TEST(ScanGuard, AWallAheadLimitsTheSpeedToWhatCanStopBeforeIt) {
   std::vector<Point> wall;
   for (double y = -2.0; y <= 2.0; y += 0.01) wall.emplace_back(1.0, y);  // 1 m ahead

@@ -161,9 +161,22 @@ void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime)
                                   std::to_string(options_.min_scan_returns) +
                                   ": a laser covered or dazzled is no view; the robot stops as without scans");
   }
-  // Returns in the robot's frame (the laser's mounting), for the guard.
-  scan_points_ = planning::guard_points(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max,
-                                        {msg.sensor_x, msg.sensor_y, msg.sensor_theta}, options_.guard_scan);
+  // Returns in the robot's frame (the laser's mounting), for the guard; a
+  // beam without a return reads the planning map's wall it runs into, if
+  // one is near (a laser blind in a sector sees nothing there).
+  const geometry::Pose2 mounting{msg.sensor_x, msg.sensor_y, msg.sensor_theta};
+  std::vector<float> with_walls;
+  std::span<const float> guard_ranges = msg.ranges;
+  if (options_.guard_scan.map_walls_m > 0.0 && mission_.map() && mission_.pose()) {
+    int filled = 0;
+    with_walls = planning::ranges_with_map_walls(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min,
+                                                 msg.range_max, geometry::compose(*mission_.pose(), mounting),
+                                                 *mission_.map(), options_.guard_scan.map_walls_m, &filled);
+    if (filled > 0) guard_ranges = with_walls;
+    counters_.guard_map_wall_beams += filled;
+  }
+  scan_points_ = planning::guard_points(guard_ranges, msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max,
+                                        mounting, options_.guard_scan);
   scan_utime_ = now_utime;
   last_scan_ = msg;
   mission_.on_scan(now_utime);

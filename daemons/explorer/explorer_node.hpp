@@ -29,6 +29,9 @@ namespace pex::explorer {
 
 struct ExplorerCounters {
   std::int64_t guard_limited_steps = 0;  // control steps whose forward speed the scan guard cut
+  // Beams without a return the guard read as the planning map's wall they
+  // run into (GuardScanOptions::map_walls_m).
+  std::int64_t guard_map_wall_beams = 0;
   std::int64_t maps_accepted = 0;
   std::int64_t map_polygons_dropped = 0;
   std::int64_t map_rings_reoriented = 0;
@@ -46,6 +49,7 @@ struct ExplorerCounters {
   void visit_counters(Visitor& v) const {
     v.total("maps_accepted", maps_accepted);
     v.total("guard_limited_steps", guard_limited_steps);
+    v.total("guard_map_wall_beams", guard_map_wall_beams);
     v.total("map_polygons_dropped", map_polygons_dropped);
     v.total("commands_applied", commands_applied);
     v.total("trail_resyncs", trail_resyncs);

@@ -148,6 +148,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("guard_wall_end_reach_m", o.guard_scan.wall_end_reach_m, in_range(0.0, 0.5));
   o.guard_scan.wall_end_jump_m =
       config.get<double>("guard_wall_end_jump_m", o.guard_scan.wall_end_jump_m, in_range(0.001, 10.0));
+  o.guard_scan.map_walls_m = config.get<double>("guard_map_walls_m", o.guard_scan.map_walls_m, in_range(0.0, 30.0));
   o.max_beams = static_cast<std::size_t>(
       config.get<int>("max_beams", static_cast<int>(o.max_beams), in_range(1, 1 << 20)));
   o.min_scan_returns = config.get<int>("min_scan_returns", o.min_scan_returns, in_range(0, 1 << 20));

@@ -396,6 +396,42 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
   EXPECT_GT(drive(options, 0.26).first, 0.0);  // the map alone would drive on
 }
 
+// The laser blind to both sides (beams beyond 0.5 rad without a return):
+// the guard reads the corridor's walls from the map for them, and walls
+// beside the robot do not slow it.
+TEST(ExplorerNode, TheGuardReadsTheMapsWallsWhereTheLaserIsBlind) {
+  pex::laser_scan_t scan{};
+  scan.angle_min = static_cast<float>(-M_PI / 2);
+  scan.angle_increment = static_cast<float>(M_PI / 180);
+  scan.range_min = 0.05f;
+  scan.range_max = 20.0f;
+  for (int i = 0; i <= 180; ++i) {
+    const double a = scan.angle_min + i * scan.angle_increment;
+    scan.ranges.push_back(std::abs(a) < 0.5 ? static_cast<float>(5.0 / std::cos(a)) : 0.0f);
+  }
+  scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
+  ExplorerOptions options;
+  const auto [v, limited] = guarded_drive(options, scan);
+  EXPECT_GT(v, 0.3);
+  EXPECT_EQ(limited, 0);
+  // The corridor's walls 1.5 m to either side are within 2 m from 48.6
+  // degrees on: 42 beams a side, in each of the 21 scans.
+  ExplorerNode node(options);
+  pex::pose_t pose{};
+  pose.x = 10;
+  pose.y = 1.5;
+  ASSERT_NO_THROW(node.on_map(corridor(), 0));
+  ASSERT_NO_THROW(node.on_pose(pose, 0));
+  ASSERT_NO_THROW(node.on_scan(scan, 0));
+  EXPECT_EQ(node.counters().guard_map_wall_beams, 84);
+  options.guard_scan.map_walls_m = 0.0;
+  ExplorerNode off(options);
+  ASSERT_NO_THROW(off.on_map(corridor(), 0));
+  ASSERT_NO_THROW(off.on_pose(pose, 0));
+  ASSERT_NO_THROW(off.on_scan(scan, 0));
+  EXPECT_EQ(off.counters().guard_map_wall_beams, 0);
+}
+
 // A wall's end just inside the band the body sweeps, its last return just
 // outside it (the next beam passes the end): the returns alone let the robot
 // on at full speed, the guard's points past the wall's end hold it back

@@ -293,7 +293,9 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
   const mapping::ScanPolygonOptions scan_options = scan_options_for(scan);
   mapping::NoReturnExtents stopped;
-  if (scan_options.no_return_stops_at_walls) {
+  if (scan_options.no_return_stops_at_walls &&
+      mapping::count_returns(scan.ranges, scan_options.range_min_m, scan_options.range_max_m) <
+          static_cast<int>(scan.ranges.size())) {
     const auto walls = mapping::known_walls(map_, {sensor.x_m, sensor.y_m}, scan_options.free_range_m);
     stopped = mapping::no_return_extents(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options, walls);
     counters_.no_return_beams_stopped += stopped.beams_stopped;

@@ -406,14 +406,17 @@ TEST(Faults, LaserBlind10sOnSlamTheRobotStandsAndTheMissionEndsDone) {
 // The scans have returns enough to be taken; each blind beam would be free
 // space for 4 m through the walls beside the robot. They stop at the walls
 // the map holds (no_return_stops_at_walls, in the mapper and the explorer's
-// live view), so the map keeps its walls, the mission ends DONE without a
-// collision, and the mapper counts the stopped beams.
-TEST(Faults, LaserBlindInASectorTheMapKeepsItsWallsAndTheMissionEndsDone) {
-  ExplorationSet set("faults-sector", {.speed = 2.0});
+// live view), so the map keeps its walls; the scan guard reads the planning
+// map's walls for them (guard_map_walls_m), so the robot touches none of
+// them; the mission ends DONE, and the mapper and explorer count the beams.
+void laser_blind_in_a_sector_then_done(bool slam) {
+  ExplorationSet set("faults-sector", {.speed = 2.0, .slam = slam});
   std::vector<pex::polygon_map_t> maps;
   set.bus().on<pex::polygon_map_t>(std::string(ch::kMap), [&](const pex::polygon_map_t& m) { maps.push_back(m); });
-  // Most of the world seen first: its walls are in the map.
-  ASSERT_TRUE(set.spin_sim([&] { return !maps.empty() && maps.back().free_area_m2 > 60.0; }, 300.0))
+  // Most of the world seen first (72 of its 82.6 m^2 of floor): its walls are
+  // in the map. (From 60 m^2 on, a wall not yet seen was sometimes carved
+  // through by the blind beams, which no map can stop: docs/mapping.md.)
+  ASSERT_TRUE(set.spin_sim([&] { return !maps.empty() && maps.back().free_area_m2 > 72.0; }, 300.0))
       << set.report_with_logs();
   pex::sim_fault_t msg{};
   msg.utime = set.clock()->utime;
@@ -426,8 +429,17 @@ TEST(Faults, LaserBlindInASectorTheMapKeepsItsWallsAndTheMissionEndsDone) {
   expect_done_with_the_world_mapped(set);
   EXPECT_EQ(counter_of(set.bus().status().at("sim"), "laser_faults"), 1);
   EXPECT_GT(counter_of(set.bus().status().at("polygon_mapper"), "no_return_beams_stopped"), 100);
+  EXPECT_GT(counter_of(set.bus().status().at("explorer"), "guard_map_wall_beams"), 100);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
+}
+
+TEST(Faults, LaserBlindInASectorTheMapKeepsItsWallsAndTheMissionEndsDone) { laser_blind_in_a_sector_then_done(false); }
+
+// The same on SLAM: each particle's map stops the blind beams at its own
+// walls (ParticleMaps::update), and the mapper publishes the best one's.
+TEST(Faults, LaserBlindInASectorOnSlamTheMapKeepsItsWallsAndTheMissionEndsDone) {
+  laser_blind_in_a_sector_then_done(true);
 }
 
 // Any start order brings the mission up (systemd orders none of the daemons
