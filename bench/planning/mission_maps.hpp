@@ -20,6 +20,7 @@
 #include <variant>
 #include <vector>
 
+#include "mapping/known_walls.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "planning/exploration_planner.hpp"
@@ -114,9 +115,10 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
 
   auto insert_at = [&](double x, double y, double theta) {
     const auto ranges = laser.scan(caster, sim::Pose2{x, y, theta});
-    const auto scan = mapping::scan_to_polygon(ranges, laser.options().first_angle_rad(),
-                                               laser.options().step_deg * std::numbers::pi / 180.0,
-                                               geometry::Pose2{x, y, theta}, scan_options);
+    // As the mapper inserts it (beams without a return stopped at the map's walls).
+    const auto scan = mapping::scan_to_polygon_in(map, ranges, laser.options().first_angle_rad(),
+                                                  laser.options().step_deg * std::numbers::pi / 180.0,
+                                                  geometry::Pose2{x, y, theta}, scan_options);
     if (scan.ok) map.insert(scan.polygon);
   };
   planning::Pose2 pose = world.start;

@@ -131,4 +131,35 @@ NoReturnExtents no_return_extents(std::span<const float> ranges, double angle_mi
   return result;
 }
 
+namespace {
+
+template <class Map>
+ScanPolygonResult polygon_against(const Map& map, std::span<const float> ranges, double angle_min,
+                                  double angle_increment, const geometry::Pose2& sensor_pose,
+                                  const ScanPolygonOptions& options, int* beams_stopped) {
+  NoReturnExtents stopped;
+  // Most scans have a return on every beam: then no wall is looked for.
+  if (options.no_return_stops_at_walls && geometry::is_finite(sensor_pose) &&
+      count_returns(ranges, options.range_min_m, options.range_max_m) < static_cast<int>(ranges.size())) {
+    const auto walls = known_walls(map, {sensor_pose.x_m, sensor_pose.y_m}, options.free_range_m);
+    stopped = no_return_extents(ranges, angle_min, angle_increment, sensor_pose, options, walls);
+  }
+  if (beams_stopped) *beams_stopped = stopped.beams_stopped;
+  return scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, options, stopped.extent_m);
+}
+
+}  // namespace
+
+ScanPolygonResult scan_to_polygon_in(const PolygonMap& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options, int* beams_stopped) {
+  return polygon_against(map, ranges, angle_min, angle_increment, sensor_pose, options, beams_stopped);
+}
+
+ScanPolygonResult scan_to_polygon_in(const TypedMultiPolygon& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options, int* beams_stopped) {
+  return polygon_against(map, ranges, angle_min, angle_increment, sensor_pose, options, beams_stopped);
+}
+
 }  // namespace pex::mapping

@@ -58,4 +58,16 @@ NoReturnExtents no_return_extents(std::span<const float> ranges, double angle_mi
                                   const geometry::Pose2& sensor_pose, const ScanPolygonOptions& options,
                                   std::span<const KnownWall> walls);
 
+// scan_to_polygon into `map`: with options.no_return_stops_at_walls, the
+// beams without a return stopped at map's walls first (known_walls within
+// free_range_m, no_return_extents); `beams_stopped`, if given, counts them.
+// What the mapper inserts, and what the benchmarks' emulated missions do as it.
+ScanPolygonResult scan_to_polygon_in(const PolygonMap& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options, int* beams_stopped = nullptr);
+// The same against a free-space map's obstacle edges (the explorer's live view).
+ScanPolygonResult scan_to_polygon_in(const TypedMultiPolygon& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options, int* beams_stopped = nullptr);
+
 }  // namespace pex::mapping

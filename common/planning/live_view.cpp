@@ -15,14 +15,9 @@ mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle
   scan.range_max_m = 1e3;  // every return counts; farther than range_m ends the view there
   scan.free_range_m = options.range_m;
   scan.obstacle_range_m = options.range_m;
-  mapping::NoReturnExtents stopped;
-  if (options.no_return_stops_at_walls && map &&
-      mapping::count_returns(ranges, scan.range_min_m, scan.range_max_m) < static_cast<int>(ranges.size())) {
-    const auto walls = mapping::known_walls(*map, {sensor_pose.x_m, sensor_pose.y_m}, scan.free_range_m);
-    stopped = mapping::no_return_extents(ranges, angle_min, angle_increment, sensor_pose, scan, walls);
-  }
-  const auto polygon =
-      mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, scan, stopped.extent_m);
+  scan.no_return_stops_at_walls = options.no_return_stops_at_walls && map;
+  const auto polygon = map ? mapping::scan_to_polygon_in(*map, ranges, angle_min, angle_increment, sensor_pose, scan)
+                           : mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, scan);
   if (!polygon.ok) return {};
   const mapping::TypedMultiPolygon free{polygon.polygon};
   const auto band = mapping::obstacle_band(polygon.polygon, options.obstacle_inner_m, options.obstacle_outer_m);

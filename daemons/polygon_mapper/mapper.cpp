@@ -292,16 +292,10 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   // Sensor pose in the map: the robot pose composed with the mounting.
   const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
   const mapping::ScanPolygonOptions scan_options = scan_options_for(scan);
-  mapping::NoReturnExtents stopped;
-  if (scan_options.no_return_stops_at_walls &&
-      mapping::count_returns(scan.ranges, scan_options.range_min_m, scan_options.range_max_m) <
-          static_cast<int>(scan.ranges.size())) {
-    const auto walls = mapping::known_walls(map_, {sensor.x_m, sensor.y_m}, scan_options.free_range_m);
-    stopped = mapping::no_return_extents(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options, walls);
-    counters_.no_return_beams_stopped += stopped.beams_stopped;
-  }
-  const auto polygon = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options,
-                                                stopped.extent_m);
+  int stopped = 0;
+  const auto polygon = mapping::scan_to_polygon_in(map_, scan.ranges, scan.angle_min, scan.angle_increment, sensor,
+                                                   scan_options, &stopped);
+  counters_.no_return_beams_stopped += stopped;
   if (!polygon.ok) {
     ++counters_.scan_polygon_errors;
     return true;
