@@ -129,6 +129,18 @@ TEST(Mapper, MalformedScansAreRefusedAndTheMapKept) {
   EXPECT_FALSE(mapper.map_message(0).has_value());
 }
 
+// The room seen from `at` (a scan at 1.01 s), then `second` (its utime
+// 3.01 s) taken from `second_at`, each with poses around it.
+void map_room_then(Mapper& mapper, const std::vector<mapping::testing::Wall>& walls, const geometry::Pose2& at,
+                   const geometry::Pose2& second_at, const pex::laser_scan_t& second) {
+  mapper.on_pose({1'000'000, at});
+  mapper.on_scan(make_scan(walls, at, 1'010'000));
+  mapper.on_pose({1'020'000, at});
+  mapper.on_pose({3'000'000, second_at});
+  mapper.on_scan(second);
+  mapper.on_pose({3'020'000, second_at});
+}
+
 // A laser covered or dazzled answers "no echo" on every beam. Mapped, each
 // such beam would be free space for free_range_m through the room's walls;
 // with min_returns the scan is refused and the room is what it was.
@@ -161,12 +173,7 @@ TEST(Mapper, AScanWithoutReturnsIsRefusedAndTheWallsKept) {
   MapperOptions unchecked_options;
   unchecked_options.scan.no_return_stops_at_walls = false;
   Mapper unchecked(unchecked_options);
-  unchecked.on_pose({1'000'000, at});
-  unchecked.on_scan(make_scan(walls, at, 1'010'000));
-  unchecked.on_pose({1'020'000, at});
-  unchecked.on_pose({3'000'000, {2.0, 1.5, 1.0}});
-  unchecked.on_scan(blind);
-  unchecked.on_pose({3'020'000, {2.0, 1.5, 1.0}});
+  map_room_then(unchecked, walls, at, {2.0, 1.5, 1.0}, blind);
   EXPECT_EQ(unchecked.counters().scans_inserted, 2);
   EXPECT_GT(unchecked.free_space_message(4'000'000)->free_area_m2, 12.0 + 1.0);
 }
@@ -188,12 +195,7 @@ TEST(Mapper, ABlindSectorsBeamsStopAtTheWallsTheMapHolds) {
     options.scan.min_returns = 5;
     options.scan.no_return_stops_at_walls = stop_at_walls;
     Mapper mapper(options);
-    mapper.on_pose({1'000'000, at});
-    mapper.on_scan(make_scan(walls, at, 1'010'000));
-    mapper.on_pose({1'020'000, at});
-    mapper.on_pose({3'000'000, {2.5, 1.5, 0.5}});
-    mapper.on_scan(blind);
-    mapper.on_pose({3'020'000, {2.5, 1.5, 0.5}});
+    map_room_then(mapper, walls, at, {2.5, 1.5, 0.5}, blind);
     EXPECT_EQ(mapper.counters().scans_inserted, 2);
     *stopped = mapper.counters().no_return_beams_stopped;
     return mapper.free_space_message(4'000'000)->free_area_m2;
