@@ -91,8 +91,12 @@ NoReturnExtents no_return_extents(std::span<const float> ranges, double angle_mi
   };
   std::vector<double> extent(n, options.free_range_m);
   auto test_beams = [&](const KnownWall& w, double from_phase, double to_phase) {
-    const long lo = std::max(0L, static_cast<long>(std::ceil(from_phase / step - 1e-9)));
-    const long hi = std::min(static_cast<long>(n) - 1, static_cast<long>(std::floor(to_phase / step + 1e-9)));
+    // Beam indices in double first: a tiny increment makes them far larger
+    // than any integer (the scan_polygon fuzz finding); clamped, then cast.
+    const double first_beam = std::ceil(from_phase / step - 1e-9), last_beam = std::floor(to_phase / step + 1e-9);
+    if (!(first_beam <= last_beam) || !(last_beam >= 0.0) || !(first_beam <= static_cast<double>(n - 1))) return;
+    const long lo = static_cast<long>(std::max(0.0, first_beam));
+    const long hi = static_cast<long>(std::min(static_cast<double>(n - 1), last_beam));
     const double ex = w.b.x() - w.a.x(), ey = w.b.y() - w.a.y();
     for (long i = lo; i <= hi; ++i) {
       if (!no_return[static_cast<std::size_t>(i)]) continue;
