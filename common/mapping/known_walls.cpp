@@ -138,21 +138,39 @@ NoReturnExtents no_return_extents(std::span<const float> ranges, double angle_mi
 namespace {
 
 template <class Map>
+NoReturnExtents extents_against(const Map& map, std::span<const float> ranges, double angle_min,
+                                double angle_increment, const geometry::Pose2& sensor_pose,
+                                const ScanPolygonOptions& options) {
+  // Most scans have a return on every beam: then no wall is looked for.
+  if (!options.no_return_stops_at_walls || !geometry::is_finite(sensor_pose) ||
+      count_returns(ranges, options.range_min_m, options.range_max_m) == static_cast<int>(ranges.size()))
+    return {};
+  const auto walls = known_walls(map, {sensor_pose.x_m, sensor_pose.y_m}, options.free_range_m);
+  return no_return_extents(ranges, angle_min, angle_increment, sensor_pose, options, walls);
+}
+
+template <class Map>
 ScanPolygonResult polygon_against(const Map& map, std::span<const float> ranges, double angle_min,
                                   double angle_increment, const geometry::Pose2& sensor_pose,
                                   const ScanPolygonOptions& options, int* beams_stopped) {
-  NoReturnExtents stopped;
-  // Most scans have a return on every beam: then no wall is looked for.
-  if (options.no_return_stops_at_walls && geometry::is_finite(sensor_pose) &&
-      count_returns(ranges, options.range_min_m, options.range_max_m) < static_cast<int>(ranges.size())) {
-    const auto walls = known_walls(map, {sensor_pose.x_m, sensor_pose.y_m}, options.free_range_m);
-    stopped = no_return_extents(ranges, angle_min, angle_increment, sensor_pose, options, walls);
-  }
+  const auto stopped = extents_against(map, ranges, angle_min, angle_increment, sensor_pose, options);
   if (beams_stopped) *beams_stopped = stopped.beams_stopped;
   return scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, options, stopped.extent_m);
 }
 
 }  // namespace
+
+NoReturnExtents no_return_extents_in(const PolygonMap& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options) {
+  return extents_against(map, ranges, angle_min, angle_increment, sensor_pose, options);
+}
+
+NoReturnExtents no_return_extents_in(const TypedMultiPolygon& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options) {
+  return extents_against(map, ranges, angle_min, angle_increment, sensor_pose, options);
+}
 
 ScanPolygonResult scan_to_polygon_in(const PolygonMap& map, std::span<const float> ranges, double angle_min,
                                      double angle_increment, const geometry::Pose2& sensor_pose,

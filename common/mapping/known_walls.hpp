@@ -58,6 +58,16 @@ NoReturnExtents no_return_extents(std::span<const float> ranges, double angle_mi
                                   const geometry::Pose2& sensor_pose, const ScanPolygonOptions& options,
                                   std::span<const KnownWall> walls);
 
+// no_return_extents against the walls of `map` within free_range_m of the
+// sensor, when options.no_return_stops_at_walls and the scan has a beam
+// without a return (else empty: most scans have a return on every beam).
+NoReturnExtents no_return_extents_in(const PolygonMap& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options);
+NoReturnExtents no_return_extents_in(const TypedMultiPolygon& map, std::span<const float> ranges, double angle_min,
+                                     double angle_increment, const geometry::Pose2& sensor_pose,
+                                     const ScanPolygonOptions& options);
+
 // scan_to_polygon into `map`: with options.no_return_stops_at_walls, the
 // beams without a return stopped at map's walls first (known_walls within
 // free_range_m, no_return_extents); `beams_stopped`, if given, counts them.

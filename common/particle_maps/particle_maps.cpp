@@ -91,11 +91,9 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
   std::vector<int> stopped(particles.size(), 0);
   // A beam without a return ends at a wall of the particle's own map (its
   // parent's, before this scan): each particle whose map stops one gets its
-  // own polygon, built at its pose; the rest share the one above.
-  const bool stop_at_walls =
-      scan_options.no_return_stops_at_walls && !first &&
-      mapping::count_returns(scan.ranges, scan_options.range_min_m, scan_options.range_max_m) <
-          static_cast<int>(scan.ranges.size());
+  // own polygon, built at its pose; the rest share the one above
+  // (no_return_extents_in reads the option; a first scan has no map to stop it).
+  const bool stop_at_walls = !first;
   // Inserts differ in cost (a particle's scan may touch more tiles), so each
   // worker takes the next one as it is free rather than a fixed share.
   std::atomic<std::size_t> next_insert{0};
@@ -104,9 +102,8 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
       const std::size_t i = to_insert[k];
       const Pose2 sensor = geometry::compose(particles[i].pose, scan.sensor_in_base);
       if (stop_at_walls) {
-        const auto walls = mapping::known_walls(next[i], {sensor.x_m, sensor.y_m}, scan_options.free_range_m);
-        const auto extents =
-            mapping::no_return_extents(scan.ranges, scan.angle_min, scan.angle_increment, sensor, scan_options, walls);
+        const auto extents = mapping::no_return_extents_in(next[i], scan.ranges, scan.angle_min,
+                                                           scan.angle_increment, sensor, scan_options);
         stopped[i] = extents.beams_stopped;
         if (extents.beams_stopped > 0) {
           const auto own = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor,

@@ -90,15 +90,13 @@ std::vector<float> ranges_with_map_walls(std::span<const float> ranges, double a
                                          const mapping::TypedMultiPolygon& map, double reach_m, int* filled) {
   std::vector<float> out(ranges.begin(), ranges.end());
   if (filled) *filled = 0;
-  // Most scans have a return on every beam: then no wall is looked for.
-  if (!(reach_m > 0.0) || mapping::count_returns(ranges, range_min, range_max) == static_cast<int>(ranges.size()))
-    return out;
+  if (!(reach_m > 0.0)) return out;
   mapping::ScanPolygonOptions o;
   o.range_min_m = range_min;
   o.range_max_m = range_max;
   o.free_range_m = reach_m;
-  const auto walls = mapping::known_walls(map, {sensor_in_map.x_m, sensor_in_map.y_m}, reach_m);
-  const auto stopped = mapping::no_return_extents(ranges, angle_min, angle_increment, sensor_in_map, o, walls);
+  o.no_return_stops_at_walls = true;
+  const auto stopped = mapping::no_return_extents_in(map, ranges, angle_min, angle_increment, sensor_in_map, o);
   for (std::size_t i = 0; i < stopped.extent_m.size(); ++i)
     if (!mapping::is_return(ranges[i], range_min, range_max) && stopped.extent_m[i] < reach_m)
       out[i] = stopped.extent_m[i];

@@ -44,6 +44,14 @@ pex::polygon_map_t corridor() {
   return map_of({ring(0, false, {{0, 0}, {20, 0}, {20, 3}, {0, 3}}, {0, 1, 0, 0})});
 }
 
+// The robot in the corridor's middle (10, 1.5), facing along it toward the frontier.
+pex::pose_t mid_corridor() {
+  pex::pose_t pose{};
+  pose.x = 10;
+  pose.y = 1.5;
+  return pose;
+}
+
 TEST(DecodeMap, RoomWithAHole) {
   const auto d = decode_map(map_of({ring(7, false, {{0, 0}, {10, 0}, {10, 10}, {0, 10}}),
                                     ring(7, true, {{4, 4}, {4, 6}, {6, 6}, {6, 4}}, {1, 1, 1, 1})}));
@@ -165,9 +173,7 @@ TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {
   EXPECT_EQ(node.step(0).v, 0.0);
   EXPECT_EQ(node.state_message(0).phase, +pex::explore_state_t::PHASE_IDLE);
 
-  pex::pose_t pose{};
-  pose.x = 10;
-  pose.y = 1.5;
+  const pex::pose_t pose = mid_corridor();
   ASSERT_NO_THROW(node.on_map(corridor(), 0));
   ASSERT_NO_THROW(node.on_pose(pose, 0));
   node.step(0);
@@ -279,9 +285,7 @@ TEST(ExplorerNode, StopsWithoutLaserScans) {
   ExplorerOptions options;
   options.mission.scan_timeout_us = 500'000;
   ExplorerNode node(options);
-  pex::pose_t pose{};
-  pose.x = 10;
-  pose.y = 1.5;
+  const pex::pose_t pose = mid_corridor();
   pex::laser_scan_t scan{};
   scan.nranges = 3;
   scan.ranges = {1.0f, 1.0f, 1.0f};
@@ -314,9 +318,7 @@ TEST(ExplorerNode, StopsWhenTheLaserSeesNothing) {
   options.mission.scan_timeout_us = 500'000;
   options.min_scan_returns = 5;
   ExplorerNode node(options);
-  pex::pose_t pose{};
-  pose.x = 10;
-  pose.y = 1.5;
+  const pex::pose_t pose = mid_corridor();
   pex::laser_scan_t seeing{};
   seeing.range_max = 20.0f;
   seeing.angle_increment = 0.01f;
@@ -353,9 +355,7 @@ TEST(ExplorerNode, StopsWhenTheLaserSeesNothing) {
 // guard limited.
 std::pair<double, std::int64_t> guarded_drive(const ExplorerOptions& options, const pex::laser_scan_t& scan) {
   ExplorerNode node(options);
-  pex::pose_t pose{};
-  pose.x = 10;
-  pose.y = 1.5;
+  const pex::pose_t pose = mid_corridor();
   EXPECT_NO_THROW(node.on_map(corridor(), 0));
   double v = 0.0;
   for (std::int64_t t = 0; t <= 2'000'000; t += 100'000) {
@@ -417,9 +417,7 @@ TEST(ExplorerNode, TheGuardReadsTheMapsWallsWhereTheLaserIsBlind) {
   // The corridor's walls 1.5 m to either side are within 2 m from 48.6
   // degrees on: 42 beams a side, in each of the 21 scans.
   ExplorerNode node(options);
-  pex::pose_t pose{};
-  pose.x = 10;
-  pose.y = 1.5;
+  const pex::pose_t pose = mid_corridor();
   ASSERT_NO_THROW(node.on_map(corridor(), 0));
   ASSERT_NO_THROW(node.on_pose(pose, 0));
   ASSERT_NO_THROW(node.on_scan(scan, 0));
