@@ -605,26 +605,49 @@ std::optional<Point> ConfigurationSpace::nearest_interior_point(const Point& p, 
     return p;
   const mapping::Box window(Point(p.x() - max_distance_m, p.y() - max_distance_m),
                             Point(p.x() + max_distance_m, p.y() + max_distance_m));
-  double best = std::numeric_limits<double>::infinity();
-  std::uint32_t best_edge = 0;
-  Point best_point;
-  for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) {
-    const Edge& e = edges_[it->second];
-    if (skip_piece >= 0 && e.polygon == static_cast<std::uint32_t>(skip_piece)) continue;
-    const Point q = closest_point_on_segment(p, e.a, e.b);
-    const double d = distance(p, q);
-    // Ties go to the lower edge index: the answer does not depend on the tree's order.
-    if (d < best || (d == best && it->second < best_edge)) {
-      best = d;
-      best_edge = it->second;
-      best_point = q;
+  struct Near {
+    double d;
+    std::uint32_t edge;
+    Point q;
+  };
+  auto within = [&](auto&& each) {
+    for (auto it = tree_->qbegin(bgi::intersects(window)); it != tree_->qend(); ++it) {
+      const Edge& e = edges_[it->second];
+      if (skip_piece >= 0 && e.polygon == static_cast<std::uint32_t>(skip_piece)) continue;
+      const Point q = closest_point_on_segment(p, e.a, e.b);
+      const double d = distance(p, q);
+      if (d <= max_distance_m) each(Near{d, it->second, q});
     }
-  }
-  if (!(best <= max_distance_m)) return std::nullopt;
-  const Edge& e = edges_[best_edge];
-  if (bg::equals(best_point, e.b)) return inward(best_point, best_edge, true);
-  if (bg::equals(best_point, e.a)) return inward(best_point, e.prev, true);
-  return inward(best_point, best_edge, false);
+  };
+  // Ties go to the lower edge index: the answer does not depend on the tree's order.
+  auto before = [](const Near& a, const Near& b) { return a.d < b.d || (a.d == b.d && a.edge < b.edge); };
+  std::optional<Near> best;
+  within([&](const Near& n) {
+    if (!best || before(n, *best)) best = n;
+  });
+  if (!best) return std::nullopt;
+  auto moved_in = [&](const Near& n) {
+    const Edge& e = edges_[n.edge];
+    if (bg::equals(n.q, e.b)) return inward(n.q, n.edge, true);
+    if (bg::equals(n.q, e.a)) return inward(n.q, e.prev, true);
+    return inward(n.q, n.edge, false);
+  };
+  if (auto in = moved_in(*best)) return in;
+  // The nearest boundary point has no interior beside it: a sliver of
+  // C-space thinner than interior_offset_m (a piece of no area, a neck).
+  // Then the next nearest edges, in order, until one has (session 45: a
+  // sliver's edge nearest a frontier left it "with no C-space near" while a
+  // room's C-space lay 2 m from it, in view). Only then: the usual answer
+  // costs no more than it did.
+  std::vector<Near> near;
+  within([&](const Near& n) { near.push_back(n); });
+  // At most kMaxTries of them, so that a map of many slivers (hostile input)
+  // costs a bounded search per call.
+  constexpr std::size_t kMaxTries = 256;
+  std::sort(near.begin(), near.end(), before);
+  for (std::size_t k = 1; k < near.size() && k <= kMaxTries; ++k)
+    if (auto in = moved_in(near[k])) return in;
+  return std::nullopt;
 }
 
 }  // namespace pex::planning

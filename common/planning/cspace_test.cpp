@@ -95,6 +95,31 @@ TEST(ConfigurationSpace, NearestInteriorPointMovesAFrontierPointInside) {
   EXPECT_EQ(inside->x(), 3.0);
 }
 
+// A strip of map just wider than the robot gives a piece of C-space thinner
+// than interior_offset_m: its boundary is nearest the point, and no interior
+// lies beside it. The answer is then the nearest boundary point that has
+// interior beside it, here the room's, in place of none (session 45: such a
+// sliver left a frontier "with no C-space near" on intel).
+TEST(ConfigurationSpace, NearestInteriorPointLooksPastASliverWithNoInterior) {
+  CSpaceOptions o = disk(0.27);
+  o.simplify_epsilon_m = 0.0;
+  ConfigurationSpace cs;
+  const auto built =
+      cs.build({typed_polygon(rectangle(0, 0, 4, 4)), typed_polygon(rectangle(6, 0, 9, 0.5404))}, o);
+  ASSERT_TRUE(built.ok) << built.error;
+  ASSERT_EQ(cs.polygons().size(), 2u);  // the sliver is a piece of its own
+  const Point p(7.5, 0.6);
+  ASSERT_LT(cs.distance_to_boundary(p), 0.34);  // the sliver's edge, 0.33 m away
+  const auto q = cs.nearest_interior_point(p, 5.0);
+  ASSERT_TRUE(q.has_value());
+  EXPECT_NEAR(q->x(), 3.73, 2e-3);
+  EXPECT_NEAR(q->y(), 0.6, 1e-3);
+  EXPECT_TRUE(cs.covers(*q));
+  EXPECT_GT(cs.distance_to_boundary(*q), 0.5 * o.interior_offset_m);
+  // Within a range that holds the sliver only: none.
+  EXPECT_FALSE(cs.nearest_interior_point(p, 1.0).has_value());
+}
+
 TEST(ConfigurationSpace, CorridorNarrowerThanTheRobotIsEmpty) {
   ConfigurationSpace cs;
   const auto built = cs.build({typed_polygon(rectangle(0, 0, 10, 0.4))}, disk(0.25));

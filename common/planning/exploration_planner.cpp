@@ -594,13 +594,28 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
         ++plan.stats.approach_candidates;
       }
     }
-    // No C-space point near it and no approach point: a gap narrower than
-    // the robot, unless the nearest C-space point within approach_range_m
-    // has a wall between it and the frontier (a sliver beyond a wall, more
-    // than the snap distance from the free side: out of view).
+    // No C-space point near it and no approach point: the nearest C-space
+    // point within approach_range_m decides. With a wall between it and the
+    // frontier, the frontier is out of view (a sliver beyond a wall, more
+    // than the snap distance from the free side). In view, that point is
+    // where the robot would see the frontier from: the candidate stands
+    // there, in another piece of the C-space than the robot's (an approach
+    // point would have been found in the robot's), so it has no path, and
+    // the endgame's narrower disk decides whether the gap to that piece is
+    // narrower than the robot or about its width (step 5), as for any
+    // candidate without a path. (Until session 45 it was "too narrow",
+    // which kept the mission from DONE for a frontier at the end of a slot
+    // in a room the robot cannot enter: intel.) With no C-space point
+    // within that range it is too narrow.
     if (!position && !out_of_view && options.approach_range_m > 0.0) {
       const auto nearest = cspace.nearest_interior_point(fp.point, options.approach_range_m);
-      out_of_view = nearest && !obstacles.in_view(*nearest, fp.point);
+      if (nearest && obstacles.in_view(*nearest, fp.point)) {
+        position = nearest;
+        piece = cspace.piece_of(*nearest);
+        ++plan.stats.candidates_seen_from_afar;
+      } else {
+        out_of_view = nearest.has_value();
+      }
     }
     if (!position && out_of_view) {
       ++plan.stats.candidates_out_of_view;

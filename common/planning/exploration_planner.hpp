@@ -170,6 +170,10 @@ struct PlanStats {
   // frontier point, and no approach point: no reachable place sees it.
   int candidates_out_of_view = 0;
   int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
+  // No C-space point near enough and no approach point, but one within
+  // approach_range_m sees the frontier: the candidate stands there (in
+  // another piece than the robot's: no path, unless step 5 settles it).
+  int candidates_seen_from_afar = 0;
   int candidates_in_pockets = 0;     // PlannerOptions::reach_past_frontier_m: no disk reaches past them
   int candidates_enclosed = 0;       // PlannerOptions::min_enclosed_area_m2: too little unknown behind them
   int candidates_behind_narrow_gaps = 0;  // PlannerOptions::narrow_gap_tolerance_m

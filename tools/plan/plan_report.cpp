@@ -47,11 +47,12 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
                   pieces[i].geometry.inners().size(), d, d == 0.0 ? " (the robot's)" : "");
   }
   out += format(
-      "frontiers: %d chains (%d too short), %zu candidates, %d approach points, %d with no C-space near, %d out of "
+      "frontiers: %d chains (%d too short), %zu candidates, %d approach points, %d seen from afar, %d "
+      "with no C-space near, %d out of "
       "view (behind a wall), %d in pockets, %d enclosed, %d behind gaps narrower than the robot, %d approached at "
       "the mouths of gaps about the robot's width\n",
       plan.stats.frontier_chains, plan.stats.chains_too_short, plan.candidates.size(), plan.stats.approach_candidates,
-      plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view, plan.stats.candidates_in_pockets,
+      plan.stats.candidates_seen_from_afar, plan.stats.candidates_not_in_cspace, plan.stats.candidates_out_of_view, plan.stats.candidates_in_pockets,
       plan.stats.candidates_enclosed, plan.stats.candidates_behind_narrow_gaps, plan.stats.gap_mouth_candidates);
   if (plan.stats.polygons_not_placed > 0)
     out += format(
