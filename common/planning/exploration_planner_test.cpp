@@ -427,21 +427,6 @@ TEST(PlanExploration, AFrontierBehindAGapNarrowerThanTheRobotIsNoCandidate) {
   for (const auto& p : plan.behind_narrow_gap_points) EXPECT_NEAR(p.x(), 22.0, 1e-6);
 }
 
-// The room of a_room_off_a_hall with its east wall seen, and a slot 0.42 m
-// wide and 2 m deep in its north wall (x = 16..16.42, y = 4..6) whose end is
-// frontier: more than the snap distance from the room's C-space, in view from
-// it straight up the slot, and from nowhere in the hall (the gap is 1 m long).
-mapping::TypedMultiPolygon a_slot_in_a_room_off_a_hall(double gap_m) {
-  constexpr auto O = E::kObstacle;
-  constexpr auto F = E::kFrontier;
-  const double lo = 2.0 - gap_m / 2, hi = 2.0 + gap_m / 2;
-  return {testing::typed_polygon(
-      testing::RingSpec{{Point(-10, 0), Point(10, 0), Point(10, lo), Point(11, lo), Point(11, 0), Point(22, 0),
-                         Point(22, 4), Point(16.42, 4), Point(16.42, 6), Point(16, 6), Point(16, 4), Point(11, 4),
-                         Point(11, hi), Point(10, hi), Point(10, 4), Point(-10, 4)},
-                        {O, O, O, O, O, O, O, O, F, O, O, O, O, O, O, O}})};
-}
-
 // The frontier at the slot's end is seen from the room's C-space only, more
 // than candidate_snap_distance_m away: a candidate there without a path (no
 // longer "too narrow", which kept the mission from DONE), and in the endgame
@@ -450,7 +435,7 @@ TEST(PlanExploration, AFrontierSeenOnlyFromAfarInARoomTheRobotCannotEnterIsBehin
   const Pose2 robot{2, 2, 0};
   PlannerOptions with_margin = options();
   with_margin.narrow_gap_tolerance_m = 0.05;
-  const Plan first = plan_exploration(a_slot_in_a_room_off_a_hall(0.3), robot, {}, with_margin);
+  const Plan first = plan_exploration(testing::a_slot_in_a_room_behind_a_gap(0.3), robot, {}, with_margin);
   ASSERT_TRUE(first.ok) << first.error;
   EXPECT_EQ(first.best, -1);
   EXPECT_EQ(first.stats.candidates_not_in_cspace, 0);
@@ -467,7 +452,7 @@ TEST(PlanExploration, AFrontierSeenOnlyFromAfarInARoomTheRobotCannotEnterIsBehin
   EXPECT_TRUE(margin_may_block(first));  // the mission plans again without the margin
 
   // The plan without the margin: the room is apart for the narrower disk too.
-  const Plan tight = plan_exploration(a_slot_in_a_room_off_a_hall(0.3), robot, {}, narrow_gap_options(0.0));
+  const Plan tight = plan_exploration(testing::a_slot_in_a_room_behind_a_gap(0.3), robot, {}, narrow_gap_options(0.0));
   ASSERT_TRUE(tight.ok) << tight.error;
   EXPECT_EQ(tight.best, -1);
   EXPECT_TRUE(tight.candidates.empty());
@@ -475,7 +460,7 @@ TEST(PlanExploration, AFrontierSeenOnlyFromAfarInARoomTheRobotCannotEnterIsBehin
   EXPECT_NEAR(tight.behind_narrow_gap_points[0].y(), 6.0, 1e-6);
 
   // A gap about the robot's width: looked through from its mouth, as the room's other frontiers are.
-  const Plan mouth = plan_exploration(a_slot_in_a_room_off_a_hall(0.5), robot, {}, narrow_gap_options(0.0));
+  const Plan mouth = plan_exploration(testing::a_slot_in_a_room_behind_a_gap(0.5), robot, {}, narrow_gap_options(0.0));
   ASSERT_TRUE(mouth.ok) << mouth.error;
   const GoalCandidate* goal = mouth.best_candidate();
   ASSERT_NE(goal, nullptr);

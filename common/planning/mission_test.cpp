@@ -1076,6 +1076,20 @@ TEST(Mission, DoneWhenTheOnlyFrontiersLeftAreBehindAGapNarrowerThanTheRobot) {
   }
 }
 
+// A frontier at the end of a slot in a room behind a 0.3 m gap, seen from
+// the room's C-space only, 2 m from it: DONE, the frontier behind the gap.
+// (It was "too narrow", which ended the mission DONE_WITH_UNREACHABLE.)
+TEST(Mission, DoneWhenAFrontierSeenOnlyFromARoomBehindANarrowGapIsLeft) {
+  MissionOptions o = test_options();  // robot radius 0.3 m, margin 0.05 m
+  o.planner.narrow_gap_tolerance_m = 0.05;
+  Mission m(o);
+  const auto out = after_two_maps(m, testing::a_slot_in_a_room_behind_a_gap(0.3), Pose2{2, 2, 0});
+  EXPECT_EQ(out.phase, Phase::kDone) << out.status;
+  ASSERT_EQ(out.frontiers.size(), 1u) << out.status;
+  EXPECT_EQ(out.frontiers[0].reason, FrontierReason::kBehindNarrowGap);
+  EXPECT_NEAR(out.frontiers[0].position.y(), 6.0, 1e-6);
+}
+
 // A door 0.66 m wide in the world that the map narrowed to 0.56 m (the robot
 // needs 0.6 m without the margin): its room's frontier has no path, but a
 // disk 0.05 m smaller gets through, so the robot drives to the door's mouth

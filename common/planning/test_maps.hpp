@@ -97,6 +97,22 @@ inline mapping::TypedMultiPolygon a_room_behind_a_gap(double gap_m, double west_
                                  {O, O, O, O, O, east_wall, O, O, O, O, O, west_wall}})};
 }
 
+// The room of a_room_behind_a_gap (hall from x = -10) with its east wall
+// seen, and a slot 0.42 m wide and 2 m deep in its north wall (x = 16..16.42,
+// y = 4..6) whose end is frontier: more than the snap distance from the
+// room's C-space, in view from it straight up the slot, and from nowhere in
+// the hall (the gap is 1 m long).
+inline mapping::TypedMultiPolygon a_slot_in_a_room_behind_a_gap(double gap_m) {
+  constexpr auto O = EdgeType::kObstacle;
+  constexpr auto F = EdgeType::kFrontier;
+  const double lo = 2.0 - gap_m / 2, hi = 2.0 + gap_m / 2;
+  return {typed_polygon(RingSpec{{Point(-10, 0), Point(10, 0), Point(10, lo), Point(11, lo), Point(11, 0),
+                                  Point(22, 0), Point(22, 4), Point(16.42, 4), Point(16.42, 6), Point(16, 6),
+                                  Point(16, 4), Point(11, 4), Point(11, hi), Point(10, hi), Point(10, 4),
+                                  Point(-10, 4)},
+                                 {O, O, O, O, O, O, O, O, F, O, O, O, O, O, O, O}})};
+}
+
 // A 200 x 200 m room with a round hole of `hole_vertices` (radius 95 m
 // about (100, 100)) holding `islands` squares, 0.3 of their grid pitch
 // across, on a square grid over (40..160, 40..160): many polygons in one
