@@ -3,7 +3,8 @@
 # explores a world by itself, recorded with lcm-logger; then the map is drawn
 # and the run is measured against the world (OUT/report.json).
 #   WORLD (default two_rooms; any worlds/<name>.wkt), MISSION_S (mission-clock
-#   limit, default 300: simulated seconds, so the same at any SPEED),
+#   limit: simulated seconds, so the same at any SPEED; default 5 s per m² of
+#   the world's extent, at least 300: a backstop, the mission ends by itself),
 #   SPEED (simulator speed factor, default 1), STRATEGY (goal strategy,
 #   default: the explorer config's), OUT (default out), QUIET=1 (no progress
 #   lines), CONFIG (the daemons' config directory, default config),
@@ -14,12 +15,13 @@ cd "$(dirname "$0")/.."
 [ "${PEX_IN_NETNS:-}" = "1" ] || { echo "demo-run.sh: run me through scripts/netns-run" >&2; exit 64; }
 export LCM_DEFAULT_URL="udpm://239.255.76.67:7667?ttl=0"
 WORLD=${WORLD:-two_rooms}
-MISSION_S=${MISSION_S:-300}
 SPEED=${SPEED:-1}
 OUT=${OUT:-out}
 BIN=${BIN:-build/bin}
 CONFIG=${CONFIG:-config}
 [ -f "worlds/$WORLD.wkt" ] || { echo "demo: no world worlds/$WORLD.wkt" >&2; exit 64; }
+# The mission-clock limit is a backstop: by default it grows with the world.
+[ -n "${MISSION_S:-}" ] || MISSION_S=$(scripts/mission-limit.sh "worlds/$WORLD.wkt")
 mkdir -p "$OUT"
 rm -f "$OUT/report.json"
 

@@ -2,7 +2,7 @@
 # scripts/demo.sh — install what is missing, build, and run the main job: the
 # daemon set on the simulator, in a private network namespace, recorded with
 # lcm-logger to out/demo.lcm, exploring a world until no frontier is left.
-#   WORLD (default two_rooms), MISSION_S (default 300), SPEED (default 1),
+#   WORLD (default two_rooms), MISSION_S (default: 5 s per m² of the world, at least 300), SPEED (default 1),
 #   VIEWER_PORT (default 8080): the live view at http://127.0.0.1:VIEWER_PORT/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
