@@ -354,7 +354,8 @@ MissionScene& mission_scene(int which) {
   tight.cspace.clearance_margin_m = 0.0;
   slot->maps = pex::bench::emulate_mission(
       std::string(PEX_SOURCE_DIR) + "/worlds/" + slot->name + ".wkt", options,
-      [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
+      [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist,
+          const pex::planning::GoalFocus*) {
         // The mission's tight fallback: nothing reachable, plan once more without the margin.
         auto plan = plan_exploration(map, pose, blacklist, greedy);
         return plan.best_candidate() ? plan : plan_exploration(map, pose, blacklist, tight);

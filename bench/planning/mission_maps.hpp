@@ -99,8 +99,13 @@ inline std::optional<sim::World> read_world(const std::string& path, std::string
   return std::get<sim::World>(std::move(parsed));
 }
 
+// The planner the emulated robot follows. `focus` is the goal it is on its
+// way to (nullptr when it chooses a new one), as the explorer's follow plans
+// carry it (planning::GoalFocus): a followed goal's frontier stays a
+// candidate where a new plan would leave it out (an enclosed frontier beyond
+// enclosed_goal_range_m, a gap's mouth).
 using MissionPlanner = std::function<planning::Plan(const mapping::TypedMultiPolygon&, const planning::Pose2&,
-                                                    const std::vector<mapping::Point>&)>;
+                                                    const std::vector<mapping::Point>&, const planning::GoalFocus*)>;
 
 // `plan` is the planner the emulated robot follows (the goal order and so the
 // maps depend on it: use one fixed planner for a benchmark's maps).
@@ -144,7 +149,7 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
       out.error = "planning map failed";
       return out;
     }
-    const planning::Plan p = next_plan ? std::move(*next_plan) : plan(s->map, s->pose, s->blacklist);
+    const planning::Plan p = next_plan ? std::move(*next_plan) : plan(s->map, s->pose, s->blacklist, nullptr);
     if (!next_plan) ++out.plans;
     next_plan.reset();
     const planning::GoalCandidate* goal = p.best_candidate();
@@ -170,7 +175,7 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
           out.error = "planning map failed";
           return out;
         }
-        planning::Plan again = plan(on_the_way->map, on_the_way->pose, on_the_way->blacklist);
+        planning::Plan again = plan(on_the_way->map, on_the_way->pose, on_the_way->blacklist, nullptr);
         ++out.plans;
         if (again.best_candidate()) next_plan = std::move(again);
       }
@@ -211,11 +216,14 @@ inline MissionMaps emulate_mission(const sim::World& world, const MissionMapsOpt
             return out;
           }
           if (options.replan_on_the_way) {
-            planning::Plan again = plan(on_the_way->map, on_the_way->pose, on_the_way->blacklist);
+            // As the mission follows a goal (Mission::on_follow_plan): the plan
+            // carries it, and it is kept while a candidate matches it (near
+            // its place or its frontier point).
+            const planning::GoalFocus focus{goal->position, goal->frontier_point, options.goal_match_radius_m};
+            planning::Plan again = plan(on_the_way->map, on_the_way->pose, on_the_way->blacklist, &focus);
             ++out.plans;
             bool still_there = false;
-            for (const auto& c : again.candidates)
-              still_there = still_there || boost::geometry::distance(c.position, goal->position) <= options.goal_match_radius_m;
+            for (const auto& c : again.candidates) still_there = still_there || focus.matches(c);
             if (!still_there) {
               seen = true;
               out.travelled_m += s_m;

@@ -23,7 +23,8 @@ sim::World corridor_with_a_post() {
 // One goal on the corridor's axis at goal_x (by default its east end,
 // straight through the post); then none.
 MissionPlanner through_the_post(double goal_x = 11.0) {
-  return [goal_x](const mapping::TypedMultiPolygon&, const planning::Pose2& pose, const std::vector<Point>& blacklist) {
+  return [goal_x](const mapping::TypedMultiPolygon&, const planning::Pose2& pose, const std::vector<Point>& blacklist,
+                  const planning::GoalFocus*) {
     planning::Plan plan;
     plan.ok = true;
     const Point goal(goal_x, 1.5);
@@ -77,6 +78,45 @@ TEST(EmulatedMission, WithoutARadiusThePathIsFollowedThroughIt) {
   ASSERT_TRUE(maps.error.empty()) << maps.error;
   EXPECT_EQ(maps.guard_stops, 0);
   EXPECT_NEAR(maps.travelled_m, 10.0, 1e-9);
+}
+
+// The plans on the way carry the goal followed, as the explorer's follow
+// plans do: a planner that offers the goal (x = 4, on the corridor's axis)
+// only to a plan that follows it, and another goal (x = 2) to a plan that
+// chooses anew, has the robot drive on to x = 4 and reach it. Without the
+// focus the plan on the way would not match the goal, which would be left as
+// seen for the other.
+TEST(EmulatedMission, ThePlansOnTheWayCarryTheGoalFollowed) {
+  const auto world = corridor_with_a_post();
+  MissionMapsOptions o;
+  o.max_goals = 1;
+  o.replan_on_the_way = true;
+  o.replan_step_m = 0.5;
+  o.goal_match_radius_m = 0.5;
+  int plans_with_focus = 0;
+  const MissionPlanner planner = [&](const mapping::TypedMultiPolygon&, const planning::Pose2& pose,
+                                     const std::vector<Point>&, const planning::GoalFocus* focus) {
+    planning::Plan plan;
+    plan.ok = true;
+    const Point goal = focus ? focus->goal : (pose.x_m < 1.5 ? Point(4, 1.5) : Point(2, 1.5));
+    plans_with_focus += focus != nullptr;
+    planning::GoalCandidate c;
+    c.position = goal;
+    c.frontier_point = Point(goal.x() + 0.5, 1.5);
+    c.reachable = true;
+    c.path = {Point(pose.x_m, pose.y_m), goal};
+    c.path_length_m = boost::geometry::distance(c.path[0], goal);
+    c.cost = c.path_length_m;
+    plan.candidates.push_back(c);
+    plan.best = 0;
+    return plan;
+  };
+  const auto maps = emulate_mission(world, o, planner);
+  ASSERT_TRUE(maps.error.empty()) << maps.error;
+  EXPECT_EQ(maps.goals, 1);
+  EXPECT_EQ(maps.goals_seen, 0);  // reached, not left on the way
+  EXPECT_GE(plans_with_focus, 4);  // 3 m at a plan every 0.5 m
+  EXPECT_NEAR(maps.travelled_m, 3.0, 1e-9);
 }
 
 }  // namespace

@@ -12,10 +12,12 @@
 //
 //   pex-bench-strategies [--config config/explorer.toml] [--strategies greedy,tour] [WORLD.wkt...]
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,7 +49,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> strategies;
   std::vector<std::string> worlds;
   double max_travel_m = 4000.0;
-  std::string map_wkt_dir;
+  std::string map_wkt_dir, trace_dir;
   app.add_option("--config", config_path, "explorer config (planner options)")->check(CLI::ExistingFile);
   app.add_option("--mapper-config", mapper_config_path, "polygon_mapper config (scan polygons, map)")
       ->check(CLI::ExistingFile);
@@ -58,6 +60,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-travel-m", max_travel_m, "give a mission up after this much driving")->check(CLI::PositiveNumber);
   app.add_option("--map-wkt-dir", map_wkt_dir,
                  "write each run's final map (MAP_FREE) there as WORLD-STRATEGY.wkt, one POLYGON per line (world frame)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--trace-dir", trace_dir,
+                 "write each run's plans there as WORLD-STRATEGY.csv: travel so far (m, the poses' straight legs), "
+                 "the planning map's area (m2), candidates, the plan's best candidate and its path length (plan by plan)")
       ->check(CLI::ExistingDirectory);
   app.add_option("worlds", worlds, "world files (default: every worlds/*.wkt)")->check(CLI::ExistingFile);
   app.set_version_flag("--version", std::string("pex-bench-strategies ") + PEX_VERSION);
@@ -132,20 +138,65 @@ int main(int argc, char** argv) {
       pex::planning::PlanCache offsets, tight_offsets;
       auto timed_plan = [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose,
                             const std::vector<Point>& blacklist, const PlannerOptions& o,
-                            pex::planning::PlanCache& cache) {
+                            pex::planning::PlanCache& cache, const pex::planning::GoalFocus* focus) {
         const double started = pex::explorer::thread_cpu_ms();
-        Plan plan = pex::planning::plan_exploration(map, pose, blacklist, o, nullptr, nullptr, &cache);
+        Plan plan = pex::planning::plan_exploration(map, pose, blacklist, o, nullptr, focus, &cache);
         plan_cpu_ms.add(pex::explorer::thread_cpu_ms() - started);
         return plan;
       };
+      // The plans' trace (--trace-dir) and the travel at which the map
+      // first held 99 % of its final area (how long the endgame was).
+      struct TracePoint {
+        double travel_m, map_m2;
+      };
+      std::vector<TracePoint> trace;
+      std::string trace_lines;
+      std::optional<pex::geometry::Pose2> last_pose;
+      double travel_m = 0.0;
+      auto traced = [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const Plan& plan) {
+        if (last_pose) travel_m += std::hypot(pose.x_m - last_pose->x_m, pose.y_m - last_pose->y_m);
+        last_pose = pose;
+        double area_m2 = 0.0;
+        for (const auto& piece : map) area_m2 += boost::geometry::area(piece.geometry);
+        trace.push_back({travel_m, area_m2});
+        if (trace_dir.empty()) return;
+        const auto* goal = plan.best_candidate();
+        char line[256];
+        std::snprintf(line, sizeof line, "%.3f,%.3f,%zu,%.3f,%.3f,%.3f\n", travel_m, area_m2, plan.candidates.size(),
+                      goal ? goal->position.x() : NAN, goal ? goal->position.y() : NAN,
+                      goal ? goal->path_length_m : NAN);
+        trace_lines += line;
+      };
       const auto maps = pex::bench::emulate_mission(
-          *sim_world, mission, [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist) {
-            Plan plan = timed_plan(map, pose, blacklist, options, offsets);
+          *sim_world, mission,
+          [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist,
+              const pex::planning::GoalFocus* focus) {
+            Plan plan = timed_plan(map, pose, blacklist, options, offsets, focus);
             // As the mission does (Mission::on_plan, on_select_plan): without the
             // margin only when nothing is reachable and the margin may be why.
-            if (plan.best_candidate() || !fallback || !pex::planning::margin_may_block(plan)) return plan;
-            return timed_plan(map, pose, blacklist, tight, tight_offsets);
+            if (!plan.best_candidate() && fallback && pex::planning::margin_may_block(plan))
+              plan = timed_plan(map, pose, blacklist, tight, tight_offsets, focus);
+            traced(map, pose, plan);
+            return plan;
           });
+      double travel_at_99_m = 0.0;
+      if (!trace.empty()) {
+        const double final_m2 = trace.back().map_m2;
+        for (const auto& t : trace)
+          if (t.map_m2 >= 0.99 * final_m2) {
+            travel_at_99_m = t.travel_m;
+            break;
+          }
+      }
+      if (!trace_dir.empty()) {
+        const auto out_path = std::filesystem::path(trace_dir) / (name + "-" + strategy_name + ".csv");
+        std::ofstream out(out_path);
+        out << "travel_m,map_m2,candidates,best_x,best_y,best_path_m\n" << trace_lines;
+        if (!out) {
+          std::fprintf(stderr, "pex-bench-strategies: cannot write %s\n", out_path.c_str());
+          return 73;
+        }
+      }
       if (!maps.error.empty()) {
         std::fprintf(stderr, "pex-bench-strategies: %s: %s\n", name.c_str(), maps.error.c_str());
         return 70;
@@ -165,10 +216,11 @@ int main(int argc, char** argv) {
                                                     walls, kWallToleranceM);
       std::printf(
           "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"backs_out\":%d,"
-          "\"guard_stops\":%d,\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f,\"plan_cpu_ms_p50\":%.3f,\"plan_cpu_ms_p99\":%.3f}\n",
+          "\"guard_stops\":%d,\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f,\"plan_cpu_ms_p50\":%.3f,\"plan_cpu_ms_p99\":%.3f,"
+          "\"travel_at_99pct_map_m\":%.1f}\n",
           name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
           maps.goals_seen, maps.backs_out, maps.guard_stops, maps.plans, score.coverage, score.iou, plan_cpu_ms.quantile(0.5),
-          plan_cpu_ms.quantile(0.99));
+          plan_cpu_ms.quantile(0.99), travel_at_99_m);
       std::fflush(stdout);
     }
   }
