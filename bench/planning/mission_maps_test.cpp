@@ -20,26 +20,36 @@ sim::World corridor_with_a_post() {
   return std::get<sim::World>(std::move(parsed));
 }
 
+// A plan with one candidate at `goal` looking at `frontier`, its path
+// straight from the robot.
+planning::Plan straight_to(const planning::Pose2& pose, const Point& goal, const Point& frontier) {
+  planning::Plan plan;
+  plan.ok = true;
+  planning::GoalCandidate c;
+  c.position = goal;
+  c.frontier_point = frontier;
+  c.reachable = true;
+  c.path = {Point(pose.x_m, pose.y_m), goal};
+  c.path_length_m = boost::geometry::distance(c.path[0], goal);
+  c.cost = c.path_length_m;
+  plan.candidates.push_back(c);
+  plan.best = 0;
+  return plan;
+}
+
 // One goal on the corridor's axis at goal_x (by default its east end,
 // straight through the post); then none.
 MissionPlanner through_the_post(double goal_x = 11.0) {
   return [goal_x](const mapping::TypedMultiPolygon&, const planning::Pose2& pose, const std::vector<Point>& blacklist,
                   const planning::GoalFocus*) {
-    planning::Plan plan;
-    plan.ok = true;
     const Point goal(goal_x, 1.5);
     for (const auto& b : blacklist)
-      if (boost::geometry::distance(b, goal) < 0.5) return plan;
-    planning::GoalCandidate c;
-    c.position = goal;
-    c.frontier_point = Point(12, 1.5);
-    c.reachable = true;
-    c.path = {Point(pose.x_m, pose.y_m), goal};
-    c.path_length_m = boost::geometry::distance(c.path[0], goal);
-    c.cost = c.path_length_m;
-    plan.candidates.push_back(c);
-    plan.best = 0;
-    return plan;
+      if (boost::geometry::distance(b, goal) < 0.5) {
+        planning::Plan none;
+        none.ok = true;
+        return none;
+      }
+    return straight_to(pose, goal, Point(12, 1.5));
   };
 }
 
@@ -96,20 +106,9 @@ TEST(EmulatedMission, ThePlansOnTheWayCarryTheGoalFollowed) {
   int plans_with_focus = 0;
   const MissionPlanner planner = [&](const mapping::TypedMultiPolygon&, const planning::Pose2& pose,
                                      const std::vector<Point>&, const planning::GoalFocus* focus) {
-    planning::Plan plan;
-    plan.ok = true;
     const Point goal = focus ? focus->goal : (pose.x_m < 1.5 ? Point(4, 1.5) : Point(2, 1.5));
     plans_with_focus += focus != nullptr;
-    planning::GoalCandidate c;
-    c.position = goal;
-    c.frontier_point = Point(goal.x() + 0.5, 1.5);
-    c.reachable = true;
-    c.path = {Point(pose.x_m, pose.y_m), goal};
-    c.path_length_m = boost::geometry::distance(c.path[0], goal);
-    c.cost = c.path_length_m;
-    plan.candidates.push_back(c);
-    plan.best = 0;
-    return plan;
+    return straight_to(pose, goal, Point(goal.x() + 0.5, 1.5));
   };
   const auto maps = emulate_mission(world, o, planner);
   ASSERT_TRUE(maps.error.empty()) << maps.error;
