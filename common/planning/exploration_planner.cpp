@@ -605,8 +605,9 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
     // narrower than the robot or about its width (step 5), as for any
     // candidate without a path. (Until session 45 it was "too narrow",
     // which kept the mission from DONE for a frontier at the end of a slot
-    // in a room the robot cannot enter: intel.) With no C-space point
-    // within that range it is too narrow.
+    // in a room the robot cannot enter: an office floor, docs/exploration.md,
+    // "Seen from afar".) With no C-space point within that range it is too
+    // narrow.
     if (!position && !out_of_view && options.approach_range_m > 0.0) {
       const auto nearest = cspace.nearest_interior_point(fp.point, options.approach_range_m);
       if (nearest && obstacles.in_view(*nearest, fp.point)) {
