@@ -90,8 +90,8 @@ TEST(EmulatedMission, WithoutARadiusThePathIsFollowedThroughIt) {
   EXPECT_NEAR(maps.travelled_m, 10.0, 1e-9);
 }
 
-// The plans on the way carry the goal followed, as the explorer's follow
-// plans do: a planner that offers the goal (x = 4, on the corridor's axis)
+// With carry_goal the plans on the way carry the goal followed, as the
+// explorer's follow plans do: a planner that offers the goal (x = 4, on the corridor's axis)
 // only to a plan that follows it, and another goal (x = 2) to a plan that
 // chooses anew, has the robot drive on to x = 4 and reach it. Without the
 // focus the plan on the way would not match the goal, which would be left as
@@ -101,6 +101,7 @@ TEST(EmulatedMission, ThePlansOnTheWayCarryTheGoalFollowed) {
   MissionMapsOptions o;
   o.max_goals = 1;
   o.replan_on_the_way = true;
+  o.carry_goal = true;
   o.replan_step_m = 0.5;
   o.goal_match_radius_m = 0.5;
   int plans_with_focus = 0;

@@ -61,6 +61,10 @@ int main(int argc, char** argv) {
   app.add_option("--map-wkt-dir", map_wkt_dir,
                  "write each run's final map (MAP_FREE) there as WORLD-STRATEGY.wkt, one POLYGON per line (world frame)")
       ->check(CLI::ExistingDirectory);
+  bool carry_goal = false;
+  app.add_flag("--carry-goal", carry_goal,
+               "the plans on the way carry the goal followed, as the explorer's follow plans do (MissionMapsOptions::"
+               "carry_goal; off: they choose anew)");
   app.add_option("--trace-dir", trace_dir,
                  "write each run's plans there as WORLD-STRATEGY.csv: travel so far (m, the poses' straight legs), "
                  "the planning map's area (m2), candidates, the plan's best candidate and its path length (plan by plan)")
@@ -126,6 +130,7 @@ int main(int argc, char** argv) {
       mission.replan_step_m = 0.4;  // 0.4 m/s, a plan a second
       mission.replan_on_the_way = true;
       mission.goal_match_radius_m = explorer.mission.goal_match_radius_m;
+      mission.carry_goal = carry_goal;
       mission.back_out_m = explorer.mission.back_out_m;
       mission.robot_radius_m = kSimRobotRadiusM;  // stopped short of what the map does not hold, as the guard stops
       mission.keep_snapshots = false;
