@@ -18,6 +18,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -67,8 +68,15 @@ int main(int argc, char** argv) {
                "carry_goal; off: they choose anew)");
   app.add_option("--trace-dir", trace_dir,
                  "write each run's plans there as WORLD-STRATEGY.csv: travel so far (m, the poses' straight legs), "
-                 "the planning map's area (m2), candidates, the plan's best candidate and its path length (plan by plan)")
+                 "the planning map's area (m2), candidates, the plan's best candidate: its place, path length, frontier point, "
+                 "frontier chain's length, the unknown area behind that chain when enclosed or in a bay (inf: open) and "
+                 "whether it is an approach point (plan by plan)")
       ->check(CLI::ExistingDirectory);
+  std::string dump_at_list;  // one word, comma-separated, as --strategies
+  app.add_option("--dump-at", dump_at_list,
+                 "with --trace-dir: at the first plan at or after each of these travels (m, comma-separated), write "
+                 "its planning map's edges (ring, x1, y1, x2, y2, type) and its candidates as "
+                 "WORLD-STRATEGY-at-M-{edges,candidates}.csv");
   app.add_option("worlds", worlds, "world files (default: every worlds/*.wkt)")->check(CLI::ExistingFile);
   app.set_version_flag("--version", std::string("pex-bench-strategies ") + PEX_VERSION);
   try {
@@ -84,6 +92,22 @@ int main(int argc, char** argv) {
       return 64;
     }
     from = comma + 1;
+  }
+  std::vector<double> dump_at_m;
+  for (std::size_t from = 0; from < dump_at_list.size();) {
+    const std::size_t comma = std::min(dump_at_list.find(',', from), dump_at_list.size());
+    try {
+      dump_at_m.push_back(std::stod(dump_at_list.substr(from, comma - from)));
+    } catch (const std::exception&) {
+      std::fprintf(stderr, "pex-bench-strategies: --dump-at: '%s' is no travel in m\n",
+                   dump_at_list.substr(from, comma - from).c_str());
+      return 64;
+    }
+    from = comma + 1;
+  }
+  if (!dump_at_m.empty() && trace_dir.empty()) {
+    std::fprintf(stderr, "pex-bench-strategies: --dump-at writes into --trace-dir: give both\n");
+    return 64;
   }
   if (worlds.empty()) {
     for (const auto& entry : std::filesystem::directory_iterator(std::string(PEX_SOURCE_DIR) + "/worlds"))
@@ -156,6 +180,7 @@ int main(int argc, char** argv) {
       };
       std::vector<TracePoint> trace;
       std::string trace_lines;
+      std::set<double> dumped;  // --dump-at travels written
       std::optional<pex::geometry::Pose2> last_pose;
       double travel_m = 0.0;
       auto traced = [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const Plan& plan) {
@@ -166,11 +191,44 @@ int main(int argc, char** argv) {
         trace.push_back({travel_m, area_m2});
         if (trace_dir.empty()) return;
         const auto* goal = plan.best_candidate();
-        char line[256];
-        std::snprintf(line, sizeof line, "%.3f,%.3f,%zu,%.3f,%.3f,%.3f\n", travel_m, area_m2, plan.candidates.size(),
-                      goal ? goal->position.x() : NAN, goal ? goal->position.y() : NAN,
-                      goal ? goal->path_length_m : NAN);
+        char line[384];
+        std::snprintf(line, sizeof line, "%.3f,%.3f,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%d\n", travel_m, area_m2,
+                      plan.candidates.size(), goal ? goal->position.x() : NAN, goal ? goal->position.y() : NAN,
+                      goal ? goal->path_length_m : NAN, goal ? goal->frontier_point.x() : NAN,
+                      goal ? goal->frontier_point.y() : NAN, goal ? goal->chain_length_m : NAN,
+                      goal ? goal->enclosed_area_m2 : NAN, goal ? static_cast<int>(goal->approach) : -1);
         trace_lines += line;
+        for (const double at_m : dump_at_m) {
+          if (travel_m < at_m || dumped.count(at_m)) continue;
+          dumped.insert(at_m);
+          char stem[96];
+          std::snprintf(stem, sizeof stem, "%s-%s-at-%g", name.c_str(), strategy_name.c_str(), at_m);
+          std::ofstream edges(std::filesystem::path(trace_dir) / (std::string(stem) + "-edges.csv"));
+          edges << "ring,x1,y1,x2,y2,type\n";
+          int ring_id = 0;
+          for (const auto& piece : map) {
+            auto write_ring = [&](const pex::mapping::Ring& ring, const std::vector<pex::mapping::EdgeType>& types) {
+              for (std::size_t i = 0; i + 1 < ring.size() && i < types.size(); ++i)
+                edges << ring_id << ',' << ring[i].x() << ',' << ring[i].y() << ',' << ring[i + 1].x() << ','
+                      << ring[i + 1].y() << ',' << pex::mapping::to_string(types[i]) << '\n';
+              ++ring_id;
+            };
+            write_ring(piece.geometry.outer(), piece.edge_types[0]);
+            for (std::size_t k = 0; k < piece.geometry.inners().size(); ++k)
+              write_ring(piece.geometry.inners()[k], piece.edge_types[1 + k]);
+          }
+          std::ofstream candidates(std::filesystem::path(trace_dir) / (std::string(stem) + "-candidates.csv"));
+          candidates << "x,y,frontier_x,frontier_y,chain,chain_m,unknown_behind_m2,approach,reachable,blacklisted,"
+                        "path_m,best\n";
+          for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
+            const auto& c = plan.candidates[i];
+            candidates << c.position.x() << ',' << c.position.y() << ',' << c.frontier_point.x() << ','
+                       << c.frontier_point.y() << ',' << c.chain << ',' << c.chain_length_m << ','
+                       << c.enclosed_area_m2 << ',' << c.approach << ',' << c.reachable << ',' << c.blacklisted << ','
+                       << c.path_length_m << ',' << (static_cast<int>(i) == plan.best) << '\n';
+          }
+          candidates << "# robot," << pose.x_m << ',' << pose.y_m << ',' << pose.theta_rad << '\n';
+        }
       };
       const auto maps = pex::bench::emulate_mission(
           *sim_world, mission,
@@ -196,7 +254,9 @@ int main(int argc, char** argv) {
       if (!trace_dir.empty()) {
         const auto out_path = std::filesystem::path(trace_dir) / (name + "-" + strategy_name + ".csv");
         std::ofstream out(out_path);
-        out << "travel_m,map_m2,candidates,best_x,best_y,best_path_m\n" << trace_lines;
+        out << "travel_m,map_m2,candidates,best_x,best_y,best_path_m,best_frontier_x,best_frontier_y,best_chain_m,"
+               "best_unknown_behind_m2,best_approach\n"
+            << trace_lines;
         if (!out) {
           std::fprintf(stderr, "pex-bench-strategies: cannot write %s\n", out_path.c_str());
           return 73;
