@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   std::string dump_at_list;  // one word, comma-separated, as --strategies
   app.add_option("--dump-at", dump_at_list,
                  "with --trace-dir: at the first plan at or after each of these travels (m, comma-separated), write "
-                 "its planning map's edges (ring, x1, y1, x2, y2, type) and its candidates as "
+                 "its planning map's edges (piece, ring: 0 outer, k hole k; x1, y1, x2, y2, type) and its candidates as "
                  "WORLD-STRATEGY-at-M-{edges,candidates}.csv");
   app.add_option("worlds", worlds, "world files (default: every worlds/*.wkt)")->check(CLI::ExistingFile);
   app.set_version_flag("--version", std::string("pex-bench-strategies ") + PEX_VERSION);
@@ -204,12 +204,14 @@ int main(int argc, char** argv) {
           char stem[96];
           std::snprintf(stem, sizeof stem, "%s-%s-at-%g", name.c_str(), strategy_name.c_str(), at_m);
           std::ofstream edges(std::filesystem::path(trace_dir) / (std::string(stem) + "-edges.csv"));
-          edges << "ring,x1,y1,x2,y2,type\n";
-          int ring_id = 0;
-          for (const auto& piece : map) {
+          edges.precision(17);  // the map as planned on, to read back
+          edges << "piece,ring,x1,y1,x2,y2,type\n";
+          for (std::size_t piece_id = 0; piece_id < map.size(); ++piece_id) {
+            const auto& piece = map[piece_id];
+            std::size_t ring_id = 0;
             auto write_ring = [&](const pex::mapping::Ring& ring, const std::vector<pex::mapping::EdgeType>& types) {
               for (std::size_t i = 0; i + 1 < ring.size() && i < types.size(); ++i)
-                edges << ring_id << ',' << ring[i].x() << ',' << ring[i].y() << ',' << ring[i + 1].x() << ','
+                edges << piece_id << ',' << ring_id << ',' << ring[i].x() << ',' << ring[i].y() << ',' << ring[i + 1].x() << ','
                       << ring[i + 1].y() << ',' << pex::mapping::to_string(types[i]) << '\n';
               ++ring_id;
             };

@@ -185,26 +185,31 @@ std::vector<FrontierChain> frontier_chains(const TypedMultiPolygon& map, int* po
 void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& chains,
                       const WalledBayOptions& options) {
   if (!(options.max_area_m2 > 0.0) || !(options.max_lid_m > 0.0)) return;
-  // Every edge of the map, frontier or obstacle: a lid may cross none. Built
-  // when a first lid gets that far.
-  using Value = std::pair<mapping::Segment, std::size_t>;
-  std::optional<bgi::rtree<Value, bgi::rstar<16>>> edges;
-  auto crosses_an_edge = [&](const Point& a, const Point& b) {
-    for (auto it = edges->qbegin(bgi::intersects(mapping::Segment(a, b))); it != edges->qend(); ++it)
-      if (segments_intersect(a, b, it->first.first, it->first.second)) return true;
-    return false;
+  // Every edge of the map, frontier or obstacle: a lid may cross none but
+  // its own loop's (below). Built when a first lid gets that far.
+  struct EdgeRef {
+    std::size_t polygon, ring, edge;
+    bool operator==(const EdgeRef&) const = default;
   };
+  using Value = std::pair<mapping::Segment, EdgeRef>;
+  std::optional<bgi::rtree<Value, bgi::rstar<16>>> edges;
   // The lid u -> w, short of each end, where it meets the walls it
   // continues: the ragged steps of a wall's obstacle band, where the wall
-  // meets a frontier, cross the wall's line by centimetres.
-  auto lid_crosses_an_edge = [&](const Point& u, const Point& w) {
+  // meets a frontier, cross the wall's line by centimetres. Edges `in_loop`
+  // accepts are not counted: the loop's own edges cross the lid only within
+  // max_beyond_lid_m of its line (checked before), the band's steps again.
+  auto lid_crosses_an_edge = [&](const Point& u, const Point& w, auto in_loop) {
     if (!edges) {
       std::vector<Value> values;
-      for (const auto& piece : map) {
+      for (std::size_t p = 0; p < map.size(); ++p) {
+        const auto& piece = map[p];
         if (std::abs(bg::area(piece.geometry.outer())) < options.min_piece_m2) continue;
-        mapping::for_each_edge(piece, [&](const Point& a, const Point& b, mapping::EdgeType) {
-          values.emplace_back(mapping::Segment(a, b), values.size());
-        });
+        auto add_ring = [&](const mapping::Ring& ring, std::size_t r) {
+          for (std::size_t i = 0; i + 1 < ring.size(); ++i)
+            values.emplace_back(mapping::Segment(ring[i], ring[i + 1]), EdgeRef{p, r, i});
+        };
+        add_ring(piece.geometry.outer(), 0);
+        for (std::size_t k = 0; k < piece.geometry.inners().size(); ++k) add_ring(piece.geometry.inners()[k], 1 + k);
       }
       edges.emplace(values.begin(), values.end());
     }
@@ -212,9 +217,14 @@ void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& 
       const double d = distance(from, to), t = std::min(options.lid_end_tolerance_m, 0.25 * d) / d;
       return Point(from.x() + t * (to.x() - from.x()), from.y() + t * (to.y() - from.y()));
     };
-    return crosses_an_edge(short_of(u, w), short_of(w, u));
+    const Point a = short_of(u, w), b = short_of(w, u);
+    for (auto it = edges->qbegin(bgi::intersects(mapping::Segment(a, b))); it != edges->qend(); ++it)
+      if (!in_loop(it->second) && segments_intersect(a, b, it->first.first, it->first.second)) return true;
+    return false;
   };
   const double cos_turn = std::cos(options.max_lid_turn_rad);
+  // A right angle give or take max_corner_turn_rad: its sine is at least this.
+  const double cos_corner = std::cos(options.max_corner_turn_rad);
   // A budget of ring steps for the walks and the face tests, linear in the
   // map's size: a hostile map of many tiny edges must not cost chains x
   // pairs x ring. Past it no more bays are looked for, which leaves their
@@ -285,14 +295,29 @@ void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& 
         const std::ptrdiff_t kw = static_cast<std::ptrdiff_t>(chain.edge_count + a_steps) - 1;  // w: its start
         const Point w = vertex(kw), w_to = vertex(kw + 1);
         const double ax = (w_to.x() - w.x()) / distance(w, w_to), ay = (w_to.y() - w.y()) / distance(w, w_to);
-        // The lid: straight on from u to w, the two walls in line with it.
-        // (Not round a corner: the wall before u and one seen through a door
-        // beyond would close a room's worth of unknown as readily as the
-        // corner behind a desk.)
+        // The lid: straight on from u to w, the two walls in line with it;
+        // or, in a room's corner, in line with one of them, the other wall
+        // meeting the lid's line where the lid ends and turning off it into
+        // the room (left, the free side) at about a right angle: the desk in
+        // the corner hides the far wall up to the side wall. (Never round a
+        // corner: the wall before u and one seen through a door beyond would
+        // close a room's worth of unknown as readily as the corner behind a
+        // desk.)
         const double lid = distance(u, w);
         if (!(lid >= 0.01) || lid > options.max_lid_m) continue;
         const double lx = (w.x() - u.x()) / lid, ly = (w.y() - u.y()) / lid;
-        if (lx * bx + ly * by < cos_turn || lx * ax + ly * ay < cos_turn) continue;
+        const bool before_in_line = lx * bx + ly * by >= cos_turn, after_in_line = lx * ax + ly * ay >= cos_turn;
+        // The corner: the side wall's end off the line of the wall the lid
+        // continues (u_from -> u, or w -> w_to) by at most max_beyond_lid_m,
+        // and the side wall turning left from the lid (or the lid from it).
+        auto off_line = [](const Point& p, const Point& on, double dx, double dy) {
+          return std::abs((p.x() - on.x()) * dy - (p.y() - on.y()) * dx);
+        };
+        const bool corner_at_w = before_in_line && off_line(w, u, bx, by) <= options.max_beyond_lid_m &&
+                                 cross(lx, ly, ax, ay) >= cos_corner;
+        const bool corner_at_u = after_in_line && off_line(u, w, ax, ay) <= options.max_beyond_lid_m &&
+                                 cross(bx, by, lx, ly) >= cos_corner;
+        if (!(before_in_line && after_in_line) && !corner_at_w && !corner_at_u) continue;
         const double twice_area = swept[static_cast<std::size_t>(kw - first)] -
                                   swept[static_cast<std::size_t>(ku - first)] + rel_cross(w, u);
         const double area = -0.5 * twice_area;  // > 0 round unknown space
@@ -305,7 +330,23 @@ void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& 
           const Point middle(0.5 * (a.x() + b.x()), 0.5 * (a.y() + b.y()));
           faced = is_wall(ring_index(k)) && distance(middle, closest_point_on_segment(middle, u, w)) >= options.min_depth_m;
         }
-        if (!faced || lid_crosses_an_edge(u, w)) continue;
+        if (!faced) continue;
+        // The loop stays on the bay's side of the lid (its left, u -> w),
+        // but for the band's steps: a loop that goes further beyond the lid
+        // round free space (a door the laser saw through, a room seen past
+        // the object) closes no bay.
+        bool beyond = false;
+        for (std::ptrdiff_t k = ku + 1; k < kw && !beyond && steps_left > 0; ++k, --steps_left) {
+          const Point p = vertex(k);
+          beyond = (p.x() - u.x()) * ly - (p.y() - u.y()) * lx > options.max_beyond_lid_m;
+        }
+        const std::size_t loop_start = ring_index(ku);
+        const auto loop_edges = static_cast<std::size_t>(kw - ku);
+        auto in_loop = [&](const EdgeRef& e) {
+          return e.polygon == static_cast<std::size_t>(chain.polygon) &&
+                 e.ring == static_cast<std::size_t>(chain.ring) && (e.edge + n - loop_start) % n < loop_edges;
+        };
+        if (beyond || lid_crosses_an_edge(u, w, in_loop)) continue;
         best = area;
       }
     }

@@ -78,13 +78,20 @@ struct WalledBayOptions {
   double max_area_m2 = 0.0;  // 0: off
   // The lid: the stretch of wall nobody saw, from the end of a wall edge
   // before the chain to the start of one after it (each at least min_wall_m
-  // long and turned no more than max_lid_turn_rad from the lid), at most
-  // max_lid_m long. Straight only: a lid round a corner would close a
-  // room's worth of unknown seen through a door as readily as the corner
-  // behind a desk.
+  // long and turned no more than max_lid_turn_rad from the lid, or one of
+  // them a room's corner: max_corner_turn_rad), at most max_lid_m long.
+  // Straight only: a lid round a corner would close a room's worth of
+  // unknown seen through a door as readily as the corner behind a desk.
   double max_lid_m = 3.0;
   double min_wall_m = 0.1;
   double max_lid_turn_rad = 0.2;
+  // In a room's corner the lid continues one wall only, up to the other
+  // (the side wall) where it meets the first one's line: a desk in the
+  // corner hides the far wall to the corner. The side wall turns off the
+  // lid's line into the room by a right angle, give or take this; its end
+  // lies within max_beyond_lid_m of that line. The lid still turns no
+  // corner: it is straight, along a wall.
+  double max_corner_turn_rad = 0.35;
   // An obstacle edge of the bay (at least min_wall_m long) whose middle is
   // this far from the lid: the object in front of the unseen wall. Without one
   // the notch is the wall itself, seen at a grazing angle or not at all,
@@ -97,6 +104,13 @@ struct WalledBayOptions {
   // a quarter of its length): there the ragged steps of a wall's obstacle
   // band, where it meets the frontier, cross the wall's line.
   double lid_end_tolerance_m = 0.05;
+  // The bay's own ring, from wall to wall, goes no further than this beyond
+  // the lid's line (the band's steps, and a flank's frontier ending below
+  // the line), and may cross the lid where it does, anywhere along it: a
+  // flank's step 6 cm from the lid's end kept a desk a goal (floor120 at
+  // 605 m of travel, 4 of its 5 desk flanks at the far walls). A door the
+  // laser saw through puts the ring metres beyond the lid.
+  double max_beyond_lid_m = 0.10;
   // Nor an edge of a map polygon smaller than this: a sliver of free space
   // seen past the object's end into the strip behind it lies in the bay.
   // A room seen through a gap behind the object is larger, and stops it.

@@ -223,6 +223,34 @@ TEST(WalledBays, ADesksFlankAgainstAWallLiesInABayOfTheDesksSize) {
   EXPECT_TRUE(std::isinf(again[0].bay_area_m2));
 }
 
+TEST(WalledBays, AFlanksFrontierEndingBelowTheWallsLineStillLiesInTheBay) {
+  // As the mapper draws a desk 5 cm off a wall (floor120, far wall): the
+  // wall's band lies at y 0.05, each flank's frontier runs down to 3-4 cm
+  // below that line, and the right one meets the wall through steps of the
+  // band 6 cm long, so the flank crosses the lid 6 cm from its end.
+  RingSpec outer{{Point(0, 0.05), Point(2.0, 0.056), Point(2.008, 0.017), Point(2.0, 0.85), Point(3.6, 0.85),
+                  Point(3.725, 0.019), Point(3.725, 0.039), Point(3.782, 0.047), Point(3.782, 0.062), Point(6, 0.05),
+                  Point(6, 4), Point(0, 4)},
+                 {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle,
+                  E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}};
+  mapping::TypedMultiPolygon map{typed_polygon(outer)};
+  auto chains = frontier_chains(map);
+  ASSERT_EQ(chains.size(), 2u);
+  find_walled_bays(map, chains, bays_below(2.0));
+  // The lid from (2, 0.056) to (3.782, 0.062): the desk's 1.6 x 0.79 m above
+  // it and the slant of the right flank, 1.31 m2.
+  EXPECT_NEAR(chains[0].bay_area_m2, 1.31, 0.01);
+  EXPECT_NEAR(chains[1].bay_area_m2, chains[0].bay_area_m2, 1e-12);
+  // The same steps 10 cm below the line: more than the band's noise, no bay.
+  auto& ring = map[0].geometry.outer();
+  ring[5] = Point(3.725, -0.05);
+  ring[6] = Point(3.725, -0.03);
+  chains = frontier_chains(map);
+  find_walled_bays(map, chains, bays_below(2.0));
+  EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
+  EXPECT_TRUE(std::isinf(chains[1].bay_area_m2));
+}
+
 TEST(WalledBays, ADoorTheLaserSawThroughIsNoBay) {
   // The bottom wall has a 1 m door (x 2..3) the laser saw through: the free
   // space runs through it into a wedge of the room below, whose far wall it
@@ -314,6 +342,50 @@ TEST(WalledBays, NoLidTurnsACorner) {
     EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
     EXPECT_TRUE(std::isinf(chains[1].bay_area_m2));
   }
+}
+
+TEST(WalledBays, ADeskInARoomsCornerLiesInABayAlongTheFarWallToTheSideWall) {
+  // A desk 0.3 m from the room's right wall (x 4.3..5.7, 5 cm off the far
+  // wall): the laser saw the far wall up to the desk and the right wall down
+  // to the far wall's line, not the desk's left flank nor the corner behind
+  // it. The lid runs along the far wall's line from (4.3, 0) to the right
+  // wall's end (6, 0.02), which turns up into the room there.
+  RingSpec corner{{Point(0, 0), Point(4.3, 0), Point(4.3, 0.85), Point(5.7, 0.85), Point(6, 0.02), Point(6, 4),
+                   Point(0, 4)},
+                  {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle}};
+  mapping::TypedMultiPolygon map{typed_polygon(corner)};
+  auto chains = frontier_chains(map);
+  ASSERT_EQ(chains.size(), 2u);
+  find_walled_bays(map, chains, bays_below(3.0));
+  // The desk, the strip behind it and the corner beside it: the loop
+  // (4.3, 0), (4.3, 0.85), (5.7, 0.85), (6, 0.02), 1.3035 m2.
+  EXPECT_NEAR(chains[0].bay_area_m2, 1.3035, 1e-9);
+  EXPECT_NEAR(chains[1].bay_area_m2, chains[0].bay_area_m2, 1e-12);
+  // Mirrored (the desk in the left corner, the lid from the left wall's end
+  // to the far wall beyond the desk): the same.
+  mapping::TypedMultiPolygon mirrored{typed_polygon(
+      RingSpec{{Point(0, 0.02), Point(0.3, 0.85), Point(1.7, 0.85), Point(1.7, 0), Point(6, 0), Point(6, 4), Point(0, 4)},
+               {E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}})};
+  chains = frontier_chains(mirrored);
+  ASSERT_EQ(chains.size(), 2u);
+  find_walled_bays(mirrored, chains, bays_below(3.0));
+  EXPECT_NEAR(chains[0].bay_area_m2, 1.3035, 1e-9);
+  EXPECT_NEAR(chains[1].bay_area_m2, 1.3035, 1e-9);
+  // The side wall's end 0.2 m off the far wall's line: not the corner.
+  map[0].geometry.outer()[4] = Point(6, 0.2);
+  chains = frontier_chains(map);
+  find_walled_bays(map, chains, bays_below(3.0));
+  EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
+  // The wall at the lid's end turning away from the room (the free space
+  // goes on past the corner: a passage), not into it: no bay.
+  RingSpec passage{{Point(0, 0), Point(4.3, 0), Point(4.3, 0.85), Point(5.7, 0.85), Point(6, 0.02), Point(6, -3),
+                    Point(8, -3), Point(8, 4), Point(0, 4)},
+                   {E::kObstacle, E::kFrontier, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle,
+                    E::kObstacle, E::kObstacle}};
+  const mapping::TypedMultiPolygon open_map{typed_polygon(passage)};
+  chains = frontier_chains(open_map);
+  find_walled_bays(open_map, chains, bays_below(3.0));
+  EXPECT_TRUE(std::isinf(chains[0].bay_area_m2));
 }
 
 TEST(WalledBays, AMapOfManyTinyEdgesIsReadWithinABudgetNeverTakenAsABay) {
