@@ -336,10 +336,12 @@ void find_walled_bays(const TypedMultiPolygon& map, std::vector<FrontierChain>& 
         // round free space (a door the laser saw through, a room seen past
         // the object) closes no bay.
         bool beyond = false;
-        for (std::ptrdiff_t k = ku + 1; k < kw && !beyond && steps_left > 0; ++k, --steps_left) {
+        std::ptrdiff_t k = ku + 1;
+        for (; k < kw && !beyond && steps_left > 0; ++k, --steps_left) {
           const Point p = vertex(k);
           beyond = (p.x() - u.x()) * ly - (p.y() - u.y()) * lx > options.max_beyond_lid_m;
         }
+        if (!beyond && k < kw) continue;  // the budget ran out before the loop was read: no bay
         const std::size_t loop_start = ring_index(ku);
         const auto loop_edges = static_cast<std::size_t>(kw - ku);
         auto in_loop = [&](const EdgeRef& e) {
