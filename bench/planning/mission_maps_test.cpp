@@ -119,5 +119,69 @@ TEST(EmulatedMission, ThePlansOnTheWayCarryTheGoalFollowed) {
   EXPECT_NEAR(maps.travelled_m, 3.0, 1e-9);
 }
 
+// The way in (emulate_mission's `way_in`, Mission::on_select_plan): the
+// planner with the full margin offers only an approach point (x = 3) for a
+// frontier at x = 8, and nothing once it is visited; the planner with the
+// way in's margin, asked with that frontier as its focus, has a path to the
+// frontier's own place (x = 7.5). The robot reaches the approach point, then
+// goes in to x = 7.5, planning on the way with the way in's planner (the
+// full margin's plans on the way would have no candidate there: the goal
+// left as seen). Without `way_in` the mission ends at the approach point.
+TEST(EmulatedMission, AnApproachPointReachedLeadsInWithTheWayInsPlanner) {
+  const auto world = corridor_with_a_post();
+  MissionMapsOptions o;
+  o.max_goals = 5;
+  o.replan_on_the_way = true;
+  o.replan_step_m = 0.5;
+  o.goal_match_radius_m = 1.0;
+  const Point approach(3, 1), frontier(8, 1), inside(7.5, 1);
+  auto blacklisted = [](const std::vector<Point>& blacklist, const Point& p) {
+    for (const auto& b : blacklist)
+      if (boost::geometry::distance(b, p) < 0.1) return true;
+    return false;
+  };
+  const MissionPlanner with_margin = [&](const mapping::TypedMultiPolygon&, const planning::Pose2& pose,
+                                         const std::vector<Point>& blacklist, const planning::GoalFocus*) {
+    if (blacklisted(blacklist, approach)) {
+      planning::Plan none;
+      none.ok = true;
+      return none;
+    }
+    auto plan = straight_to(pose, approach, frontier);
+    plan.candidates[0].approach = true;
+    return plan;
+  };
+  int way_in_plans = 0, focused_on_the_frontier = 0;
+  const MissionPlanner way_in = [&](const mapping::TypedMultiPolygon&, const planning::Pose2& pose,
+                                    const std::vector<Point>& blacklist, const planning::GoalFocus* focus) {
+    ++way_in_plans;
+    focused_on_the_frontier += focus && boost::geometry::distance(focus->frontier, frontier) < 0.1;
+    planning::Plan plan;
+    plan.ok = true;
+    if (!blacklisted(blacklist, inside)) {
+      plan = straight_to(pose, inside, frontier);
+      plan.best = -1;  // the emulator chooses the way in itself
+    }
+    return plan;
+  };
+  const auto maps = emulate_mission(world, o, with_margin, way_in);
+  ASSERT_TRUE(maps.error.empty()) << maps.error;
+  EXPECT_TRUE(maps.done);
+  EXPECT_EQ(maps.ways_in, 1);
+  EXPECT_EQ(maps.goals, 2);
+  EXPECT_EQ(maps.goals_seen, 0);  // reached, not left on the way
+  EXPECT_GE(way_in_plans, 9);     // 4.5 m at a plan every 0.5 m, and the first
+  EXPECT_EQ(focused_on_the_frontier, 1);  // the first, at the approach point
+  const double to_approach = boost::geometry::distance(Point(1, 1.5), approach);
+  EXPECT_NEAR(maps.travelled_m, to_approach + 4.5, 1e-9);
+
+  const auto without = emulate_mission(world, o, with_margin);
+  ASSERT_TRUE(without.error.empty()) << without.error;
+  EXPECT_TRUE(without.done);
+  EXPECT_EQ(without.ways_in, 0);
+  EXPECT_EQ(without.goals, 1);
+  EXPECT_NEAR(without.travelled_m, to_approach, 1e-9);
+}
+
 }  // namespace
 }  // namespace pex::bench

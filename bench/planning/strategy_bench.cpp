@@ -148,6 +148,10 @@ int main(int argc, char** argv) {
       options.strategy = *strategy;
       PlannerOptions tight = options;
       tight.cspace.clearance_margin_m = 0.0;
+      // The way in's margin, as Mission::way_in_margin_m gives it.
+      PlannerOptions way_in = options;
+      way_in.cspace.clearance_margin_m =
+          std::min(explorer.mission.way_in_margin_m, options.cspace.clearance_margin_m);
       pex::bench::MissionMapsOptions mission;
       mission.max_goals = 100000;
       mission.max_travel_m = max_travel_m;
@@ -164,7 +168,7 @@ int main(int argc, char** argv) {
       // Each plan's CPU time, with what the planner reuses kept from plan to
       // plan as the explorer's planning thread keeps it (one cache per margin).
       pex::explorer::LatencyStats plan_cpu_ms;
-      pex::planning::PlanCache offsets, tight_offsets;
+      pex::planning::PlanCache offsets, tight_offsets, way_in_offsets;
       auto timed_plan = [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose,
                             const std::vector<Point>& blacklist, const PlannerOptions& o,
                             pex::planning::PlanCache& cache, const pex::planning::GoalFocus* focus) {
@@ -232,6 +236,16 @@ int main(int argc, char** argv) {
           candidates << "# robot," << pose.x_m << ',' << pose.y_m << ',' << pose.theta_rad << '\n';
         }
       };
+      // A way in after an approach point, as the mission looks for one when
+      // it may plan without the full margin (Mission::may_plan_tight).
+      pex::bench::MissionPlanner way_in_planner;
+      if (fallback && options.cspace.clearance_margin_m > 0.0)
+        way_in_planner = [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose,
+                             const std::vector<Point>& blacklist, const pex::planning::GoalFocus* focus) {
+          Plan plan = timed_plan(map, pose, blacklist, way_in, way_in_offsets, focus);
+          traced(map, pose, plan);
+          return plan;
+        };
       const auto maps = pex::bench::emulate_mission(
           *sim_world, mission,
           [&](const TypedMultiPolygon& map, const pex::geometry::Pose2& pose, const std::vector<Point>& blacklist,
@@ -243,7 +257,8 @@ int main(int argc, char** argv) {
               plan = timed_plan(map, pose, blacklist, tight, tight_offsets, focus);
             traced(map, pose, plan);
             return plan;
-          });
+          },
+          way_in_planner);
       double travel_at_99_m = 0.0;
       if (!trace.empty()) {
         const double final_m2 = trace.back().map_m2;
@@ -282,11 +297,11 @@ int main(int argc, char** argv) {
       const auto score = pex::evaluation::score_map(maps.free_space, pex::geometry::Pose2{0.0, 0.0, 0.0}, reachable,
                                                     walls, kWallToleranceM);
       std::printf(
-          "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"backs_out\":%d,"
+          "{\"world\":\"%s\",\"strategy\":\"%s\",\"done\":%s,\"path_m\":%.3f,\"goals\":%d,\"goals_seen\":%d,\"backs_out\":%d,\"ways_in\":%d,"
           "\"guard_stops\":%d,\"plans\":%d,\"coverage\":%.5f,\"iou\":%.5f,\"plan_cpu_ms_p50\":%.3f,\"plan_cpu_ms_p99\":%.3f,"
           "\"travel_at_99pct_map_m\":%.1f}\n",
           name.c_str(), strategy_name.c_str(), maps.done ? "true" : "false", maps.travelled_m, maps.goals,
-          maps.goals_seen, maps.backs_out, maps.guard_stops, maps.plans, score.coverage, score.iou, plan_cpu_ms.quantile(0.5),
+          maps.goals_seen, maps.backs_out, maps.ways_in, maps.guard_stops, maps.plans, score.coverage, score.iou, plan_cpu_ms.quantile(0.5),
           plan_cpu_ms.quantile(0.99), travel_at_99_m);
       std::fflush(stdout);
     }
