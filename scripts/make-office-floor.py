@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # A cluttered office floor for pex-sim, to try the whole set on a building
 # that is not in worlds/ (docs/exploration.md, "Buildings not in worlds/").
-#   scripts/make-office-floor.py SEED OUT.wkt [WIDTH_M]
+#   scripts/make-office-floor.py [--glass] SEED OUT.wkt [WIDTH_M]
 # 64 x 34 m by default: a row of rooms each side of a 2 m corridor along the
 # south, an open plan (pillars, desk clusters with chairs) reached from that
 # corridor by one 2 m passage through the rooms, a corridor and a row of rooms
@@ -10,12 +10,18 @@
 # each, cabinets. The same seed gives the same file. Nothing is checked
 # here: a desk cluster may stand close before the passage (seed 7: a chair
 # 0.66 m from its corner), as furniture does.
+# --glass makes the rooms' corridor fronts (the walls holding their doors)
+# and the open plan's meeting room glass panes (GLASS in the world file: the
+# simulated laser sees them only near their normal); the layout is the same
+# as without it.
 import random, sys
-seed=int(sys.argv[1]); out=sys.argv[2]
-W=float(sys.argv[3]) if len(sys.argv)>3 else 64.0
+args=[a for a in sys.argv[1:] if a!="--glass"]; glass="--glass" in sys.argv[1:]
+seed=int(args[0]); out=args[1]
+W=float(args[2]) if len(args)>2 else 64.0
 R=random.Random(seed)
 walls=[]; polys=[]
-def wall(x1,y1,x2,y2): walls.append(((x1,y1),(x2,y2)))
+glass_now=False  # walls added while True are glass (with --glass)
+def wall(x1,y1,x2,y2): walls.append(((x1,y1),(x2,y2),glass and glass_now))
 def rect(x,y,w,h): polys.append([(x,y),(x+w,y),(x+w,y+h),(x,y+h)])
 def wall_with_doors(along_x,c,a0,a1,doors):
     """A wall at x or y = c from a0 to a1 (along x if along_x), with gaps
@@ -64,7 +70,10 @@ def room_row(y0,y1,door_y,desk_side,extra=(),keep=None):
             cy=(y0+y1)/2-0.6
             rect(cx,cy,0.5,1.2)
     doors=[d for d in doors if not (keep and abs(d[0]-(keep[0]+keep[1])/2)<(keep[1]-keep[0])/2+d[1]/2+0.3)]
+    global glass_now
+    glass_now=True
     hwall_with_doors(door_y,0,W,doors+list(extra))
+    glass_now=False
 room_row(0,6,6,-1)     # south rooms: doors on y=6, desks against y=0
 # The rooms north of the corridor, doors on y=8; the passage x 30-32 runs
 # through them to the open plan (no furniture or door in it).
@@ -84,14 +93,16 @@ while x<W-5:
     x+=R.uniform(4.5,6.5)
 # a meeting room in the open plan, one door
 mx=R.uniform(36,W-10)
+glass_now=True
 wall(mx,17,mx+6,17); wall(mx+6,17,mx+6,23); wall(mx,23,mx+6,23); vwall_with_doors(mx,17,23,[(20,1.0)])
+glass_now=False
 rect(mx+1.5,19.2,3.0,1.6)
 # the open plan's north wall, three openings onto the north corridor
 hwall_with_doors(26,0,W,[(6,1.8),(W/2,1.8),(W-6,1.8)])
 room_row(28,34,28,+1)  # north rooms: doors on y=28, desks against y=34
 f=open(out,'w')
-f.write("# office floor from scripts/make-office-floor.py, seed %d, %.0f x %.0f m\n"%(seed,W,H))
-for (a,b) in walls: f.write("LINESTRING (%.3f %.3f, %.3f %.3f)\n"%(a[0],a[1],b[0],b[1]))
+f.write("# office floor from scripts/make-office-floor.py%s, seed %d, %.0f x %.0f m\n"%(" --glass" if glass else "",seed,W,H))
+for (a,b,g) in walls: f.write("%sLINESTRING (%.3f %.3f, %.3f %.3f)\n"%("GLASS " if g else "",a[0],a[1],b[0],b[1]))
 for p in polys: f.write("POLYGON ((%s))\n"%", ".join("%.3f %.3f"%q for q in p+[p[0]]))
 f.write("START 1.5 7.0 0.0\n")
-print(len(walls),"walls",len(polys),"polygons")
+print(len(walls),"walls (%d glass)"%sum(1 for w in walls if w[2]),len(polys),"polygons")

@@ -105,7 +105,7 @@ std::string add_geometry(const std::string& wkt, std::vector<Wall>& walls, std::
         if (std::string error = add_polygon(p, walls, solids); !error.empty()) return error;
     } else {
       return "unsupported geometry '" + keyword.substr(0, 24) +
-             "' (use LINESTRING, MULTILINESTRING, POLYGON, MULTIPOLYGON or START)";
+             "' (use LINESTRING, MULTILINESTRING, POLYGON, MULTIPOLYGON, any of them after GLASS, or START)";
     }
     if (!ok) return "coordinate not finite or beyond 1e5 m";
   } catch (const std::exception& e) {
@@ -124,6 +124,7 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
   std::vector<Polygon> solids;
   std::string pending;       // a geometry spread over several lines
   int pending_line = 0;
+  bool pending_glass = false;  // the pending geometry came after GLASS
   int depth = 0;
   int line_number = 0;
   std::size_t pos = 0;
@@ -154,9 +155,18 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
       start_line = line_number;
       continue;
     }
-    if (pending.empty()) pending_line = line_number;
-    pending += (pending.empty() ? "" : " ") + line;
-    for (char c : line) {
+    std::string geometry_text = line;
+    if (pending.empty()) {
+      pending_line = line_number;
+      pending_glass = upper_keyword(line) == "GLASS";
+      if (pending_glass) {
+        geometry_text = trim(std::string_view(line).substr(5));
+        if (line.size() <= 5 || line[5] != ' ' || geometry_text.empty())
+          return fail(line_number, "GLASS needs a geometry after it: GLASS LINESTRING (x y, ...)");
+      }
+    }
+    pending += (pending.empty() ? "" : " ") + geometry_text;
+    for (char c : geometry_text) {
       if (c == '(') ++depth;
       if (c == ')') --depth;
     }
@@ -165,8 +175,10 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
       if (end == text.size()) break;
       continue;
     }
+    const std::size_t first_wall = world.walls.size();
     const std::string error = add_geometry(pending, world.walls, solids);
     if (!error.empty()) return fail(pending_line, error);
+    for (std::size_t i = first_wall; i < world.walls.size(); ++i) world.walls[i].glass = pending_glass;
     pending.clear();
     if (end == text.size()) break;
   }
@@ -227,7 +239,15 @@ RayCaster& RayCaster::operator=(RayCaster&&) noexcept = default;
 std::size_t RayCaster::wall_count() const { return index_->walls.size(); }
 
 double RayCaster::cast(double x, double y, double angle_rad, double max_range_m) const {
+  return cast_beam(x, y, angle_rad, max_range_m, std::numbers::pi / 2);
+}
+
+double RayCaster::cast_beam(double x, double y, double angle_rad, double max_range_m,
+                            double glass_max_incidence_rad) const {
   const double dx = std::cos(angle_rad), dy = std::sin(angle_rad);
+  // A pane returns the beam when |cos| of the angle between beam and pane is
+  // at most sin(max incidence): the beam is within that angle of the normal.
+  const double glass_max_cos = std::sin(std::clamp(glass_max_incidence_rad, 0.0, std::numbers::pi / 2));
   const Segment ray(Point(x, y), Point(x + dx * max_range_m, y + dy * max_range_m));
   double best = max_range_m;
   // The R-tree yields the walls whose boxes the ray crosses and that intersect
@@ -235,6 +255,9 @@ double RayCaster::cast(double x, double y, double angle_rad, double max_range_m)
   for (auto it = index_->tree.qbegin(bgi::intersects(ray)); it != index_->tree.qend(); ++it) {
     const Wall& w = index_->walls[it->second];
     const double ex = w.x1 - w.x0, ey = w.y1 - w.y0;
+    if (w.glass && glass_max_cos < 1.0 &&
+        std::abs(dx * ex + dy * ey) > glass_max_cos * std::hypot(ex, ey))
+      continue;  // a pane met at a slant: the beam goes through
     const double denom = dx * ey - dy * ex;
     const double qx = w.x0 - x, qy = w.y0 - y;
     if (std::abs(denom) < 1e-12) {
@@ -276,6 +299,8 @@ std::string LaserOptions::validate() const {
   if (!(min_range_m >= 0.0 && min_range_m < max_range_m)) return "min_range_m must be in [0, max_range_m)";
   if (!(range_noise_sigma_m >= 0.0 && range_noise_sigma_m < 1.0)) return "range_noise_sigma_m must be in [0, 1)";
   if (!(rate_hz > 0.0 && rate_hz <= 100.0)) return "rate_hz must be in (0, 100]";
+  if (!(glass_max_incidence_deg >= 0.0 && glass_max_incidence_deg <= 90.0))
+    return "glass_max_incidence_deg must be in [0, 90]";
   return "";
 }
 
@@ -289,7 +314,8 @@ std::vector<float> Laser::scan(const RayCaster& caster, const Pose2& robot) {
   std::normal_distribution<double> noise(0.0, options_.range_noise_sigma_m);
   std::vector<float> ranges(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    const double r = caster.cast(sensor.x(), sensor.y(), base + i * step, options_.max_range_m);
+    const double r = caster.cast_beam(sensor.x(), sensor.y(), base + i * step, options_.max_range_m,
+                                      options_.glass_max_incidence_deg * std::numbers::pi / 180.0);
     // Draw noise for every beam, hit or not, so one beam's outcome never
     // shifts the random sequence of the others.
     const double e = options_.range_noise_sigma_m > 0.0 ? noise(rng_) : 0.0;

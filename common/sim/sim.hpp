@@ -18,6 +18,10 @@ using geometry::Pose2;
 
 struct Wall {
   double x0, y0, x1, y1;  // m
+  // A glass pane: it stops the robot as any wall, but the laser sees it only
+  // near its normal (LaserOptions::glass_max_incidence_deg); a beam meeting it
+  // more obliquely goes through to whatever stands behind.
+  bool glass = false;
 };
 
 struct World {
@@ -33,8 +37,9 @@ struct WorldError {
 
 // Parses a world file's text (see worlds/*.wkt): '#' comment lines, an
 // optional "START x y theta" line, and WKT geometries (LINESTRING,
-// MULTILINESTRING, POLYGON, MULTIPOLYGON), each possibly over several lines.
-// Every edge becomes a wall. Errors name the line; non-finite or absurd
+// MULTILINESTRING, POLYGON, MULTIPOLYGON), each possibly over several lines
+// and each possibly after the word GLASS ("GLASS LINESTRING (...)": its
+// edges are glass panes). Every edge becomes a wall. Errors name the line; non-finite or absurd
 // coordinates (|c| > 1e5 m), a POLYGON ring that is not closed, a world
 // without walls, and a START outside the walls' extent or inside a solid
 // POLYGON are errors; zero-length edges are dropped.
@@ -48,9 +53,15 @@ class RayCaster {
   RayCaster(RayCaster&&) noexcept;
   RayCaster& operator=(RayCaster&&) noexcept;
 
-  // Distance (m) from (x, y) along `angle_rad` to the nearest wall, or
-  // `max_range_m` when no wall is closer.
+  // Distance (m) from (x, y) along `angle_rad` to the nearest wall, glass
+  // or not (what the robot's body runs into), or `max_range_m` when no wall
+  // is closer.
   double cast(double x, double y, double angle_rad, double max_range_m) const;
+  // What a laser beam sees: as cast(), but a glass pane stops the beam only
+  // when the beam meets it within glass_max_incidence_rad of its normal (the
+  // pane's specular reflection back to the scanner); beyond that the beam
+  // passes through it.
+  double cast_beam(double x, double y, double angle_rad, double max_range_m, double glass_max_incidence_rad) const;
   // Distance (m) from (x, y) to the nearest wall, or `max_m` when none is closer.
   double clearance(double x, double y, double max_m) const;
   std::size_t wall_count() const;
@@ -74,6 +85,10 @@ struct LaserOptions {
   double rate_hz = 25.0;
   // Sensor pose on the robot (m, m, rad).
   double mount_x_m = 0.0, mount_y_m = 0.0, mount_theta_rad = 0.0;
+  // A glass pane returns a beam only within this angle of its normal; a
+  // scanner like the LMS1xx sees clean glass head-on and looks through it
+  // at a slant. 90: glass is seen as any wall; 0: never.
+  double glass_max_incidence_deg = 10.0;
 
   int beam_count() const;             // fov / step + 1
   double first_angle_rad() const;     // -fov/2, relative to the sensor x axis

@@ -97,6 +97,72 @@ TEST(RayCaster, HitsTheRightWallAtTheRightDistance) {
   EXPECT_DOUBLE_EQ(caster.cast(-5, 3, std::numbers::pi, 20.0), 20.0);
 }
 
+// A glass pane across the box at x = 5 (y 0 .. 6), an opaque wall behind it
+// at x = 10: the body runs into the pane; the laser sees it head-on and looks
+// through it at a slant.
+const char* kGlassBox =
+    "START 2 3 0\n"
+    "LINESTRING(0 0, 10 0, 10 6, 0 6, 0 0)\n"
+    "GLASS LINESTRING(5 0,\n"
+    "                 5 6)\n";
+
+TEST(World, GlassIsMarkedOnItsGeometryOnly) {
+  World w = parse_ok(kGlassBox);
+  ASSERT_EQ(w.walls.size(), 5u);
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_FALSE(w.walls[i].glass) << i;
+  EXPECT_TRUE(w.walls[4].glass);
+  World m = parse_ok("glass MULTIPOLYGON(((1 1, 2 1, 2 2, 1 1)))\nLINESTRING(0 0, 9 0)\n");
+  ASSERT_EQ(m.walls.size(), 4u);
+  EXPECT_TRUE(m.walls[0].glass && m.walls[1].glass && m.walls[2].glass);
+  EXPECT_FALSE(m.walls[3].glass);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 9 0)\nGLASS\n").find("test.wkt:2: GLASS needs a geometry"), std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 9 0)\nGLASS(1 1, 2 2)\n").find("test.wkt:2: GLASS needs"), std::string::npos);
+  EXPECT_NE(parse_error("LINESTRING(0 0, 9 0)\nGLASS POINT(1 1)\n").find("test.wkt:2: unsupported"), std::string::npos);
+  // A glass box is solid: START may not be inside it.
+  EXPECT_NE(parse_error("START 1.5 1.5 0\nLINESTRING(0 0, 9 0)\nGLASS POLYGON((1 1, 2 1, 2 2, 1 2, 1 1))\n")
+                .find("inside a solid"),
+            std::string::npos);
+}
+
+TEST(RayCaster, ABeamPassesGlassAtASlantTheBodyNever) {
+  World w = parse_ok(kGlassBox);
+  RayCaster caster(w);
+  const double deg = std::numbers::pi / 180.0;
+  // Head-on (0 deg from the pane's normal) and 8 deg off: the pane, 3 m away.
+  EXPECT_NEAR(caster.cast_beam(2, 3, 0.0, 20.0, 10 * deg), 3.0, 1e-12);
+  EXPECT_NEAR(caster.cast_beam(2, 3, 8 * deg, 20.0, 10 * deg), 3.0 / std::cos(8 * deg), 1e-9);
+  // 12 deg off: through the pane to the far wall at x = 10.
+  EXPECT_NEAR(caster.cast_beam(2, 3, 12 * deg, 20.0, 10 * deg), 8.0 / std::cos(12 * deg), 1e-9);
+  EXPECT_NEAR(caster.cast_beam(2, 3, -30 * deg, 20.0, 10 * deg), 3.0 / std::sin(30 * deg), 1e-9);  // the floor's wall y = 0 beyond the pane
+  // 90 deg: glass is any wall; 0 deg: seen by no beam but one exactly along its normal.
+  EXPECT_NEAR(caster.cast_beam(2, 3, 12 * deg, 20.0, 90 * deg), 3.0 / std::cos(12 * deg), 1e-9);
+  EXPECT_NEAR(caster.cast_beam(2, 3.5, 1 * deg, 20.0, 0.0), 8.0 / std::cos(1 * deg), 1e-9);
+  // The body's cast and the clearance count the pane at every angle.
+  EXPECT_NEAR(caster.cast(2, 3, 40 * deg, 20.0), 3.0 / std::cos(40 * deg), 1e-9);
+  EXPECT_NEAR(caster.clearance(4.5, 3, 2.0), 0.5, 1e-12);
+
+  // The simulated laser: head-on beams return from the pane, slanted ones from the far wall.
+  LaserOptions o;
+  o.range_noise_sigma_m = 0.0;
+  Laser laser(o, 1);
+  const std::vector<float> ranges = laser.scan(caster, w.start);
+  const int ahead = o.beam_count() / 2;  // the beam along the robot's x axis
+  EXPECT_NEAR(ranges[static_cast<std::size_t>(ahead)], 3.0, 1e-5);
+  EXPECT_NEAR(ranges[static_cast<std::size_t>(ahead + 40)], 8.0 / std::cos(20 * deg), 1e-4);  // 20 deg left
+  o.glass_max_incidence_deg = 91.0;
+  EXPECT_NE(o.validate(), "");
+
+  // The robot drives into the pane, not through it.
+  DiffDrivePlant::Options po;
+  DiffDrivePlant plant(po, Pose2{2, 3, 30 * deg}, 1);
+  for (int i = 0; i < 1000; ++i) plant.step(0.01, 10.0, 10.0, &caster);
+  // (At a slant the refusal along the heading lets the disk's edge touch:
+  // a contact, as against any wall.)
+  EXPECT_LT(plant.pose().x_m, 5.0 - 0.2);
+  EXPECT_GT(plant.pose().x_m, 4.0);
+  EXPECT_EQ(plant.contacts(), 1u);
+}
+
 TEST(Laser, Lms111DefaultsNoiseAndDeterminism) {
   LaserOptions o;
   EXPECT_EQ(o.beam_count(), 541);

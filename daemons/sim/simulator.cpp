@@ -54,6 +54,8 @@ SimOptions load_options(runtime::ConfigReader& config) {
   o.laser.range_noise_sigma_m =
       lidar.get<double>("range_noise_sigma_m", o.laser.range_noise_sigma_m, in_range(0.0, 0.5));
   o.laser.rate_hz = lidar.get<double>("rate_hz", o.laser.rate_hz, in_range(1.0, 100.0));
+  o.laser.glass_max_incidence_deg =
+      lidar.get<double>("glass_max_incidence_deg", o.laser.glass_max_incidence_deg, in_range(0.0, 90.0));
   o.laser.mount_x_m = lidar.get<double>("mount_x_m", o.laser.mount_x_m, in_range(-5.0, 5.0));
   o.laser.mount_y_m = lidar.get<double>("mount_y_m", o.laser.mount_y_m, in_range(-5.0, 5.0));
   o.laser.mount_theta_rad = lidar.get<double>("mount_theta_rad", o.laser.mount_theta_rad, in_range(-4.0, 4.0));
