@@ -6,7 +6,8 @@
 // Invariants: nothing crashes; the result is an error naming the file and a
 // line, or a world whose walls are finite, within +-1e5 m, of non-zero
 // length and inside its bounds, with a finite start within the bounds; every
-// ray cast in it is a distance in [0, max range].
+// ray cast in it is a distance in [0, max range], and a laser beam, which
+// passes glass at a slant, reaches at least as far as the body's ray.
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -46,6 +47,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (int i = 0; i < 16; ++i) {
     const double r = walls.cast(w.start.x_m, w.start.y_m, w.start.theta_rad + i * std::numbers::pi / 8, kMaxRange);
     PEX_FUZZ_CHECK(r >= 0 && r <= kMaxRange, "ray " + std::to_string(r));
+    const double beam = walls.cast_beam(w.start.x_m, w.start.y_m, w.start.theta_rad + i * std::numbers::pi / 8,
+                                        kMaxRange, 10.0 * std::numbers::pi / 180.0);
+    PEX_FUZZ_CHECK(beam >= r && beam <= kMaxRange, "beam " + std::to_string(beam) + " short of the ray " + std::to_string(r));
   }
   const double c = walls.clearance(w.start.x_m, w.start.y_m, kMaxRange);
   PEX_FUZZ_CHECK(c >= 0 && c <= kMaxRange, "clearance " + std::to_string(c));
