@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "planning/driven_trail.hpp"
+#include "planning/keep_out.hpp"
 #include "planning/live_view.hpp"
 
 namespace pex::planning {
@@ -78,16 +79,22 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
     result.plan.error = "no map";
     return result;
   }
+  // What the operator keeps the robot out of is a wall for every plan, also
+  // where the newest scan sees free space (glass seen through).
+  const bool keep_out = request.keep_out && !request.keep_out->empty();
+  const TypedMultiPolygon kept = keep_out ? without_keep_out(*request.map, *request.keep_out) : TypedMultiPolygon{};
+  const TypedMultiPolygon& map = keep_out ? kept : *request.map;
   // The newest scan opens where the robot may drive; the frontiers stay the map's.
   const bool live = request.live_view && !request.live_view->empty();
-  const TypedMultiPolygon opened = live ? with_live_view(*request.map, *request.live_view) : TypedMultiPolygon{};
+  TypedMultiPolygon opened = live ? with_live_view(map, *request.live_view) : TypedMultiPolygon{};
+  if (live && keep_out) opened = without_keep_out(opened, *request.keep_out);
   // A tight plan also goes where the robot has driven.
   DrivenWay way;
   if (request.tight && request.trail) way = {*request.trail, request.options.trail_corridor_m};
   const DrivenWay* driven = way.points.empty() ? nullptr : &way;
-  result.plan = request.home ? plan_path_to(live ? opened : *request.map, request.pose, *request.home, request.options,
+  result.plan = request.home ? plan_path_to(live ? opened : map, request.pose, *request.home, request.options,
                                             cache, driven)
-                             : plan_exploration(*request.map, request.pose, request.blacklist, request.options,
+                             : plan_exploration(map, request.pose, request.blacklist, request.options,
                                                 live ? &opened : nullptr, request.focus ? &*request.focus : nullptr,
                                                 cache, driven);
   return result;

@@ -207,6 +207,10 @@ struct PlanRequest {
   // corridor (options.trail_corridor_m) into the C-space; null or empty:
   // none. The mission leaves it empty; the explorer adds it to tight requests.
   std::shared_ptr<const std::vector<Point>> trail;
+  // Keep-out lines and areas (keep_out.hpp), in the map frame: taken out of
+  // the map and of its live view before planning. Null or empty: none. The
+  // mission leaves it empty; the explorer adds its keep_out_file's.
+  std::shared_ptr<const TypedMultiPolygon> keep_out;
 };
 
 // What a request is for, as the explorer counts plan cost by it: a path

@@ -16,6 +16,7 @@
 #include <boost/geometry/index/rtree.hpp>
 
 #include "geometry/point.hpp"
+#include "geometry/wkt_text.hpp"
 
 namespace pex::sim {
 
@@ -30,23 +31,9 @@ using MultiPolygon = bg::model::multi_polygon<Polygon>;
 
 namespace {
 
-constexpr double kMaxCoordinate = 1e5;
-
-std::string trim(std::string_view s) {
-  const auto begin = s.find_first_not_of(" \t\r");
-  if (begin == std::string_view::npos) return {};
-  const auto end = s.find_last_not_of(" \t\r");
-  return std::string(s.substr(begin, end - begin + 1));
-}
-
-std::string upper_keyword(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (!std::isalpha(static_cast<unsigned char>(c))) break;
-    out.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
-  }
-  return out;
-}
+constexpr double kMaxCoordinate = geometry::kMaxFileCoordinateM;
+using geometry::leading_keyword;
+using geometry::trim_blanks;
 
 // Adds the edges of a point sequence; false when a coordinate is bad.
 template <class Range>
@@ -83,7 +70,7 @@ std::string add_polygon(const Polygon& polygon, std::vector<Wall>& walls, std::v
 
 // Parses one WKT geometry into walls (and solids); returns an error text or "".
 std::string add_geometry(const std::string& wkt, std::vector<Wall>& walls, std::vector<Polygon>& solids) {
-  const std::string keyword = upper_keyword(wkt);
+  const std::string keyword = leading_keyword(wkt);
   try {
     bool ok = true;
     if (keyword == "LINESTRING") {
@@ -134,14 +121,14 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
   while (pos <= text.size()) {
     std::size_t end = text.find('\n', pos);
     if (end == std::string_view::npos) end = text.size();
-    const std::string line = trim(text.substr(pos, end - pos));
+    const std::string line = trim_blanks(text.substr(pos, end - pos));
     pos = end + 1;
     ++line_number;
     if (line.empty() || line[0] == '#') {
       if (end == text.size()) break;
       continue;
     }
-    if (pending.empty() && upper_keyword(line) == "START" && line.size() > 5 && line[5] == ' ') {
+    if (pending.empty() && leading_keyword(line) == "START" && line.size() > 5 && line[5] == ' ') {
       if (have_start) return fail(line_number, "second START line");
       std::istringstream in(line.substr(5));
       double x = NAN, y = NAN, theta = NAN;
@@ -158,9 +145,9 @@ std::variant<World, WorldError> parse_world(std::string_view text, const std::st
     std::string geometry_text = line;
     if (pending.empty()) {
       pending_line = line_number;
-      pending_glass = upper_keyword(line) == "GLASS";
+      pending_glass = leading_keyword(line) == "GLASS";
       if (pending_glass) {
-        geometry_text = trim(std::string_view(line).substr(5));
+        geometry_text = trim_blanks(std::string_view(line).substr(5));
         if (line.size() <= 5 || line[5] != ' ' || geometry_text.empty())
           return fail(line_number, "GLASS needs a geometry after it: GLASS LINESTRING (x y, ...)");
       }

@@ -128,6 +128,7 @@ void ExplorerNode::on_slam_update(const pex::slam_update_t& msg) {
 
 void ExplorerNode::complete(planning::PlanRequest& request) {
   request.live_view = live_view_at(request.pose, request.map.get());
+  request.keep_out = options_.keep_out;
   if (request.tight && request.options.trail_corridor_m > 0.0) {
     request.trail = trails_.trail_for_map();
     if (!request.trail) ++counters_.tight_plans_without_trail;

@@ -1,8 +1,13 @@
 #include "explorer_options.hpp"
 
+#include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <optional>
+#include <sstream>
+#include <variant>
 
+#include "planning/keep_out.hpp"
 #include "runtime/config.hpp"
 
 namespace pex::explorer {
@@ -32,6 +37,31 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.trail_checkpoint_file = config.get_path("trail_checkpoint_file", o.trail_checkpoint_file, /*must_exist=*/false);
   o.checkpoint_period_s = config.get<double>("checkpoint_period_s", o.checkpoint_period_s, in_range(0.1, 3600.0));
   o.map.max_vertices = config.get<std::int64_t>("max_map_vertices", o.map.max_vertices, positive<std::int64_t>());
+
+  // Keep-out lines and areas: what the operator knows and the laser does not
+  // see (glass, a drop, a room not to enter), drawn in the file's own frame,
+  // in which the robot starts at keep_out_start_pose_m_m_rad.
+  const std::string keep_out_file = config.get_path("keep_out_file", "");
+  const std::vector<double> keep_out_start =
+      config.get<std::vector<double>>("keep_out_start_pose_m_m_rad", {0.0, 0.0, 0.0});
+  const double keep_out_line_width_m = config.get<double>("keep_out_line_width_m", 0.05, in_range(0.01, 1.0));
+  if (keep_out_start.size() != 3 || !std::isfinite(keep_out_start[0]) || !std::isfinite(keep_out_start[1]) ||
+      !std::isfinite(keep_out_start[2]))
+    config.fail("keep_out_start_pose_m_m_rad", "needs [x_m, y_m, theta_rad], finite");
+  if (!keep_out_file.empty()) {
+    std::ifstream in(keep_out_file);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in) config.fail("keep_out_file", "cannot read " + keep_out_file);
+    auto parsed = planning::parse_keep_out(
+        text.str(), keep_out_file, geometry::Pose2{keep_out_start[0], keep_out_start[1], keep_out_start[2]},
+        keep_out_line_width_m);
+    if (auto* e = std::get_if<planning::KeepOutError>(&parsed)) config.fail("keep_out_file", e->message);
+    auto& k = std::get<planning::KeepOut>(parsed);
+    o.keep_out_lines = k.lines;
+    o.keep_out_areas = k.areas;
+    if (!k.obstacles.empty()) o.keep_out = std::make_shared<const mapping::TypedMultiPolygon>(std::move(k.obstacles));
+  }
 
   // The robot and its configuration space.
   cspace.robot_radius_m = config.get<double>("robot_radius_m", cspace.robot_radius_m, in_range(0.01, 5.0));

@@ -2,6 +2,7 @@
 // The explorer daemon's options: every key of config/explorer.toml, read in
 // one place into the planning library's option structs.
 #include <cstddef>
+#include <memory>
 #include <string>
 
 #include "map_message.hpp"
@@ -40,6 +41,10 @@ struct ExplorerOptions {
   int min_scan_returns = 0;
   // The newest scan opens the planning map near the robot (planning/live_view.hpp).
   planning::LiveViewOptions live_view;
+  // Keep-out lines and areas (planning/keep_out.hpp) from keep_out_file, in
+  // the map frame; null: none. Every plan treats them as walls.
+  std::shared_ptr<const mapping::TypedMultiPolygon> keep_out;
+  int keep_out_lines = 0, keep_out_areas = 0;  // read from the file, for the log
 };
 
 // Reads and validates every key; throws runtime::ConfigError on a bad value.

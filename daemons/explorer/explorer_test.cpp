@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <optional>
 
@@ -165,6 +166,39 @@ TEST(ExplorerOptions, RejectsBadValues) {
   EXPECT_THROW(load_options(strategy), runtime::ConfigError);
   auto sim = runtime::ConfigReader::from_string("pose_channel = \"SIM_TRUTH\"", "test.toml");
   EXPECT_EQ(load_options(sim).pose_channel, "SIM_TRUTH");
+}
+
+TEST(ExplorerOptions, KeepOutFileIsReadInTheMapFrameAndItsErrorsNameTheLine) {
+  const std::string good = ::testing::TempDir() + "/keep_out_good.wkt";
+  const std::string bad = ::testing::TempDir() + "/keep_out_bad.wkt";
+  {
+    std::ofstream(good) << "# glass\nLINESTRING (5 6, 9 6)\nPOLYGON ((0 0, 1 0, 1 1, 0 1, 0 0))\n";
+    std::ofstream(bad) << "LINESTRING (5 6, 9 6)\nLINESTRING (5 6, nan 6)\n";
+  }
+  auto none = runtime::ConfigReader::from_string("", "test.toml");
+  EXPECT_EQ(load_options(none).keep_out, nullptr);
+  auto config = runtime::ConfigReader::from_string(
+      "keep_out_file = \"" + good + "\"\nkeep_out_start_pose_m_m_rad = [5.0, 5.0, 0.0]\n", "test.toml");
+  const auto o = load_options(config);
+  ASSERT_NE(o.keep_out, nullptr);
+  EXPECT_EQ(o.keep_out_lines, 1);
+  EXPECT_EQ(o.keep_out_areas, 1);
+  // The line (5 6, 9 6) with the robot starting at (5, 5): map (0, 1) .. (4, 1).
+  bool covers_line = false;
+  for (const auto& polygon : *o.keep_out)
+    covers_line = covers_line || boost::geometry::covered_by(mapping::Point(2.0, 1.0), polygon.geometry);
+  EXPECT_TRUE(covers_line);
+  auto broken = runtime::ConfigReader::from_string("keep_out_file = \"" + bad + "\"\n", "test.toml");
+  try {
+    load_options(broken);
+    ADD_FAILURE() << "a bad keep-out file was taken";
+  } catch (const runtime::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(bad + ":2:"), std::string::npos) << e.what();
+  }
+  auto missing = runtime::ConfigReader::from_string("keep_out_file = \"/nonexistent/keep.wkt\"\n", "test.toml");
+  EXPECT_THROW(load_options(missing), runtime::ConfigError);
+  auto pose = runtime::ConfigReader::from_string("keep_out_start_pose_m_m_rad = [1.0, 2.0]\n", "test.toml");
+  EXPECT_THROW(load_options(pose), runtime::ConfigError);
 }
 
 TEST(ExplorerNode, DrivesTowardTheFrontierAndStopsWhenThePoseIsStale) {

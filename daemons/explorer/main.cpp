@@ -38,6 +38,9 @@ int main(int argc, char** argv) {
         auto explorer =
             std::make_shared<ExplorerNode>(pex::explorer::load_options(config), ExplorerNode::Planning::kWorkerThread);
         const auto& options = explorer->options();
+        if (options.keep_out)
+          spdlog::info("keep-out: {} lines and {} areas, walls for every plan", options.keep_out_lines,
+                       options.keep_out_areas);
 
         node.collect_counters([explorer]() -> const ExplorerNode& { return *explorer; });  // DAEMON_STATUS, the benchmark
 
