@@ -44,6 +44,9 @@
 #include "planning/exploration_planner.hpp"
 #include "planning/frontier_goals.hpp"
 #include "planning/goal_tour.hpp"
+#include "planning/keep_out.hpp"
+#include "planning/live_view.hpp"
+#include "planning/mission.hpp"
 #include "planning/path_matrix.hpp"
 #include "planning/scan_guard.hpp"
 #include "planning/test_maps.hpp"
@@ -507,6 +510,113 @@ void BM_PlanMission(benchmark::State& state) {
   state.counters["max_ms"] = percentile(ms, 1.0);
 }
 
+// What keep-out lines (planning/keep_out.hpp) cost the explorer's plans:
+// every map of the mission planned once in order as its worker plans it
+// (compute_plan, the offset tiles kept, each map with the live view of a
+// scan from the simulator's laser at the snapshot's pose), with no keep-out
+// (range 1 = 0) and with every wall of the world drawn as a keep-out line
+// 0.05 m wide (1; the worst case: a glass floor of make-office-floor.py
+// draws 45 of its 103 walls). Each map is planned once (the explorer plans
+// every replan_period_ms on the newest MAP, which comes as often: a new map
+// each time, so the planning thread's KeepOutCache gains nothing here; it
+// does when plans outnumber maps: tight plans, ways home). Counters as
+// BM_PlanMission's, per plan; and the keep-out's size and what parsing it
+// cost.
+struct KeepOutScene {
+  std::vector<std::shared_ptr<const TypedMultiPolygon>> maps;  // the mission's snapshots
+  std::vector<std::shared_ptr<const TypedMultiPolygon>> views;  // a live view at each
+  std::shared_ptr<const TypedMultiPolygon> keep_out;
+  int lines = 0;
+  std::size_t vertices = 0;  // of the keep-out polygons
+  double parse_ms = 0.0;     // CPU time parse_keep_out took (the explorer's start)
+  std::string error;
+};
+
+const KeepOutScene& keep_out_scene(int which) {
+  static std::map<int, std::unique_ptr<KeepOutScene>> cache;
+  auto& slot = cache[which];
+  if (slot) return *slot;
+  slot = std::make_unique<KeepOutScene>();
+  const MissionScene& mission = mission_scene(which);
+  const auto world = pex::bench::read_world(std::string(PEX_SOURCE_DIR) + "/worlds/" + mission.name + ".wkt",
+                                            slot->error);
+  if (!world) return *slot;
+  std::string text;
+  char line[160];
+  for (const auto& w : world->walls) {
+    std::snprintf(line, sizeof line, "LINESTRING (%.6f %.6f, %.6f %.6f)\n", w.x0, w.y0, w.x1, w.y1);
+    text += line;
+  }
+  // The emulated mission's maps are in the world's frame (emulate_mission).
+  const double parse_started = thread_cpu_ms();
+  auto parsed = parse_keep_out(text, "walls", pex::geometry::Pose2{}, 0.05);
+  slot->parse_ms = thread_cpu_ms() - parse_started;
+  if (const auto* e = std::get_if<KeepOutError>(&parsed)) {
+    slot->error = e->message;
+    return *slot;
+  }
+  slot->lines = std::get<KeepOut>(parsed).lines;
+  slot->vertices = pex::mapping::vertex_count(std::get<KeepOut>(parsed).obstacles);
+  slot->keep_out = std::make_shared<const TypedMultiPolygon>(std::move(std::get<KeepOut>(parsed).obstacles));
+  const pex::sim::RayCaster caster(*world);
+  pex::sim::Laser laser(pex::sim::LaserOptions{}, 13);
+  LiveViewOptions view;
+  view.range_m = 3.0;  // config/explorer.toml
+  for (const auto& snap : mission.maps.snapshots) {
+    auto map = std::make_shared<const TypedMultiPolygon>(snap.map);
+    const auto ranges = laser.scan(caster, snap.pose);
+    slot->views.push_back(std::make_shared<const TypedMultiPolygon>(
+        live_view(ranges, laser.options().first_angle_rad(), laser.options().step_deg * M_PI / 180.0,
+                  laser.options().min_range_m, snap.pose, view, map.get())));
+    slot->maps.push_back(std::move(map));
+  }
+  return *slot;
+}
+
+void BM_PlanMissionKeepOut(benchmark::State& state) {
+  MissionScene* mission = mission_scene_or_skip(state);
+  if (!mission) return;
+  const KeepOutScene& s = keep_out_scene(static_cast<int>(state.range(0)));
+  if (!s.error.empty()) {
+    state.SkipWithError((mission->name + ": " + s.error).c_str());
+    return;
+  }
+  const bool keep_out = state.range(1) != 0;
+  std::vector<double> ms;
+  int failed = 0, keep_out_failed = 0;
+  for (auto _ : state) {
+    ms.clear();
+    failed = 0;
+    keep_out_failed = 0;
+    PlanCache cache;
+    for (std::size_t i = 0; i < s.maps.size(); ++i) {
+      PlanRequest request;
+      request.map = s.maps[i];
+      request.pose = mission->maps.snapshots[i].pose;
+      request.blacklist = mission->maps.snapshots[i].blacklist;
+      request.options = planner_options(GoalStrategy::kGreedy);
+      request.live_view = s.views[i];
+      if (keep_out) request.keep_out = s.keep_out;
+      const double t0 = thread_cpu_ms();
+      const auto result = compute_plan(request, &cache);
+      ms.push_back(thread_cpu_ms() - t0);
+      failed += result.plan.ok ? 0 : 1;
+      keep_out_failed += result.keep_out_failed ? 1 : 0;
+      benchmark::DoNotOptimize(result);
+    }
+  }
+  state.SetLabel(mission->name + (keep_out ? " keep-out: every wall" : " no keep-out"));
+  state.counters["plans"] = static_cast<double>(ms.size());
+  state.counters["not_ok"] = failed;
+  state.counters["keep_out_failed"] = keep_out_failed;
+  state.counters["lines"] = keep_out ? s.lines : 0;
+  state.counters["keep_out_vertices"] = keep_out ? static_cast<double>(s.vertices) : 0.0;
+  state.counters["parse_ms"] = keep_out ? s.parse_ms : 0.0;
+  state.counters["p50_ms"] = percentile(ms, 0.5);
+  state.counters["p99_ms"] = percentile(ms, 0.99);
+  state.counters["max_ms"] = percentile(ms, 1.0);
+}
+
 // The scan guard's reading of one scan (guard_points: the returns and the
 // points past wall ends and on to convex corners) and its check of one arc
 // on them, which the explorer runs on its one LCM thread for every
@@ -644,6 +754,10 @@ BENCHMARK(BM_PlanHostile)
     ->Args({100000, 20000})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
+BENCHMARK(BM_PlanMissionKeepOut)
+    ->ArgNames({"world", "keep_out"})
+    ->Args({0, 0})->Args({0, 1})->Args({1, 0})->Args({1, 1})
+    ->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)->ReportAggregatesOnly(true);
 BENCHMARK(BM_PlanMission)->Apply(missions)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_GuardPoints)->ArgName("reach_mm")->Arg(0)->Arg(30)->Unit(benchmark::kMicrosecond)->Repetitions(5)

@@ -19,6 +19,7 @@
 #include "planning/cspace.hpp"
 #include "planning/frontier_goals.hpp"
 #include "planning/goal_tour.hpp"
+#include "planning/keep_out.hpp"
 #include "planning/pruned_graph.hpp"
 #include "planning/visibility_graph.hpp"
 
@@ -281,6 +282,7 @@ class PlanCache {
  public:
   OffsetTileCache offsets;  // the C-space's offset tiles (inward_offset.hpp)
   ApproachCache approaches;  // the approach points' tries
+  KeepOutCache keep_out;     // the map without the keep-out (compute_plan)
   // The path graph's segment tests (pruned_graph.hpp), kept per clearance
   // (the mission plans without the margin now and then, and back): the
   // last two clearances asked for.

@@ -8,12 +8,14 @@
 // robot's radius and margin from them, no path crosses them and no frontier
 // behind them is a goal unless another way leads there. Pure: text in,
 // polygons out; the daemon reads the file.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
 #include <variant>
 
 #include "geometry/pose2.hpp"
+#include "mapping/typed_ops.hpp"
 #include "mapping/typed_polygon.hpp"
 
 namespace pex::planning {
@@ -40,9 +42,30 @@ struct KeepOutError {
 std::variant<KeepOut, KeepOutError> parse_keep_out(std::string_view text, const std::string& origin,
                                                    const geometry::Pose2& start_in_file, double line_width_m);
 
-// `map` minus the keep-out obstacles (their edges typed obstacle); `map`
-// itself when there are none or the difference fails (`failed` then set).
-mapping::TypedMultiPolygon without_keep_out(const mapping::TypedMultiPolygon& map,
-                                            const mapping::TypedMultiPolygon& keep_out, bool* failed = nullptr);
+// `map` minus the keep-out obstacles, their edges typed obstacle. Not
+// checked with bg::is_valid, as the live view's union is not (it only feeds
+// the C-space's offset); not ok, with why, when the overlay fails: a plan
+// must then not fall back to the map without them (a line drawn at a
+// stairwell's edge).
+mapping::TypedOpResult without_keep_out(const mapping::TypedMultiPolygon& map,
+                                        const mapping::TypedMultiPolygon& keep_out);
+
+// without_keep_out() of the last map and keep-out it was asked for, kept:
+// the difference runs over the whole map, and the explorer plans on each MAP
+// (1 Hz) more than once (a goal selected, then followed; a tight plan). Not
+// thread-safe: one per planning thread (PlanCache).
+class KeepOutCache {
+ public:
+  const mapping::TypedOpResult& without_keep_out(const std::shared_ptr<const mapping::TypedMultiPolygon>& map,
+                                                 const std::shared_ptr<const mapping::TypedMultiPolygon>& keep_out);
+  std::int64_t hits() const { return hits_; }
+  std::int64_t misses() const { return misses_; }
+
+ private:
+  // Held, so that no other map can come to have their addresses.
+  std::shared_ptr<const mapping::TypedMultiPolygon> map_, keep_out_;
+  mapping::TypedOpResult result_;
+  std::int64_t hits_ = 0, misses_ = 0;
+};
 
 }  // namespace pex::planning

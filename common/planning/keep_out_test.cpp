@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "geometry/point.hpp"
 #include "mapping/test_support.hpp"
@@ -74,6 +76,10 @@ TEST(KeepOut, ErrorsNameTheLine) {
   EXPECT_NE(parse_error("\nLINESTRING (0 0, x 1)\n").find("keep.wkt:2: bad WKT"), std::string::npos);
   EXPECT_NE(parse_error("LINESTRING (0 0, inf 1)\n").find("keep.wkt:1: coordinate"), std::string::npos);
   EXPECT_NE(parse_error("LINESTRING (0 0, 1e9 1)\n").find("beyond 1e5"), std::string::npos);
+  // Within the file's bound but beyond the map's extent once in the map frame (a start pose far off).
+  EXPECT_NE(parse_error("LINESTRING (0 0, 9000 1)\n").find("keep.wkt:1: beyond 8191 m"), std::string::npos)
+      << parse_error("LINESTRING (0 0, 9000 1)\n");
+  EXPECT_NE(parse_error("\nPOLYGON ((0 0, 1 0, 1 -9000, 0 0))\n").find("keep.wkt:2: beyond"), std::string::npos);
   EXPECT_NE(parse_error("POLYGON ((0 0, 1 0, 1 1))\n").find("keep.wkt:1: POLYGON ring not closed"), std::string::npos);
   EXPECT_NE(parse_error("POLYGON ((0 0, 2 2, 2 0, 0 2, 0 0))\n").find("not a valid area"), std::string::npos);
 }
@@ -155,15 +161,80 @@ TEST(KeepOut, APlanGoesThroughTheDoorNotTheGlassAlsoWithTheLiveView) {
 
 TEST(KeepOut, NoneOrDisjointLeavesTheMapAsItIs) {
   const auto map = map_seen_through_glass();
-  bool failed = true;
-  EXPECT_EQ(mapping::vertex_count(without_keep_out(map, {}, &failed)), mapping::vertex_count(map));
-  EXPECT_FALSE(failed);
+  const auto none = without_keep_out(map, {});
+  ASSERT_TRUE(none.ok) << none.error;
+  EXPECT_EQ(mapping::vertex_count(none.polygons), mapping::vertex_count(map));
   const KeepOut far = parse_ok("POLYGON ((20 20, 21 20, 21 21, 20 21, 20 20))\n");
-  EXPECT_NEAR(mapping::area(without_keep_out(map, far.obstacles, &failed)), mapping::area(map), 1e-5);  // the overlay's grid
-  EXPECT_FALSE(failed);
+  const auto beside = without_keep_out(map, far.obstacles);
+  ASSERT_TRUE(beside.ok) << beside.error;
+  EXPECT_NEAR(mapping::area(beside.polygons), mapping::area(map), 1e-5);  // the overlay's grid
   const KeepOut half = parse_ok("POLYGON ((4 -1, 9 -1, 9 5, 4 5, 4 -1))\n");
-  EXPECT_NEAR(mapping::area(without_keep_out(map, half.obstacles, &failed)), 16.0, 1e-6);
-  EXPECT_FALSE(failed);
+  const auto cut = without_keep_out(map, half.obstacles);
+  ASSERT_TRUE(cut.ok) << cut.error;
+  EXPECT_NEAR(mapping::area(cut.polygons), 16.0, 1e-6);
+}
+
+// The map without the keep-out is computed once per map: a second plan on
+// the same MAP takes it from the cache, a new map computes it again, and the
+// plans are the ones planning without a cache gives.
+TEST(KeepOut, TheMapWithoutTheKeepOutIsKeptPerMapAndChangesNoPlan) {
+  const KeepOut k = parse_ok("LINESTRING (4.1 0, 4.1 1.5)\nLINESTRING (4.1 2.5, 4.1 4)\n");
+  PlanRequest request;
+  request.map = std::make_shared<const mapping::TypedMultiPolygon>(map_seen_through_glass());
+  request.pose = Pose2{2.0, 0.7, 0.0};
+  request.options = options();
+  request.keep_out = std::make_shared<const mapping::TypedMultiPolygon>(k.obstacles);
+  PlanCache cache;
+  const PlanResult first = compute_plan(request, &cache);
+  const PlanResult again = compute_plan(request, &cache);
+  EXPECT_EQ(cache.keep_out.misses(), 1);
+  EXPECT_EQ(cache.keep_out.hits(), 1);
+  const PlanResult uncached = compute_plan(request);
+  for (const PlanResult* r : {&first, &again, &uncached}) {
+    ASSERT_TRUE(r->plan.ok) << r->plan.error;
+    ASSERT_NE(r->plan.best_candidate(), nullptr);
+    EXPECT_FALSE(r->keep_out_failed);
+  }
+  auto xy = [](const PlanResult& r) {
+    std::vector<std::pair<double, double>> out;
+    for (const auto& p : r.plan.best_candidate()->path) out.emplace_back(p.x(), p.y());
+    return out;
+  };
+  EXPECT_EQ(xy(again), xy(first));
+  EXPECT_EQ(xy(uncached), xy(first));
+
+  // A new MAP (the same polygons, a new message) and a new keep-out are computed anew.
+  request.map = std::make_shared<const mapping::TypedMultiPolygon>(*request.map);
+  EXPECT_TRUE(compute_plan(request, &cache).plan.ok);
+  request.keep_out = std::make_shared<const mapping::TypedMultiPolygon>(*request.keep_out);
+  EXPECT_TRUE(compute_plan(request, &cache).plan.ok);
+  EXPECT_EQ(cache.keep_out.misses(), 3);
+  EXPECT_EQ(cache.keep_out.hits(), 1);
+}
+
+// A keep-out the overlay refuses (an area given clockwise, which
+// parse_keep_out never makes) fails the plan, flagged: it is never planned on
+// the map without it.
+TEST(KeepOut, APlanFailsWhenTheKeepOutCannotBeTakenOut) {
+  mapping::TypedPolygon area;
+  area.geometry.outer() = {Point(1, 1), Point(1, 2), Point(2, 2), Point(2, 1), Point(1, 1)};
+  area.edge_types = {std::vector<E>(4, E::kObstacle)};
+  const auto refused = without_keep_out(map_seen_through_glass(), {area});
+  EXPECT_FALSE(refused.ok);
+  EXPECT_NE(refused.error.find("degenerate"), std::string::npos) << refused.error;
+  PlanRequest request;
+  request.map = std::make_shared<const mapping::TypedMultiPolygon>(map_seen_through_glass());
+  request.pose = Pose2{6.0, 2.0, 0.0};
+  request.options = options();
+  request.keep_out = std::make_shared<const mapping::TypedMultiPolygon>(mapping::TypedMultiPolygon{area});
+  PlanCache cache;
+  for (PlanCache* c : {static_cast<PlanCache*>(nullptr), &cache, &cache}) {
+    const PlanResult r = compute_plan(request, c);
+    EXPECT_TRUE(r.keep_out_failed);
+    EXPECT_FALSE(r.plan.ok);
+    EXPECT_EQ(r.plan.best_candidate(), nullptr);
+    EXPECT_NE(r.plan.error.find("keep-out"), std::string::npos) << r.plan.error;
+  }
 }
 
 }  // namespace

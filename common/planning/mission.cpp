@@ -80,14 +80,39 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
     return result;
   }
   // What the operator keeps the robot out of is a wall for every plan, also
-  // where the newest scan sees free space (glass seen through).
+  // where the newest scan sees free space (glass seen through). The map
+  // without it is kept per map (the cache); the live view, a few metres
+  // across, has it taken out on its own before it is united in: (M - K) u
+  // (L - K) is (M u L) - K without a second pass over the whole map.
   const bool keep_out = request.keep_out && !request.keep_out->empty();
-  const TypedMultiPolygon kept = keep_out ? without_keep_out(*request.map, *request.keep_out) : TypedMultiPolygon{};
-  const TypedMultiPolygon& map = keep_out ? kept : *request.map;
+  mapping::TypedOpResult uncached;
+  const mapping::TypedOpResult* kept = nullptr;
+  if (keep_out) {
+    if (cache) {
+      kept = &cache->keep_out.without_keep_out(request.map, request.keep_out);
+    } else {
+      uncached = without_keep_out(*request.map, *request.keep_out);
+      kept = &uncached;
+    }
+    if (!kept->ok) {
+      // Never the map without them: a plan must not cross a line drawn at a stairwell.
+      result.keep_out_failed = true;
+      result.plan.error = "the keep-out could not be taken out of the map: " + kept->error;
+      return result;
+    }
+  }
+  const TypedMultiPolygon& map = keep_out ? kept->polygons : *request.map;
   // The newest scan opens where the robot may drive; the frontiers stay the map's.
-  const bool live = request.live_view && !request.live_view->empty();
-  TypedMultiPolygon opened = live ? with_live_view(map, *request.live_view) : TypedMultiPolygon{};
-  if (live && keep_out) opened = without_keep_out(opened, *request.keep_out);
+  bool live = request.live_view && !request.live_view->empty();
+  TypedMultiPolygon view;
+  if (live && keep_out) {
+    // Failed: the plan is the map's own, which has the keep-out.
+    auto cut = without_keep_out(*request.live_view, *request.keep_out);
+    live = cut.ok && !cut.polygons.empty();
+    if (live) view = std::move(cut.polygons);
+  }
+  const TypedMultiPolygon opened =
+      live ? with_live_view(map, keep_out ? view : *request.live_view) : TypedMultiPolygon{};
   // A tight plan also goes where the robot has driven.
   DrivenWay way;
   if (request.tight && request.trail) way = {*request.trail, request.options.trail_corridor_m};

@@ -225,6 +225,9 @@ const char* to_string(PlanKind kind);
 struct PlanResult {
   std::uint64_t id = 0;  // the request's
   Plan plan;
+  // The request's keep-out could not be taken out of its map (the overlay
+  // failed): the plan failed rather than plan on the map without it.
+  bool keep_out_failed = false;
 };
 
 // Runs the request: plan_exploration(), or plan_path_to() for `home`. The

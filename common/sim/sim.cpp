@@ -31,7 +31,6 @@ using MultiPolygon = bg::model::multi_polygon<Polygon>;
 
 namespace {
 
-constexpr double kMaxCoordinate = geometry::kMaxFileCoordinateM;
 using geometry::leading_keyword;
 using geometry::trim_blanks;
 
@@ -40,10 +39,7 @@ template <class Range>
 bool add_edges(const Range& points, std::vector<Wall>& walls) {
   const Point* previous = nullptr;
   for (const Point& p : points) {
-    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || std::abs(p.x()) > kMaxCoordinate ||
-        std::abs(p.y()) > kMaxCoordinate) {
-      return false;
-    }
+    if (!geometry::file_coordinates_ok(p.x(), p.y())) return false;
     if (previous && (previous->x() != p.x() || previous->y() != p.y())) {
       walls.push_back(Wall{previous->x(), previous->y(), p.x(), p.y()});
     }
@@ -56,13 +52,10 @@ bool add_edges(const Range& points, std::vector<Wall>& walls) {
 // an edge out, a gap in the obstacle nobody meant), and it is kept to tell
 // whether START is inside it.
 std::string add_polygon(const Polygon& polygon, std::vector<Wall>& walls, std::vector<Polygon>& solids) {
-  auto closed = [](const auto& ring) { return ring.size() >= 4 && bg::equals(ring.front(), ring.back()); };
-  if (!closed(polygon.outer())) return "POLYGON ring not closed (its last point must be its first, 4 points at least)";
-  for (const auto& inner : polygon.inners())
-    if (!closed(inner)) return "POLYGON hole not closed (its last point must be its first, 4 points at least)";
-  if (!add_edges(polygon.outer(), walls)) return "coordinate not finite or beyond 1e5 m";
+  if (auto open = geometry::unclosed_ring(polygon); !open.empty()) return open;
+  if (!add_edges(polygon.outer(), walls)) return geometry::kBadFileCoordinate;
   for (const auto& inner : polygon.inners()) {
-    if (!add_edges(inner, walls)) return "coordinate not finite or beyond 1e5 m";
+    if (!add_edges(inner, walls)) return geometry::kBadFileCoordinate;
   }
   solids.push_back(polygon);
   return "";

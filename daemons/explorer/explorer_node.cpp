@@ -198,8 +198,16 @@ void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
     add_plan_time(timed->kind, timed->compute_ms, timed->compute_cpu_ms);
     offset_tiles_ = timed->offset_tiles;
     graph_tests_ = timed->graph_tests;
+    count_failures(timed->result);
     mission_.on_plan(timed->result, now_utime);
   }
+}
+
+void ExplorerNode::count_failures(const planning::PlanResult& result) {
+  if (!result.keep_out_failed) return;
+  ++counters_.keep_out_failures;
+  failure_log_.log(spdlog::level::err, "keep_out",
+                   "plan failed (" + std::to_string(counters_.keep_out_failures) + " so far): " + result.plan.error);
 }
 
 void ExplorerNode::add_plan_time(planning::PlanKind kind, double wall_ms, double cpu_ms) {
@@ -228,6 +236,7 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
       add_plan_time(planning::plan_kind(request), ms_since(plan_started), thread_cpu_ms() - cpu_started);
       offset_tiles_ = inline_cache_.offsets.counters();
       graph_tests_ = inline_cache_.visibility_counters();
+      count_failures(result);
       return result;
     });
   }

@@ -20,6 +20,7 @@
 #include <pex/velocity_cmd_t.hpp>
 
 #include "explorer_options.hpp"
+#include "runtime/node.hpp"
 #include "latency_stats.hpp"
 #include "plan_worker.hpp"
 #include "planning/driven_trail.hpp"
@@ -43,6 +44,9 @@ struct ExplorerCounters {
   // Plans without the full margin sent with no trail: the map's particle
   // and generation had none here (no SLAM_UPDATE of it seen).
   std::int64_t tight_plans_without_trail = 0;
+  // Plans failed because the keep-out could not be taken out of their map
+  // (PlanResult::keep_out_failed; the mission counts them as failed plans).
+  std::int64_t keep_out_failures = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -55,6 +59,7 @@ struct ExplorerCounters {
     v.total("trail_resyncs", trail_resyncs);
     v.total("trail_epochs", trail_epochs);
     v.total("tight_plans_without_trail", tight_plans_without_trail);
+    v.total("keep_out_failures", keep_out_failures);
   }
 };
 
@@ -197,6 +202,8 @@ class ExplorerNode {
   // What the mission's request leaves to the explorer: the live view, and
   // for a tight plan the trail.
   void complete(planning::PlanRequest& request);
+  // A finished plan's failures the explorer counts (keep_out_failures), logged.
+  void count_failures(const planning::PlanResult& result);
   // A finished plan's wall and CPU time, in the totals and in its kind's.
   void add_plan_time(planning::PlanKind kind, double wall_ms, double cpu_ms);
 
@@ -208,6 +215,8 @@ class ExplorerNode {
   planning::VisibilityCache::Counters graph_tests_;   // likewise
   planning::MissionOutput last_;
   ExplorerCounters counters_;
+  // A map the overlay cannot cut fails every plan on it: a line each 10 s.
+  runtime::RateLimitedLog failure_log_{std::chrono::seconds(10)};
   LatencyStats plan_ms_;
   LatencyStats plan_cpu_ms_;
   std::array<LatencyStats, planning::kPlanKinds> plan_cpu_ms_by_kind_;

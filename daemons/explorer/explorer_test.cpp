@@ -1,6 +1,7 @@
 // The explorer daemon's adapter: MAP decoding, options, the node without a bus.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -311,6 +312,45 @@ TEST(ExplorerNode, CountsPlanTimeByKind) {
   EXPECT_EQ(second.at("plans_follow"), 1);
   EXPECT_GT(second.at("plan_cpu_us_max_follow"), 0);
   EXPECT_EQ(second.at("plan_cpu_us_max_select"), first.at("plan_cpu_us_max_select"));
+}
+
+// A keep-out the overlay cannot take out of the map fails every plan on it:
+// the robot does not move, the failures are counted in DAEMON_STATUS, and no
+// plan is made on the map without the keep-out. One it can take out plans.
+TEST(ExplorerNode, AKeepOutThatCannotBeAppliedFailsThePlanAndIsCounted) {
+  mapping::TypedPolygon area;  // given clockwise: parse_keep_out never makes one, the overlay refuses it
+  area.geometry.outer() = {Point(12, 1), Point(12, 2), Point(13, 2), Point(13, 1), Point(12, 1)};
+  area.edge_types = {std::vector<mapping::EdgeType>(4, mapping::EdgeType::kObstacle)};
+  for (const bool clockwise : {true, false}) {
+    SCOPED_TRACE(clockwise ? "clockwise" : "counter-clockwise");
+    ExplorerOptions options;
+    mapping::TypedPolygon given = area;
+    if (!clockwise) {
+      std::reverse(given.geometry.outer().begin(), given.geometry.outer().end());
+    }
+    options.keep_out = std::make_shared<const mapping::TypedMultiPolygon>(mapping::TypedMultiPolygon{given});
+    ExplorerNode node(options);
+    node.on_map(corridor(), 0);
+    node.on_pose(mid_corridor(), 0);
+    node.step(0);
+    node.on_pose(mid_corridor(), 100'000);
+    const auto cmd = node.step(100'000);
+    const std::int64_t replan_us = options.mission.replan_period_us + 100'000;
+    node.on_pose(mid_corridor(), replan_us);
+    node.step(replan_us);
+    StatusTotals status;
+    node.visit_counters(status);
+    if (clockwise) {
+      EXPECT_EQ(cmd.v, 0.0);
+      EXPECT_EQ(status.at("keep_out_failures"), 2);
+      EXPECT_NE(node.last_output().status.find("keep-out"), std::string::npos) << node.last_output().status;
+      EXPECT_FALSE(node.last_output().goal.has_value());
+    } else {
+      EXPECT_GT(cmd.v, 0.0);
+      EXPECT_EQ(status.at("keep_out_failures"), 0);
+      ASSERT_TRUE(node.last_output().goal.has_value());
+    }
+  }
 }
 
 // The laser's scans keep the mission going; a scan without ranges, or with
