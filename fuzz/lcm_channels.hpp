@@ -73,6 +73,7 @@ inline void subscribe_every_channel(runtime::Node& node, std::int64_t& decoded, 
   add(ch::kSimClock, static_cast<pex::sim_clock_t*>(nullptr));
   add(ch::kMissionCmd, static_cast<pex::mission_cmd_t*>(nullptr));
   add(ch::kSimFault, static_cast<pex::sim_fault_t*>(nullptr));
+  add(ch::kKeepOut, static_cast<pex::polygon_map_t*>(nullptr));
   // A channel added to the registry must be added here too.
   for (const auto& c : ch::kRegistry)
     PEX_FUZZ_CHECK(std::find(done.begin(), done.end(), c.name) != done.end(),

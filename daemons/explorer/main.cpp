@@ -16,6 +16,7 @@
 #include <pex/pose_t.hpp>
 
 #include "explorer_node.hpp"
+#include "map_message.hpp"
 #include "runtime/channels.hpp"
 #include "runtime/daemon.hpp"
 #include "runtime/checkpoint.hpp"
@@ -96,6 +97,17 @@ int main(int argc, char** argv) {
         node.every(period_of(options.state_rate_hz), [&node, explorer](std::int64_t now_utime) {
           node.publish(ch::kExploreState, explorer->state_message(now_utime));
         });
+        // The keep-out as every plan takes it (map frame), for pex-viewer and
+        // the capture: drawn over the map, it shows where the robot holds the
+        // lines to be, which is off the glass when the SLAM frame is. At
+        // start and every 5 s, so a viewer or a recording started later has it.
+        if (options.keep_out) {
+          auto publish_keep_out = [&node, keep_out = options.keep_out](std::int64_t now_utime) {
+            node.publish(ch::kKeepOut, pex::explorer::encode_map(*keep_out, now_utime));
+          };
+          publish_keep_out(node.now_utime());
+          node.every(std::chrono::seconds(5), publish_keep_out);
+        }
         node.on_shutdown([&node] { node.publish(ch::kBaseCmd, ExplorerNode::stop_command(node.now_utime())); });
       });
 }

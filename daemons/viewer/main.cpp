@@ -1,5 +1,5 @@
 // pex-viewer: a live web page of the mission. MAP, a pose, LIDAR_SCAN,
-// EXPLORE_STATE and DAEMON_STATUS in; the page (and /api/state, /events) out
+// EXPLORE_STATE, KEEP_OUT and DAEMON_STATUS in; the page (and /api/state, /events) out
 // on bind_address:port; the page's mission buttons out as MISSION_CMD. What
 // is shown is kept by ViewerState (viewer_state.hpp); HTTP is web_server.hpp.
 #include <chrono>
@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
                                       state->on_pose(p);
                                       watch->seen(channel, node.monotonic_us());
                                     });
+        node.subscribe<pex::polygon_map_t>(ch::kKeepOut, [state](const pex::polygon_map_t& k) { state->on_keep_out(k); });
         node.subscribe<pex::laser_scan_t>(ch::kLidarScan, [state](const pex::laser_scan_t& s) { state->on_scan(s); });
         node.subscribe<pex::explore_state_t>(ch::kExploreState,
                                              [state](const pex::explore_state_t& s) { state->on_explore_state(s); });

@@ -27,6 +27,28 @@ json points_json(const std::vector<std::pair<double, double>>& points) {
   return out;
 }
 
+json rings_json(const pex::polygon_map_t& m) {
+  json rings = json::array();
+  for (const auto& ring : m.rings) {
+    json xs = json::array(), ys = json::array();
+    for (double x : ring.x) xs.push_back(mm(x));
+    for (double y : ring.y) ys.push_back(mm(y));
+    rings.push_back({{"polygon", ring.polygon}, {"hole", ring.hole != 0}, {"x", std::move(xs)}, {"y", std::move(ys)},
+                     {"edge_type", ring.edge_type}});
+  }
+  return rings;
+}
+
+bool same_rings(const pex::polygon_map_t& a, const pex::polygon_map_t& b) {
+  if (a.rings.size() != b.rings.size()) return false;
+  for (std::size_t i = 0; i < a.rings.size(); ++i) {
+    const auto &p = a.rings[i], &q = b.rings[i];
+    if (p.polygon != q.polygon || p.hole != q.hole || p.x != q.x || p.y != q.y || p.edge_type != q.edge_type)
+      return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 const char* phase_name(int phase) {
@@ -39,19 +61,32 @@ const char* daemon_state_name(int state) { return pex::runtime::daemon_state_nam
 
 ViewerState::ViewerState(ViewerStateOptions options) : options_(options) {}
 
-void ViewerState::on_map(const pex::polygon_map_t& map) {
-  if (auto why = map_files::check_map(map); !why.empty()) throw std::invalid_argument(why);
+std::string ViewerState::refusal(const pex::polygon_map_t& map) const {
+  if (auto why = map_files::check_map(map); !why.empty()) return why;
   std::int64_t vertices = 0;
   for (const auto& ring : map.rings) vertices += ring.nvertices;
   if (vertices > options_.max_map_vertices)
-    throw std::invalid_argument(std::to_string(vertices) + " vertices, more than " +
-                                std::to_string(options_.max_map_vertices));
+    return std::to_string(vertices) + " vertices, more than " + std::to_string(options_.max_map_vertices);
   for (const auto& ring : map.rings)
     for (std::size_t i = 0; i < ring.x.size(); ++i)
-      if (!plausible(ring.x[i]) || !plausible(ring.y[i])) throw std::invalid_argument("a vertex 1000 km or more away");
+      if (!plausible(ring.x[i]) || !plausible(ring.y[i])) return "a vertex 1000 km or more away";
+  return "";
+}
+
+void ViewerState::on_map(const pex::polygon_map_t& map) {
+  if (auto why = refusal(map); !why.empty()) throw std::invalid_argument(why);
   map_ = map;
   ++map_version_;
   ++maps_;
+}
+
+void ViewerState::on_keep_out(const pex::polygon_map_t& keep_out) {
+  if (auto why = refusal(keep_out); !why.empty()) throw std::invalid_argument(why);
+  ++keep_outs_;
+  // It comes every 5 s unchanged: the page redraws the map only when it changed.
+  if (keep_out_ && same_rings(*keep_out_, keep_out)) return;
+  keep_out_ = keep_out;
+  ++map_version_;
 }
 
 void ViewerState::on_pose(const pex::pose_t& pose) {
@@ -127,6 +162,7 @@ void ViewerState::on_status(const pex::daemon_status_t& status, std::int64_t rec
 
 json ViewerState::map_json() const {
   json out = {{"version", map_version_}};
+  out["keep_out"] = keep_out_ ? json{{"utime", keep_out_->utime}, {"rings", rings_json(*keep_out_)}} : json(nullptr);
   if (!map_) return out;
   const auto& m = *map_;
   out["utime"] = m.utime;
@@ -137,15 +173,7 @@ json ViewerState::map_json() const {
   out["free_area_m2"] = m.free_area_m2;
   out["obstacle_length_m"] = m.obstacle_length_m;
   out["frontier_length_m"] = m.frontier_length_m;
-  json rings = json::array();
-  for (const auto& ring : m.rings) {
-    json xs = json::array(), ys = json::array();
-    for (double x : ring.x) xs.push_back(mm(x));
-    for (double y : ring.y) ys.push_back(mm(y));
-    rings.push_back({{"polygon", ring.polygon}, {"hole", ring.hole != 0}, {"x", std::move(xs)}, {"y", std::move(ys)},
-                     {"edge_type", ring.edge_type}});
-  }
-  out["rings"] = std::move(rings);
+  out["rings"] = rings_json(m);
   return out;
 }
 
@@ -199,7 +227,7 @@ json ViewerState::live_json(std::int64_t now_utime) const {
                        {"stale", age_s > options_.status_stale_s}});
   }
   out["daemons"] = std::move(daemons);
-  out["counts"] = {{"maps", maps_}, {"poses", poses_}, {"scans", scans_}, {"states", states_},
+  out["counts"] = {{"maps", maps_}, {"keep_outs", keep_outs_}, {"poses", poses_}, {"scans", scans_}, {"states", states_},
                    {"statuses", statuses_heard_}};
   return out;
 }

@@ -1,8 +1,8 @@
 #pragma once
 // What pex-viewer shows, kept from the bus's messages and written as JSON for
 // the page (/api/state, /events): the map, the robot, its trajectory, the
-// current scan, the mission (goal, path, frontier candidates, progress) and
-// the daemons' health. No LCM, no clock, no I/O: the daemon passes messages
+// current scan, the mission (goal, path, frontier candidates, progress),
+// the explorer's keep-out lines and areas (KEEP_OUT) and the daemons' health. No LCM, no clock, no I/O: the daemon passes messages
 // and times in (viewer_state_test.cpp).
 //
 // Every on_*() checks the message first and returns why it refuses it; a
@@ -43,6 +43,8 @@ class ViewerState {
   // A message refused throws std::invalid_argument with the reason and
   // changes nothing; the daemon's log line names the channel.
   void on_map(const pex::polygon_map_t& map);
+  // KEEP_OUT: the explorer's keep-out polygons in the map frame, checked as a MAP is.
+  void on_keep_out(const pex::polygon_map_t& keep_out);
   void on_pose(const pex::pose_t& pose);
   // The scan is drawn from the newest pose (ignored before the first).
   void on_scan(const pex::laser_scan_t& scan);
@@ -50,10 +52,12 @@ class ViewerState {
   // `received_utime`: when the viewer heard it, on the clock later passed to live_json().
   void on_status(const pex::daemon_status_t& status, std::int64_t received_utime);
 
-  // Bumped by every accepted MAP: a page needs map_json() again only when it changed.
+  // Bumped by every accepted MAP and by a KEEP_OUT that differs from the
+  // last: a page needs map_json() again only when it changed.
   std::int64_t map_version() const { return map_version_; }
   // The map: {"version", "utime", "frame", "free_area_m2", ..., "rings": [{"polygon",
-  // "hole", "x": [...], "y": [...], "edge_type": [0 obstacle | 1 frontier, ...]}]}.
+  // "hole", "x": [...], "y": [...], "edge_type": [0 obstacle | 1 frontier, ...]}],
+  // "keep_out": {"utime", "rings": [as the map's]} or null}.
   nlohmann::json map_json() const;
   // Everything but the map, at `now_utime`: "pose", "trajectory", "scan",
   // "mission", "daemons" (sorted by name, with "age_s" and "stale"), "counts".
@@ -69,7 +73,10 @@ class ViewerState {
     std::int64_t received_utime = 0;
   };
   ViewerStateOptions options_;
+  // Why `map` (a MAP or a KEEP_OUT) is refused; "" when it is fine.
+  std::string refusal(const pex::polygon_map_t& map) const;
   std::optional<pex::polygon_map_t> map_;
+  std::optional<pex::polygon_map_t> keep_out_;
   std::int64_t map_version_ = 0;
   std::optional<pex::pose_t> pose_;
   std::vector<std::pair<double, double>> trajectory_;
@@ -77,7 +84,7 @@ class ViewerState {
   std::vector<std::pair<double, double>> scan_points_;  // map frame, m
   std::optional<pex::explore_state_t> mission_;
   std::map<std::string, Status> statuses_;
-  std::int64_t maps_ = 0, poses_ = 0, scans_ = 0, states_ = 0, statuses_heard_ = 0;
+  std::int64_t maps_ = 0, keep_outs_ = 0, poses_ = 0, scans_ = 0, states_ = 0, statuses_heard_ = 0;
 };
 
 }  // namespace pex::viewer

@@ -78,6 +78,49 @@ TEST(ViewerState, ABadMapIsRefusedAndTheLastGoodOneKept) {
   EXPECT_THROW(small.on_map(room_map()), std::invalid_argument);  // 8 vertices
 }
 
+// KEEP_OUT: the explorer's keep-out drawn with the map, before a map too; the
+// same one again (every 5 s) leaves the map's version, a new one bumps it; a
+// bad one is refused and the last good one kept.
+TEST(ViewerState, KeepOutIsShownWithTheMapAndABadOneRefused) {
+  ViewerState s;
+  EXPECT_TRUE(s.map_json()["keep_out"].is_null());
+  pex::polygon_map_t strip{};
+  strip.utime = 9;
+  strip.particle = -1;
+  strip.rings.push_back(ring({3.975, 4.025, 4.025, 3.975}, {0, 0, 1.5, 1.5}, {0, 0, 0, 0}));
+  strip.nrings = 1;
+  EXPECT_NO_THROW(s.on_keep_out(strip));
+  EXPECT_EQ(s.map_version(), 1);
+  auto j = s.map_json();
+  ASSERT_EQ(j["keep_out"]["rings"].size(), 1u);
+  EXPECT_EQ(j["keep_out"]["rings"][0]["x"], nlohmann::json({3.975, 4.025, 4.025, 3.975}));
+  EXPECT_EQ(j["keep_out"]["utime"], 9);
+  EXPECT_FALSE(j.contains("rings"));  // no map yet
+
+  EXPECT_NO_THROW(s.on_map(room_map()));
+  strip.utime = 10;
+  EXPECT_NO_THROW(s.on_keep_out(strip));  // unchanged
+  EXPECT_EQ(s.map_version(), 2);
+  j = s.map_json();
+  EXPECT_EQ(j["rings"].size(), 2u);
+  EXPECT_EQ(j["keep_out"]["rings"].size(), 1u);
+
+  auto bad = strip;
+  bad.rings[0].x[1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(s.on_keep_out(bad), std::invalid_argument);
+  auto far = strip;
+  far.rings[0].x[1] = 5e6;
+  EXPECT_THROW(s.on_keep_out(far), std::invalid_argument);
+  EXPECT_EQ(s.map_version(), 2);
+  EXPECT_EQ(s.map_json()["keep_out"]["rings"][0]["x"][1], 4.025);
+
+  auto moved = strip;
+  moved.rings[0].y[2] = 2.0;
+  EXPECT_NO_THROW(s.on_keep_out(moved));
+  EXPECT_EQ(s.map_version(), 3);
+  EXPECT_EQ(s.live_json(0)["counts"]["keep_outs"], 3);
+}
+
 TEST(ViewerState, TrajectoryGrowsWithMotionAndIsThinnedBeyondItsLimit) {
   ViewerState s({.trajectory_min_step_m = 0.1, .max_trajectory_points = 10});
   EXPECT_NO_THROW(s.on_pose(pose(0, 0, 0)));

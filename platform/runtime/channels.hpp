@@ -20,6 +20,7 @@ inline constexpr std::string_view kSimTruth = "SIM_TRUTH";
 inline constexpr std::string_view kSimClock = "SIM_CLOCK";
 inline constexpr std::string_view kMissionCmd = "MISSION_CMD";
 inline constexpr std::string_view kSimFault = "SIM_FAULT";
+inline constexpr std::string_view kKeepOut = "KEEP_OUT";
 
 struct ChannelInfo {
   std::string_view name;
@@ -29,7 +30,7 @@ struct ChannelInfo {
   std::string_view publisher;   // daemon that publishes it
 };
 
-inline constexpr std::array<ChannelInfo, 13> kRegistry{{
+inline constexpr std::array<ChannelInfo, 14> kRegistry{{
     {kLidarScan, "pex.laser_scan_t", 25.0, true, "lidar_reader"},
     {kOdometry, "pex.odometry_t", 50.0, true, "base_driver"},
     {kBaseCmd, "pex.velocity_cmd_t", 10.0, true, "explorer"},
@@ -43,6 +44,8 @@ inline constexpr std::array<ChannelInfo, 13> kRegistry{{
     {kSimClock, "pex.sim_clock_t", 100.0, true, "sim"},
     {kMissionCmd, "pex.mission_cmd_t", 0.0, true, "pex-mission"},
     {kSimFault, "pex.sim_fault_t", 0.0, true, "tests, drills"},
+    // Last: the lcm_message fuzz target picks a channel by index.
+    {kKeepOut, "pex.polygon_map_t", 0.2, true, "explorer"},
 }};
 
 // nullptr if the name is not registered.

@@ -1,8 +1,9 @@
 // pex-viewer in a real browser: the exploration set on two_rooms with the
 // viewer, the page opened in headless Chromium (chromedriver), and what the
 // page shows read from its DOM.
-//   - the map, the robot and the health table are there, and change as the
-//     mission goes on (the page is live, no reload);
+//   - the map, the robot, the explorer's keep-out (KEEP_OUT, from a file) and
+//     the health table are there, and change as the mission goes on (the page
+//     is live, no reload);
 //   - "pause" pressed on the page stops the robot: EXPLORE_STATE says PAUSED
 //     and SIM_TRUTH stands still;
 //   - and without a browser or a simulator: /api/state, /events, the mission
@@ -38,6 +39,8 @@ constexpr const char* kPageFacts = R"(
   return {
     map_version: Number(world.dataset.version), rings: Number(world.dataset.rings),
     obstacles_d: document.getElementById("obstacles").getAttribute("d").length,
+    keep_out_rings: Number(document.getElementById("keepout").dataset.rings),
+    keep_out_d: document.getElementById("keepout").getAttribute("d").length,
     robot_visible: robot.getAttribute("visibility") === "visible",
     robot_x: Number(robot.dataset.x), robot_y: Number(robot.dataset.y), robot_utime: Number(robot.dataset.utime),
     scan_d: document.getElementById("scan").getAttribute("d").length,
@@ -71,9 +74,14 @@ class ViewerSet {
     set_.clean_up(::testing::Test::HasFailure());
   }
 
+  // With a keep-out file (the box grown, a line): the explorer publishes it
+  // (KEEP_OUT) and the page draws it. The set runs on SIM_TRUTH, whose frame
+  // (the map's) is the world's: the file's.
   static SetOptions options() {
     SetOptions o;
     o.speed = 2.0;
+    o.explorer_keys = {{"keep_out_file", "\"" + source_path("tests/viewer/two_rooms_keep_out.wkt") + "\""},
+                       {"keep_out_start_pose_m_m_rad", "[0.0, 0.0, 0.0]"}};
     return o;
   }
   ExplorationSet& set() { return set_; }
@@ -128,11 +136,13 @@ TEST(Viewer, PageShowsTheMapTheRobotAndTheHealthTableLive) {
   ASSERT_TRUE(v.wait_page(
       [](const nlohmann::json& p) {
         return p["rings"] > 0 && p["obstacles_d"] > 0 && p["robot_visible"] == true && p["scan_d"] > 0 &&
-               shows_every_daemon(p);
+               p["keep_out_rings"] > 0 && shows_every_daemon(p);
       },
       60.0))
       << v.report();
   const auto first = v.page();
+  EXPECT_EQ(first["keep_out_rings"], 2) << first.dump();  // the area and the line's strip
+  EXPECT_GT(first["keep_out_d"], 0) << first.dump();
 
   // Zoom (the wheel, about the cursor) and pan (a drag) change the view, and the
   // next map update keeps it (no refit once the user moved the view).
