@@ -17,7 +17,10 @@ cd "$(dirname "$0")/.."
 PEX_DEPS_FUZZ=1 bash scripts/deps.sh
 FUZZ_BUILD_DIR=${FUZZ_BUILD_DIR:-build-fuzz}
 JOBS=${JOBS:-2}
-all_targets=(cola sim_cola canopen lcm_message lcm_log world carmen map_message config typed_ops scan_polygon slam_input)
+# Every target fuzz/CMakeLists.txt declares (a list written here once left
+# keep_out out): the names pex_add_fuzz_target takes first.
+mapfile -t all_targets < <(sed -n 's/^pex_add_fuzz_target(\([a-z0-9_]*\).*/\1/p' fuzz/CMakeLists.txt)
+((${#all_targets[@]})) || { echo "no fuzz targets found in fuzz/CMakeLists.txt" >&2; exit 70; }
 target=${1:-all}
 seconds=${2:-60}
 if [ "$target" = all ]; then
@@ -25,7 +28,7 @@ if [ "$target" = all ]; then
 elif [[ " ${all_targets[*]} " == *" $target "* ]]; then
   targets=("$target")
 else
-  echo "usage: scripts/fuzz.sh [all|${all_targets[*]// /|}] [SECONDS]" >&2
+  echo "usage: scripts/fuzz.sh [all|$(IFS='|'; echo "${all_targets[*]}")] [SECONDS]" >&2
   exit 64
 fi
 [[ "$seconds" =~ ^[0-9]+$ ]] || { echo "SECONDS must be a whole number" >&2; exit 64; }

@@ -99,16 +99,6 @@ PlannerOptions options() {
   return o;
 }
 
-// Where the path first crosses x = 4.1 (NaN: it does not).
-double crossing_y(const std::vector<Point>& path) {
-  for (std::size_t k = 1; k < path.size(); ++k) {
-    const auto& a = path[k - 1];
-    const auto& b = path[k];
-    if ((a.x() - 4.1) * (b.x() - 4.1) <= 0.0 && a.x() != b.x())
-      return a.y() + (b.y() - a.y()) * (4.1 - a.x()) / (b.x() - a.x());
-  }
-  return std::nan("");
-}
 
 TEST(KeepOut, APlanGoesThroughTheDoorNotTheGlassAlsoWithTheLiveView) {
   const Pose2 robot{2.0, 0.7, 0.0};
@@ -137,7 +127,7 @@ TEST(KeepOut, APlanGoesThroughTheDoorNotTheGlassAlsoWithTheLiveView) {
   const PlanResult without = compute_plan(request);
   ASSERT_TRUE(without.plan.ok) << without.plan.error;
   ASSERT_NE(without.plan.best_candidate(), nullptr);
-  const double y_without = crossing_y(without.plan.best_candidate()->path);
+  const double y_without = testing::crossing_y(without.plan.best_candidate()->path, 4.1);
   EXPECT_LT(y_without, 1.5) << "without the keep-out the path crosses the glass";
 
   request.keep_out = std::make_shared<const mapping::TypedMultiPolygon>(k.obstacles);
@@ -146,7 +136,7 @@ TEST(KeepOut, APlanGoesThroughTheDoorNotTheGlassAlsoWithTheLiveView) {
   const GoalCandidate* goal = with.plan.best_candidate();
   ASSERT_NE(goal, nullptr) << "room B is reached through the door";
   EXPECT_GT(goal->position.x(), 4.2);
-  const double y = crossing_y(goal->path);
+  const double y = testing::crossing_y(goal->path, 4.1);
   EXPECT_GT(y, 1.5 + 0.27);
   EXPECT_LT(y, 2.5 - 0.27);
 

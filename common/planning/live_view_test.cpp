@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "mapping/test_support.hpp"
 #include "planning/exploration_planner.hpp"
 #include "planning/mission.hpp"
@@ -93,6 +95,70 @@ TEST(LiveView, TheNewestScanReopensADoorTheMapClosed) {
     }
   }
   EXPECT_TRUE(through_door);
+}
+
+
+// The two rooms as the map holds them with the wall between them glass
+// (seen head-on: in the map) and the door open; room B's far side a frontier.
+mapping::TypedMultiPolygon map_with_a_glass_wall() {
+  using testing::typed_polygon;
+  return {typed_polygon({{Point(0, 0), Point(4, 0), Point(4, 1.5), Point(4.2, 1.5), Point(4.2, 0), Point(8.2, 0),
+                          Point(8.2, 4), Point(4.2, 4), Point(4.2, 2.5), Point(4, 2.5), Point(4, 4), Point(0, 4)},
+                         {E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kFrontier,
+                          E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle}})};
+}
+
+TEST(LiveView, WhenStuckOnlyItOpensNoGlassTheMapHoldsButStillADoorTheMapShut) {
+  // From low in room A the laser sees through the glass at a slant: the
+  // view spans both rooms (its walls are the outer box only).
+  const Pose2 robot{2.0, 0.7, 0.0};
+  std::vector<mapping::testing::Wall> box;
+  mapping::testing::add_box(box, 0, 0, 8.2, 4);
+  PlanRequest request;
+  request.map = std::make_shared<const mapping::TypedMultiPolygon>(map_with_a_glass_wall());
+  request.pose = robot;
+  request.options = options();
+  request.live_view = std::make_shared<const mapping::TypedMultiPolygon>(view_in(box, robot, 6.0));
+  ASSERT_FALSE(request.live_view->empty());
+
+  // In every plan, the view reopens the glass: the path crosses it below the door.
+  const PlanResult every = compute_plan(request);
+  ASSERT_NE(every.plan.best_candidate(), nullptr) << every.plan.error;
+  EXPECT_LT(testing::crossing_y(every.plan.best_candidate()->path, 4.1), 1.5);
+  EXPECT_FALSE(every.live_view_used);
+
+  // Only when stuck: the map has a way (the door), so the plan is the map's.
+  request.live_view_when_stuck_only = true;
+  const PlanResult stuck_only = compute_plan(request);
+  const GoalCandidate* goal = stuck_only.plan.best_candidate();
+  ASSERT_NE(goal, nullptr) << stuck_only.plan.error;
+  EXPECT_GT(goal->position.x(), 4.2);
+  EXPECT_GT(testing::crossing_y(goal->path, 4.1), 1.5 + 0.27);
+  EXPECT_LT(testing::crossing_y(goal->path, 4.1), 2.5 - 0.27);
+  EXPECT_FALSE(stuck_only.live_view_used);
+  // A follow plan for that goal is the map's too: its goal has a path.
+  const GoalFocus focus{goal->position, goal->frontier_point, 1.5};
+  request.focus = focus;
+  const PlanResult follow = compute_plan(request);
+  EXPECT_FALSE(follow.live_view_used);
+  EXPECT_TRUE(gives_a_way(follow.plan, &focus));
+
+  // The door shut by a band and the laser seeing through it: no way on the
+  // map alone, so the plan is made again with the view, through the door.
+  const Pose2 facing{2.5, 2.0, 0.0};
+  PlanRequest shut;
+  shut.map = std::make_shared<const mapping::TypedMultiPolygon>(map_with_the_door_closed());
+  shut.pose = facing;
+  shut.options = options();
+  shut.live_view = std::make_shared<const mapping::TypedMultiPolygon>(view_from(facing, 4.0));
+  shut.live_view_when_stuck_only = true;
+  const PlanResult opened = compute_plan(shut);
+  EXPECT_TRUE(opened.live_view_used);
+  const GoalCandidate* behind = opened.plan.best_candidate();
+  ASSERT_NE(behind, nullptr) << opened.plan.error;
+  EXPECT_GT(behind->position.x(), 4.2);
+  EXPECT_GT(testing::crossing_y(behind->path, 4.1), 1.5 + 0.27);
+  EXPECT_LT(testing::crossing_y(behind->path, 4.1), 2.5 - 0.27);
 }
 
 // Part of the window covered: the beams toward the door have no echo. The

@@ -72,6 +72,12 @@ const char* to_string(PlanKind kind) {
   return "?";
 }
 
+bool gives_a_way(const Plan& plan, const GoalFocus* focus) {
+  if (!focus) return plan.best_candidate() != nullptr;
+  return std::any_of(plan.candidates.begin(), plan.candidates.end(),
+                     [&](const GoalCandidate& c) { return c.reachable && focus->matches(c); });
+}
+
 PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   PlanResult result;
   result.id = request.id;
@@ -111,17 +117,28 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
     live = cut.ok && !cut.polygons.empty();
     if (live) view = std::move(cut.polygons);
   }
-  const TypedMultiPolygon opened =
-      live ? with_live_view(map, keep_out ? view : *request.live_view) : TypedMultiPolygon{};
   // A tight plan also goes where the robot has driven.
   DrivenWay way;
   if (request.tight && request.trail) way = {*request.trail, request.options.trail_corridor_m};
   const DrivenWay* driven = way.points.empty() ? nullptr : &way;
-  result.plan = request.home ? plan_path_to(live ? opened : map, request.pose, *request.home, request.options,
-                                            cache, driven)
-                             : plan_exploration(map, request.pose, request.blacklist, request.options,
-                                                live ? &opened : nullptr, request.focus ? &*request.focus : nullptr,
-                                                cache, driven);
+  const GoalFocus* focus = request.focus ? &*request.focus : nullptr;
+  auto plan_on = [&](const TypedMultiPolygon* opened) {
+    return request.home ? plan_path_to(opened ? *opened : map, request.pose, *request.home, request.options, cache,
+                                       driven)
+                        : plan_exploration(map, request.pose, request.blacklist, request.options, opened, focus,
+                                           cache, driven);
+  };
+  if (live && request.live_view_when_stuck_only) {
+    result.plan = plan_on(nullptr);
+    if (gives_a_way(result.plan, focus)) return result;
+    result.live_view_used = true;
+  }
+  if (!live) {
+    result.plan = plan_on(nullptr);
+    return result;
+  }
+  const TypedMultiPolygon opened = with_live_view(map, keep_out ? view : *request.live_view);
+  result.plan = plan_on(&opened);
   return result;
 }
 
@@ -689,6 +706,8 @@ void Mission::start_goal(const GoalCandidate& goal, const Plan& plan, std::int64
   progress_goal_ = goal.frontier_point;
   best_remaining_m_ = goal.path_length_m;
   progress_utime_ = now_utime;
+  goal_guard_blocks_ = 0;
+  baseline_maps_left_ = 0;
   goal_taken_at_ = Point(pose_->x_m, pose_->y_m);
   goal_moved_m_ = 0.0;
   // However the goal seems to progress, it gets at most this long (a goal
@@ -831,6 +850,16 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
   goal_approach_ = same.approach;
   goal_frontier_ = same.frontier_point;
   follower_.set_path(same.path);
+  // After a guard block the path is measured from the plans on the next
+  // maps on: it may go round what held the robot, longer than the one before.
+  if (baseline_maps_left_ > 0 && last_request_map_utime_ > baseline_map_utime_) {
+    --baseline_maps_left_;
+    baseline_map_utime_ = last_request_map_utime_;
+    best_remaining_m_ = same.path_length_m;
+    progress_goal_ = same.frontier_point;
+    progress_utime_ = now_utime;
+    goal_deadline_utime_ = deadline_for(same.path_length_m, now_utime);
+  }
   // Progress: the path got shorter, or the frontier moved on (a corridor's
   // end recedes as the robot drives down it). The goal point moving alone
   // is not progress: it may jump between a frontier's approach point and its
@@ -841,6 +870,20 @@ void Mission::on_follow_plan(const Plan& plan, std::int64_t now_utime) {
     progress_goal_ = same.frontier_point;
     progress_utime_ = now_utime;
   }
+}
+
+bool Mission::on_guard_block(std::int64_t now_utime) {
+  if (phase_ != Phase::kMoving || !goal_ || goal_guard_blocks_ >= options_.max_guard_blocks_per_goal) return false;
+  ++goal_guard_blocks_;
+  // The time the maps need to show what held the robot (SLAM's update of a
+  // standing robot, the mapper's next MAP) is no want of progress either.
+  progress_utime_ = now_utime;
+  baseline_maps_left_ = kBaselineMaps;
+  baseline_map_utime_ = map_utime_;
+  if (outstanding_id_ == 0) last_request_utime_ = -1;  // a plan at the next step
+  status_ = format("held by the scan guard (%.0f of %.0f for this goal): replanning round what holds it",
+                   static_cast<double>(goal_guard_blocks_), static_cast<double>(options_.max_guard_blocks_per_goal));
+  return true;
 }
 
 void Mission::on_home_plan(const Plan& plan, bool tight) {

@@ -167,6 +167,16 @@ struct MissionOptions {
   // about the robot's width (docs/exploration.md, "Frontiers seen through a
   // door": the way in).
   double way_in_margin_m = 0.025;
+  // A goal's path the scan guard holds the robot on (on_guard_block: it ran
+  // into something the map does not hold) starts its progress anew, this many
+  // times a goal at most. The scans of the robot standing there put what held
+  // it into the next maps, and the path around it is longer than the one the
+  // robot had: measured against the old one, every detour was "no progress".
+  // Clean glass is the case that made it (docs/exploration.md, "Held by the
+  // guard"): seen only head-on, a pane goes into the map a hand's width at a
+  // time, each piece one hold, and office floors with glass fronts ended
+  // FAILED, five goals behind the glass given up in a row. 0: off.
+  int max_guard_blocks_per_goal = 8;
 };
 
 // How goals ended (counted over the mission).
@@ -202,6 +212,15 @@ struct PlanRequest {
   // `map` before planning; null or empty: the map alone. The mission leaves it
   // empty; the explorer adds it from the newest LIDAR_SCAN.
   std::shared_ptr<const TypedMultiPolygon> live_view;
+  // The live view only when the map alone gives this plan nothing to drive
+  // to (no goal; for a follow plan no path to the goal followed; no way
+  // home): a live view also sees through glass at a slant, and united into
+  // every plan it reopened the pieces of a pane the map had from looking at
+  // it head-on, so the path to a goal behind a glass front swapped between
+  // the glass and the door from one plan to the next (docs/exploration.md,
+  // "Glass: the live view"). What it is for, a door the map shut by a band,
+  // is a plan with no way through. False: every plan has it.
+  bool live_view_when_stuck_only = false;
   // The way the robot drove, oldest point first, in the map's frame (the
   // map's particle's trail: driven_trail.hpp). A tight plan unites its
   // corridor (options.trail_corridor_m) into the C-space; null or empty:
@@ -228,7 +247,15 @@ struct PlanResult {
   // The request's keep-out could not be taken out of its map (the overlay
   // failed): the plan failed rather than plan on the map without it.
   bool keep_out_failed = false;
+  // PlanRequest::live_view_when_stuck_only: the map alone gave no way, and
+  // this plan is the one with the live view.
+  bool live_view_used = false;
 };
+
+// Whether `plan` gives the robot somewhere to drive: a goal, or with `focus`
+// (a follow plan) a reachable candidate matching the goal followed. A home
+// plan's one candidate is home.
+bool gives_a_way(const Plan& plan, const GoalFocus* focus);
 
 // Runs the request: plan_exploration(), or plan_path_to() for `home`. The
 // result is a function of the request; `cache` (may be null: one per
@@ -295,6 +322,12 @@ class Mission {
   std::string on_command(MissionCommand command, std::int64_t now_utime);
   // The answer to a plan_request; an answer to an older request is ignored.
   void on_plan(const PlanResult& result, std::int64_t now_utime);
+  // The scan guard has held the robot still on its way to the goal (it
+  // wanted to drive on; something the laser sees is in its way): the goal's
+  // progress starts anew from the next plan, and a plan is asked for now
+  // (MissionOptions::max_guard_blocks_per_goal). Returns whether it did
+  // (false: not moving to a goal, or the goal's holds are used up).
+  bool on_guard_block(std::int64_t now_utime);
 
   // One control step at `now_utime`; call at the command rate. Never plans.
   MissionOutput step(std::int64_t now_utime);
@@ -427,6 +460,13 @@ class Mission {
   // way_in_margin_m and takes a way to this frontier's own place, if it has one.
   std::optional<Point> through_frontier_;
   double best_remaining_m_ = 0.0;
+  int goal_guard_blocks_ = 0;        // on_guard_block()s of the goal in hand
+  // After a guard block, the follow plans on the next kBaselineMaps maps
+  // newer than the one of the block set the progress baseline (the map
+  // that shows what held the robot comes a second or two after the hold).
+  int baseline_maps_left_ = 0;
+  std::int64_t baseline_map_utime_ = -1;  // the map the last baseline was set on
+  static constexpr int kBaselineMaps = 2;
   Point progress_goal_;  // where the goal's frontier point was at the last progress
   std::int64_t progress_utime_ = 0;
   std::int64_t goal_deadline_utime_ = 0;  // given up (no progress) after this, whatever the progress

@@ -11,6 +11,7 @@ namespace {
 
 using E = mapping::EdgeType;
 using testing::rectangle;
+using testing::rectangle_hole;
 using testing::typed_polygon;
 
 constexpr std::int64_t kSecond = 1'000'000;
@@ -765,6 +766,68 @@ TEST(Mission, NoLaserScansStopTheRobotUntilTheyComeBack) {
   EXPECT_GT(out.command.v_mps, 0.0);
   ASSERT_TRUE(goal && out.goal);
   EXPECT_LT(distance(*goal, *out.goal), 0.5);
+}
+
+// The robot on its way down the corridor to its open right end is held
+// still by the scan guard from 4 s on (a pane the map did not hold), and
+// the maps from then on hold what held it: a block across the corridor's
+// middle, the way round it longer than the way the robot had.
+mapping::TypedMultiPolygon corridor_with_a_block(bool block) {
+  const auto outer = rectangle(0, 0, 20, 3, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle});
+  if (!block) return {typed_polygon(outer)};
+  return {typed_polygon(outer, {rectangle_hole(11.0, 0.9, 11.4, 2.1)})};
+}
+
+// When the held mission gives its goal up (s; -1: not within 30 s), the
+// guard block told at 4 s or not.
+double held_goal_given_up_at_s(bool tell_the_block) {
+  Mission m(test_options());  // progress timeout 5 s
+  for (std::int64_t t = 0; t <= 30 * kSecond; t += 100'000) {
+    if (t % kSecond == 0) m.on_map(corridor_with_a_block(t >= 5 * kSecond), t);
+    m.on_pose(Pose2{10, 1.5, 0}, t);  // held: it never moves
+    if (t == 4 * kSecond && tell_the_block) {
+      EXPECT_TRUE(m.on_guard_block(t));
+    }
+    step_with_inline_planning(m, t);
+    if (m.goal_outcomes().given_up() > 0) {
+      EXPECT_EQ(m.goal_outcomes().no_progress, 1);
+      return static_cast<double>(t) * 1e-6;
+    }
+  }
+  return -1.0;
+}
+
+TEST(Mission, AGuardBlockStartsTheGoalsProgressAnewFromThePlansOnTheNextMaps) {
+  // Untold, the goal is given up at its progress timeout from the start.
+  EXPECT_NEAR(held_goal_given_up_at_s(false), 5.1, 0.05);
+  // Told, the time starts anew at the block, and again on the plans of the
+  // next two maps (5 s and 6 s, the longer way round the baseline): given
+  // up 5 s after the second, if the robot still does not move.
+  EXPECT_NEAR(held_goal_given_up_at_s(true), 11.1, 0.05);
+}
+
+TEST(Mission, GuardBlocksAreBoundedPerGoalAndOnlyWhileMoving) {
+  MissionOptions o = test_options();
+  o.max_guard_blocks_per_goal = 2;
+  Mission m(o);
+  EXPECT_FALSE(m.on_guard_block(0));  // no mission yet
+  m.on_map(corridor(false, true), 0);
+  m.on_pose(Pose2{10, 1.5, 0}, 0);
+  auto out = step_with_inline_planning(m, 0);
+  ASSERT_EQ(out.phase, Phase::kMoving) << out.status;
+  EXPECT_TRUE(m.on_guard_block(100'000));
+  out = m.step(200'000);
+  EXPECT_NE(out.status.find("held by the scan guard (1 of 2"), std::string::npos) << out.status;
+  EXPECT_TRUE(out.plan_request.has_value());  // replanned at once, not at the period
+  EXPECT_TRUE(m.on_guard_block(300'000));
+  EXPECT_FALSE(m.on_guard_block(400'000));  // this goal's holds are used up
+  MissionOptions off = test_options();
+  off.max_guard_blocks_per_goal = 0;
+  Mission n(off);
+  n.on_map(corridor(false, true), 0);
+  n.on_pose(Pose2{10, 1.5, 0}, 0);
+  ASSERT_EQ(step_with_inline_planning(n, 0).phase, Phase::kMoving);
+  EXPECT_FALSE(n.on_guard_block(100'000));
 }
 
 TEST(Mission, AGoalThatMovesOnWithItsFrontierIsProgress) {

@@ -58,6 +58,17 @@ inline double distance_to_ring(const Point& p, const std::vector<Point>& ring) {
   return best;
 }
 
+// Where a path (a polyline) first crosses the line x = `x` (NaN: it does not):
+// through a door or through the glass beside it.
+inline double crossing_y(const std::vector<Point>& path, double x) {
+  for (std::size_t k = 1; k < path.size(); ++k) {
+    const auto& a = path[k - 1];
+    const auto& b = path[k];
+    if ((a.x() - x) * (b.x() - x) <= 0.0 && a.x() != b.x()) return a.y() + (b.y() - a.y()) * (x - a.x()) / (b.x() - a.x());
+  }
+  return std::nan("");
+}
+
 // C-space options of a bare disk robot: no margin, no simplification.
 inline CSpaceOptions disk(double radius_m) {
   CSpaceOptions o;

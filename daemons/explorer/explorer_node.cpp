@@ -128,6 +128,7 @@ void ExplorerNode::on_slam_update(const pex::slam_update_t& msg) {
 
 void ExplorerNode::complete(planning::PlanRequest& request) {
   request.live_view = live_view_at(request.pose, request.map.get());
+  request.live_view_when_stuck_only = options_.live_view_when_stuck_only;
   request.keep_out = options_.keep_out;
   if (request.tight && request.options.trail_corridor_m > 0.0) {
     request.trail = trails_.trail_for_map();
@@ -204,6 +205,7 @@ void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
 }
 
 void ExplorerNode::count_failures(const planning::PlanResult& result) {
+  if (result.live_view_used) ++counters_.live_view_plans;
   if (!result.keep_out_failed) return;
   ++counters_.keep_out_failures;
   failure_log_.log(spdlog::level::err, "keep_out",
@@ -251,12 +253,29 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
     const double since_scan_s = std::max<std::int64_t>(0, now_utime - *scan_utime_) * 1e-6;
     const auto guarded = guard_.command(scan_points_, cmd.v, cmd.omega, since_scan_s, step_s);
     if (guarded.limited) ++counters_.guard_limited_steps;
+    note_guard_hold(cmd.v > 0.0 && guarded.limited && guarded.v_mps <= 0.0, now_utime);
     cmd.v = guarded.v_mps;
     cmd.omega = guarded.omega_radps;
   } else {
     guard_.sent(cmd.v, step_s);
   }
   return cmd;
+}
+
+void ExplorerNode::note_guard_hold(bool held, std::int64_t now_utime) {
+  if (!held || last_.phase != planning::Phase::kMoving) {
+    guard_held_since_.reset();
+    return;
+  }
+  if (!guard_held_since_) {
+    guard_held_since_ = now_utime;
+    guard_hold_told_ = false;
+  }
+  if (guard_hold_told_ || options_.guard_block_us <= 0 || now_utime - *guard_held_since_ < options_.guard_block_us)
+    return;
+  guard_hold_told_ = true;  // once a hold: the mission's replan moves the robot on, or the goal's time runs out
+  ++counters_.guard_blocks;
+  if (mission_.on_guard_block(now_utime)) ++counters_.guard_block_replans;
 }
 
 std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,

@@ -47,6 +47,13 @@ struct ExplorerCounters {
   // Plans failed because the keep-out could not be taken out of their map
   // (PlanResult::keep_out_failed; the mission counts them as failed plans).
   std::int64_t keep_out_failures = 0;
+  // Times the guard held the robot still for guard_block_ms on its way
+  // (one a hold), and those the mission replanned for (Mission::on_guard_block).
+  std::int64_t guard_blocks = 0;
+  std::int64_t guard_block_replans = 0;
+  // Plans the map alone gave no way, planned again with the live view
+  // (live_view_when_stuck_only).
+  std::int64_t live_view_plans = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -60,6 +67,9 @@ struct ExplorerCounters {
     v.total("trail_epochs", trail_epochs);
     v.total("tight_plans_without_trail", tight_plans_without_trail);
     v.total("keep_out_failures", keep_out_failures);
+    v.total("guard_blocks", guard_blocks);
+    v.total("guard_block_replans", guard_block_replans);
+    v.total("live_view_plans", live_view_plans);
   }
 };
 
@@ -204,6 +214,10 @@ class ExplorerNode {
   void complete(planning::PlanRequest& request);
   // A finished plan's failures the explorer counts (keep_out_failures), logged.
   void count_failures(const planning::PlanResult& result);
+  // One control step's guard outcome: `held` when it stopped a robot the
+  // follower wanted to drive forward. A hold of guard_block_us while MOVING
+  // is told to the mission once (Mission::on_guard_block).
+  void note_guard_hold(bool held, std::int64_t now_utime);
   // A finished plan's wall and CPU time, in the totals and in its kind's.
   void add_plan_time(planning::PlanKind kind, double wall_ms, double cpu_ms);
 
@@ -231,6 +245,8 @@ class ExplorerNode {
   TrailKeeper trails_;
   planning::ScanGuard guard_;                  // with its model of the robot's speed
   std::optional<std::int64_t> last_step_utime_;  // the previous control step
+  std::optional<std::int64_t> guard_held_since_;  // the guard has held the robot still since (driving wanted)
+  bool guard_hold_told_ = false;                  // this hold was told to the mission
 };
 
 }  // namespace pex::explorer

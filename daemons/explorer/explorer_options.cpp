@@ -179,6 +179,10 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.guard_scan.wall_end_jump_m =
       config.get<double>("guard_wall_end_jump_m", o.guard_scan.wall_end_jump_m, in_range(0.001, 10.0));
   o.guard_scan.map_walls_m = config.get<double>("guard_map_walls_m", o.guard_scan.map_walls_m, in_range(0.0, 30.0));
+  o.guard_block_us = static_cast<std::int64_t>(
+      config.get<double>("guard_block_ms", static_cast<double>(o.guard_block_us) * 1e-3, in_range(0.0, 60000.0)) * 1e3);
+  m.max_guard_blocks_per_goal =
+      config.get<int>("max_guard_blocks_per_goal", m.max_guard_blocks_per_goal, in_range(0, 1000));
   o.max_beams = static_cast<std::size_t>(
       config.get<int>("max_beams", static_cast<int>(o.max_beams), in_range(1, 1 << 20)));
   o.min_scan_returns = config.get<int>("min_scan_returns", o.min_scan_returns, in_range(0, 1 << 20));
@@ -188,6 +192,7 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.live_view.range_m = config.get<double>("live_view_range_m", o.live_view.range_m, in_range(0.0, 30.0));
   o.live_view.no_return_stops_at_walls =
       config.get<bool>("live_view_no_return_stops_at_walls", o.live_view.no_return_stops_at_walls);
+  o.live_view_when_stuck_only = config.get<bool>("live_view_when_stuck_only", o.live_view_when_stuck_only);
   return o;
 }
 

@@ -34,6 +34,10 @@ struct ExplorerOptions {
   bool scan_guard = true;
   planning::ScanGuardOptions guard;
   planning::GuardScanOptions guard_scan;  // how the guard reads a scan (wall ends, corners)
+  // The guard holding the robot still this long (the follower wants to drive
+  // on) is a guard block: the mission replans round it and starts the goal's
+  // progress anew (Mission::on_guard_block). 0: not told.
+  std::int64_t guard_block_us = 1'000'000;
   std::size_t max_beams = 8192;           // a LIDAR_SCAN with more beams is refused as bad input
   // A LIDAR_SCAN with fewer returns is refused as no view (a laser covered
   // or dazzled): it keeps no scan fresh, so the robot stops as without
@@ -41,6 +45,8 @@ struct ExplorerOptions {
   int min_scan_returns = 0;
   // The newest scan opens the planning map near the robot (planning/live_view.hpp).
   planning::LiveViewOptions live_view;
+  // ... only for the plans the map alone gives no way (PlanRequest::live_view_when_stuck_only).
+  bool live_view_when_stuck_only = true;
   // Keep-out lines and areas (planning/keep_out.hpp) from keep_out_file, in
   // the map frame; null: none. Every plan treats them as walls.
   std::shared_ptr<const mapping::TypedMultiPolygon> keep_out;
