@@ -149,6 +149,12 @@ TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
     EXPECT_EQ(o.guard.body_radius_m, 0.25) << files.back();
     EXPECT_EQ(o.guard_scan.wall_end_reach_m, 0.03) << files.back();
     EXPECT_EQ(o.guard_scan.wall_end_jump_m, 0.07) << files.back();
+    // No live view in the plans: through glass at a slant it reopened the
+    // panes ("Glass: the live view"); a guard hold replans ("Held by the guard").
+    EXPECT_EQ(o.live_view.range_m, 0.0) << files.back();
+    EXPECT_TRUE(o.live_view_when_stuck_only) << files.back();
+    EXPECT_EQ(o.guard_block_us, 1'000'000) << files.back();
+    EXPECT_EQ(o.mission.max_guard_blocks_per_goal, 8) << files.back();
   }
 }
 
