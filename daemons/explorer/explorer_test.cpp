@@ -446,20 +446,22 @@ std::pair<double, std::int64_t> guarded_drive(const ExplorerOptions& options, co
   return {v, node.counters().guard_limited_steps};
 }
 
+// A wall across the robot's way distance_m ahead (beams within 0.5 rad).
+pex::laser_scan_t scan_of_wall_ahead(double distance_m) {
+  pex::laser_scan_t scan{};
+  scan.angle_min = -0.5f;
+  scan.angle_increment = 0.01f;
+  scan.range_min = 0.05f;
+  scan.range_max = 20.0f;
+  for (int i = 0; i <= 100; ++i) {
+    const double a = scan.angle_min + i * scan.angle_increment;
+    scan.ranges.push_back(static_cast<float>(distance_m / std::cos(a)));
+  }
+  scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
+  return scan;
+}
+
 TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
-  auto scan_of_wall_ahead = [](double distance_m) {
-    pex::laser_scan_t scan{};
-    scan.angle_min = -0.5f;
-    scan.angle_increment = 0.01f;
-    scan.range_min = 0.05f;
-    scan.range_max = 20.0f;
-    for (int i = 0; i <= 100; ++i) {
-      const double a = scan.angle_min + i * scan.angle_increment;
-      scan.ranges.push_back(static_cast<float>(distance_m / std::cos(a)));
-    }
-    scan.nranges = static_cast<std::int32_t>(scan.ranges.size());
-    return scan;
-  };
   auto drive = [&](const ExplorerOptions& options, double wall_m) {
     return guarded_drive(options, scan_of_wall_ahead(wall_m));
   };
@@ -474,6 +476,36 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
   EXPECT_EQ(touch_v, 0.0);
   options.scan_guard = false;
   EXPECT_GT(drive(options, 0.26).first, 0.0);  // the map alone would drive on
+}
+
+// A pane the map does not hold, right in front of the robot on its way:
+// held still for guard_block_ms, the mission is told once a hold (and
+// replans); a second hold after the way was clear is told again.
+TEST(ExplorerNode, AGuardHoldIsToldToTheMissionOnceAHold) {
+  auto holds = [](const ExplorerOptions& options) {
+    ExplorerNode node(options);
+    const pex::pose_t pose = mid_corridor();
+    EXPECT_NO_THROW(node.on_map(corridor(), 0));
+    bool said = false;
+    // Held 3 s, free 1 s, held 2 s.
+    for (std::int64_t t = 0; t <= 6'000'000; t += 100'000) {
+      const bool clear = t > 3'000'000 && t <= 4'000'000;
+      EXPECT_NO_THROW(node.on_pose(pose, t));
+      EXPECT_NO_THROW(node.on_scan(scan_of_wall_ahead(clear ? 5.0 : 0.26), t));
+      if (t % 1'000'000 == 0) EXPECT_NO_THROW(node.on_map(corridor(), t));
+      node.step(t);
+      said = said || node.last_output().status.find("held by the scan guard") != std::string::npos;
+    }
+    EXPECT_EQ(said, node.counters().guard_block_replans > 0);
+    return std::pair{node.counters().guard_blocks, node.counters().guard_block_replans};
+  };
+  ExplorerOptions options;
+  EXPECT_EQ(holds(options), (std::pair<std::int64_t, std::int64_t>{2, 2}));
+  options.guard_block_us = 0;
+  EXPECT_EQ(holds(options), (std::pair<std::int64_t, std::int64_t>{0, 0}));
+  options.guard_block_us = 1'000'000;
+  options.mission.max_guard_blocks_per_goal = 1;  // told twice, replanned for once
+  EXPECT_EQ(holds(options), (std::pair<std::int64_t, std::int64_t>{2, 1}));
 }
 
 // The laser blind to both sides (beams beyond 0.5 rad without a return):
