@@ -99,7 +99,6 @@ PlannerOptions options() {
   return o;
 }
 
-
 TEST(KeepOut, APlanGoesThroughTheDoorNotTheGlassAlsoWithTheLiveView) {
   const Pose2 robot{2.0, 0.7, 0.0};
   // The glass in a file whose frame is the world's, the robot starting at (1, 1).

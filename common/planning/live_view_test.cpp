@@ -85,18 +85,9 @@ TEST(LiveView, TheNewestScanReopensADoorTheMapClosed) {
   ASSERT_NE(goal, nullptr) << "the door is open in the live view";
   EXPECT_GT(goal->position.x(), 4.2);  // in room B
   // The path goes through the door.
-  bool through_door = false;
-  for (std::size_t k = 1; k < goal->path.size(); ++k) {
-    const auto& a = goal->path[k - 1];
-    const auto& b = goal->path[k];
-    if ((a.x() - 4.1) * (b.x() - 4.1) <= 0.0) {
-      const double y = a.y() + (b.y() - a.y()) * (4.1 - a.x()) / (b.x() - a.x());
-      through_door = y > 1.5 + 0.27 && y < 2.5 - 0.27;
-    }
-  }
-  EXPECT_TRUE(through_door);
+  EXPECT_GT(testing::crossing_y(goal->path, 4.1), 1.5 + 0.27);
+  EXPECT_LT(testing::crossing_y(goal->path, 4.1), 2.5 - 0.27);
 }
-
 
 // The two rooms as the map holds them with the wall between them glass
 // (seen head-on: in the map) and the door open; room B's far side a frontier.

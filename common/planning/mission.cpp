@@ -128,14 +128,10 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
                         : plan_exploration(map, request.pose, request.blacklist, request.options, opened, focus,
                                            cache, driven);
   };
-  if (live && request.live_view_when_stuck_only) {
+  if (!live || request.live_view_when_stuck_only) {
     result.plan = plan_on(nullptr);
-    if (gives_a_way(result.plan, focus)) return result;
-    result.live_view_used = true;
-  }
-  if (!live) {
-    result.plan = plan_on(nullptr);
-    return result;
+    if (!live || gives_a_way(result.plan, focus)) return result;
+    result.live_view_used = true;  // stuck on the map alone: again, with the view
   }
   const TypedMultiPolygon opened = with_live_view(map, keep_out ? view : *request.live_view);
   result.plan = plan_on(&opened);

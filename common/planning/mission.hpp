@@ -324,7 +324,8 @@ class Mission {
   void on_plan(const PlanResult& result, std::int64_t now_utime);
   // The scan guard has held the robot still on its way to the goal (it
   // wanted to drive on; something the laser sees is in its way): the goal's
-  // progress starts anew from the next plan, and a plan is asked for now
+  // progress starts anew, measured from its follow plans on the next two
+  // maps (which show what held the robot), and a plan is asked for now
   // (MissionOptions::max_guard_blocks_per_goal). Returns whether it did
   // (false: not moving to a goal, or the goal's holds are used up).
   bool on_guard_block(std::int64_t now_utime);
