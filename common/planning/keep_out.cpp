@@ -44,6 +44,8 @@ MultiPolygon strip(const Linestring& line, double width) {
   return out;
 }
 
+}  // namespace
+
 // Every shape united by the map's own overlay (typed_union, which checks
 // its result), pairwise: a balanced tree of unions, in which each vertex
 // takes part in about log2(n) of them. Boost's union_ of a few thousand
@@ -66,8 +68,6 @@ mapping::TypedOpResult unite_all(std::vector<mapping::TypedMultiPolygon> shapes)
   if (!shapes.empty()) out.polygons = std::move(shapes.front());
   return out;
 }
-
-}  // namespace
 
 std::variant<KeepOut, KeepOutError> parse_keep_out(std::string_view text, const std::string& origin,
                                                    const geometry::Pose2& start_in_file, double line_width_m) {

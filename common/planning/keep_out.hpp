@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
 #include "geometry/pose2.hpp"
 #include "mapping/typed_ops.hpp"
@@ -49,6 +50,11 @@ std::variant<KeepOut, KeepOutError> parse_keep_out(std::string_view text, const 
 // stairwell's edge).
 mapping::TypedOpResult without_keep_out(const mapping::TypedMultiPolygon& map,
                                         const mapping::TypedMultiPolygon& keep_out);
+
+// Every shape united, pairwise by the map's own overlay (typed_union,
+// which checks its result): a keep-out file's strips and areas, the guard's
+// marks. Not ok, with why, when an overlay fails.
+mapping::TypedOpResult unite_all(std::vector<mapping::TypedMultiPolygon> shapes);
 
 // without_keep_out() of the last map and keep-out it was asked for, kept:
 // the difference runs over the whole map, and the explorer plans on each MAP

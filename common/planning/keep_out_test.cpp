@@ -91,13 +91,7 @@ mapping::TypedMultiPolygon map_seen_through_glass() {
   return {testing::typed_polygon(testing::rectangle(0, 0, 8.2, 4, {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}))};
 }
 
-PlannerOptions options() {
-  PlannerOptions o;
-  o.cspace.robot_radius_m = 0.27;
-  o.cspace.clearance_margin_m = 0.05;
-  o.approach_range_m = 0.0;
-  return o;
-}
+PlannerOptions options() { return testing::door_planner_options(); }
 
 TEST(KeepOut, APlanGoesThroughTheDoorNotTheGlassAlsoWithTheLiveView) {
   const Pose2 robot{2.0, 0.7, 0.0};

@@ -40,13 +40,7 @@ mapping::TypedMultiPolygon map_with_the_door_closed() {
                          {E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle}})};
 }
 
-PlannerOptions options() {
-  PlannerOptions o;
-  o.cspace.robot_radius_m = 0.27;
-  o.cspace.clearance_margin_m = 0.05;
-  o.approach_range_m = 0.0;  // the door itself, not a look from afar
-  return o;
-}
+PlannerOptions options() { return testing::door_planner_options(); }
 
 mapping::TypedMultiPolygon view_in(const std::vector<mapping::testing::Wall>& walls, const Pose2& robot,
                                    double range_m) {

@@ -78,7 +78,11 @@ bool gives_a_way(const Plan& plan, const GoalFocus* focus) {
                      [&](const GoalCandidate& c) { return c.reachable && focus->matches(c); });
 }
 
-PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
+namespace {
+
+// compute_plan with keep_out_areas for the request's keep_out.
+PlanResult plan_keeping_out(const PlanRequest& request, const std::shared_ptr<const TypedMultiPolygon>& keep_out_areas,
+                            PlanCache* cache) {
   PlanResult result;
   result.id = request.id;
   if (!request.map) {
@@ -90,14 +94,14 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   // without it is kept per map (the cache); the live view, a few metres
   // across, has it taken out on its own before it is united in: (M - K) u
   // (L - K) is (M u L) - K without a second pass over the whole map.
-  const bool keep_out = request.keep_out && !request.keep_out->empty();
+  const bool keep_out = keep_out_areas && !keep_out_areas->empty();
   mapping::TypedOpResult uncached;
   const mapping::TypedOpResult* kept = nullptr;
   if (keep_out) {
     if (cache) {
-      kept = &cache->keep_out.without_keep_out(request.map, request.keep_out);
+      kept = &cache->keep_out.without_keep_out(request.map, keep_out_areas);
     } else {
-      uncached = without_keep_out(*request.map, *request.keep_out);
+      uncached = without_keep_out(*request.map, *keep_out_areas);
       kept = &uncached;
     }
     if (!kept->ok) {
@@ -113,7 +117,7 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   TypedMultiPolygon view;
   if (live && keep_out) {
     // Failed: the plan is the map's own, which has the keep-out.
-    auto cut = without_keep_out(*request.live_view, *request.keep_out);
+    auto cut = without_keep_out(*request.live_view, *keep_out_areas);
     live = cut.ok && !cut.polygons.empty();
     if (live) view = std::move(cut.polygons);
   }
@@ -135,6 +139,20 @@ PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
   }
   const TypedMultiPolygon opened = with_live_view(map, keep_out ? view : *request.live_view);
   result.plan = plan_on(&opened);
+  return result;
+}
+
+}  // namespace
+
+PlanResult compute_plan(const PlanRequest& request, PlanCache* cache) {
+  PlanResult result = plan_keeping_out(request, request.keep_out, cache);
+  if (!request.has_guard_marks) return result;
+  // Any goal at all, not the one followed: the goal behind a pane the marks
+  // shut is given up (no path) and another taken; only marks that shut the
+  // robot in are dropped.
+  if (!result.keep_out_failed && gives_a_way(result.plan, nullptr)) return result;
+  result = plan_keeping_out(request, request.keep_out_without_marks, cache);
+  result.guard_marks_dropped = true;
   return result;
 }
 

@@ -169,13 +169,14 @@ struct MissionOptions {
   double way_in_margin_m = 0.025;
   // A goal's path the scan guard holds the robot on (on_guard_block: it ran
   // into something the map does not hold) starts its progress anew, this many
-  // times a goal at most. The scans of the robot standing there put what held
-  // it into the next maps, and the path around it is longer than the one the
-  // robot had: measured against the old one, every detour was "no progress".
-  // Clean glass is the case that made it (docs/exploration.md, "Held by the
-  // guard"): seen only head-on, a pane goes into the map a hand's width at a
-  // time, each piece one hold, and office floors with glass fronts ended
-  // FAILED, five goals behind the glass given up in a row. 0: off.
+  // times a goal at most. The explorer marks what held it (guard_marks.hpp:
+  // glass the map has as free never gets into the maps), and the path round
+  // it is longer than the one the robot had: measured against the old one,
+  // every detour was "no progress". Clean glass is the case that made it
+  // (docs/exploration.md, "Held by the guard", "Guard marks"): a pane is
+  // closed a piece at a time, each piece one hold, and office floors with
+  // glass fronts ended FAILED, five goals behind the glass given up in a
+  // row. 0: off.
   int max_guard_blocks_per_goal = 8;
 };
 
@@ -230,6 +231,12 @@ struct PlanRequest {
   // the map and of its live view before planning. Null or empty: none. The
   // mission leaves it empty; the explorer adds its keep_out_file's.
   std::shared_ptr<const TypedMultiPolygon> keep_out;
+  // keep_out holds the scan guard's marks (guard_marks.hpp: what held the
+  // robot, glass the map has as free), and this is keep_out without them: a
+  // plan in which the marks leave no goal (or no way home) is planned again
+  // on it (a person who stood in a door and has gone). False: no marks.
+  bool has_guard_marks = false;
+  std::shared_ptr<const TypedMultiPolygon> keep_out_without_marks;
 };
 
 // What a request is for, as the explorer counts plan cost by it: a path
@@ -250,6 +257,9 @@ struct PlanResult {
   // PlanRequest::live_view_when_stuck_only: the map alone gave no way, and
   // this plan is the one with the live view.
   bool live_view_used = false;
+  // PlanRequest::has_guard_marks: the marks left no way, and this plan is
+  // the one without them.
+  bool guard_marks_dropped = false;
 };
 
 // Whether `plan` gives the robot somewhere to drive: a goal, or with `focus`

@@ -5,6 +5,7 @@
 
 #include "mapping/typed_polygon.hpp"
 #include "planning/cspace.hpp"
+#include "planning/exploration_planner.hpp"
 
 namespace pex::planning::testing {
 
@@ -75,6 +76,16 @@ inline CSpaceOptions disk(double radius_m) {
   o.robot_radius_m = radius_m;
   o.clearance_margin_m = 0.0;
   o.simplify_epsilon_m = 0.0;
+  return o;
+}
+
+// The planner of the door and glass tests: a 0.27 m robot with a 5 cm
+// margin, a frontier's goal at the frontier itself (no look from afar).
+inline PlannerOptions door_planner_options() {
+  PlannerOptions o;
+  o.cspace.robot_radius_m = 0.27;
+  o.cspace.clearance_margin_m = 0.05;
+  o.approach_range_m = 0.0;
   return o;
 }
 

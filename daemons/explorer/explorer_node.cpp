@@ -20,7 +20,10 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 ExplorerNode::ExplorerNode(ExplorerOptions options, Planning planning)
-    : options_(std::move(options)), mission_(options_.mission), guard_(options_.guard) {
+    : options_(std::move(options)),
+      mission_(options_.mission),
+      guard_(options_.guard),
+      guard_marks_(options_.guard_marks) {
   if (planning == Planning::kWorkerThread) worker_ = std::make_unique<PlanWorker>();
 }
 
@@ -123,13 +126,22 @@ void ExplorerNode::on_pose(const pex::pose_t& msg, std::int64_t now_utime) {
 void ExplorerNode::on_slam_update(const pex::slam_update_t& msg) {
   const auto result = trails_.on_slam_update(msg);
   if (result.resynced) ++counters_.trail_resyncs;
-  if (result.new_epoch) ++counters_.trail_epochs;
+  if (result.new_epoch) {
+    ++counters_.trail_epochs;
+    guard_marks_.clear();  // a new SLAM epoch is a new map frame
+  }
 }
 
-void ExplorerNode::complete(planning::PlanRequest& request) {
+void ExplorerNode::complete(planning::PlanRequest& request, std::int64_t now_utime) {
   request.live_view = live_view_at(request.pose, request.map.get());
   request.live_view_when_stuck_only = options_.live_view_when_stuck_only;
   request.keep_out = options_.keep_out;
+  guard_marks_.expire(now_utime);
+  if (auto marked = guard_marks_.with_keep_out(options_.keep_out)) {
+    request.keep_out = std::move(marked);
+    request.has_guard_marks = true;
+    request.keep_out_without_marks = options_.keep_out;
+  }
   if (request.tight && request.options.trail_corridor_m > 0.0) {
     request.trail = trails_.trail_for_map();
     if (!request.trail) ++counters_.tight_plans_without_trail;
@@ -206,6 +218,7 @@ void ExplorerNode::on_plan_ready(std::int64_t now_utime) {
 
 void ExplorerNode::count_failures(const planning::PlanResult& result) {
   if (result.live_view_used) ++counters_.live_view_plans;
+  if (result.guard_marks_dropped) ++counters_.guard_marks_dropped_plans;
   if (!result.keep_out_failed) return;
   ++counters_.keep_out_failures;
   failure_log_.log(spdlog::level::err, "keep_out",
@@ -225,13 +238,13 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   if (worker_) {
     last_ = mission_.step(now_utime);
     if (last_.plan_request) {
-      complete(*last_.plan_request);
+      complete(*last_.plan_request, now_utime);
       worker_->submit(std::move(*last_.plan_request));
     }
   } else {
     // Inline: the plan runs here (tests); its time is measured apart.
-    last_ = planning::step_with_inline_planning(mission_, now_utime, [this](planning::PlanRequest request) {
-      complete(request);
+    last_ = planning::step_with_inline_planning(mission_, now_utime, [this, now_utime](planning::PlanRequest request) {
+      complete(request, now_utime);
       const auto plan_started = std::chrono::steady_clock::now();
       const double cpu_started = thread_cpu_ms();
       auto result = planning::compute_plan(request, &inline_cache_);
@@ -253,7 +266,8 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
     const double since_scan_s = std::max<std::int64_t>(0, now_utime - *scan_utime_) * 1e-6;
     const auto guarded = guard_.command(scan_points_, cmd.v, cmd.omega, since_scan_s, step_s);
     if (guarded.limited) ++counters_.guard_limited_steps;
-    note_guard_hold(cmd.v > 0.0 && guarded.limited && guarded.v_mps <= 0.0, now_utime);
+    note_guard_hold(cmd.v > 0.0 && guarded.limited && guarded.v_mps <= 0.0, cmd.v > 0.0 ? cmd.omega / cmd.v : 0.0,
+                    now_utime);
     cmd.v = guarded.v_mps;
     cmd.omega = guarded.omega_radps;
   } else {
@@ -262,7 +276,7 @@ pex::velocity_cmd_t ExplorerNode::step(std::int64_t now_utime) {
   return cmd;
 }
 
-void ExplorerNode::note_guard_hold(bool held, std::int64_t now_utime) {
+void ExplorerNode::note_guard_hold(bool held, double curvature_per_m, std::int64_t now_utime) {
   if (!held || last_.phase != planning::Phase::kMoving) {
     guard_held_since_.reset();
     return;
@@ -275,6 +289,10 @@ void ExplorerNode::note_guard_hold(bool held, std::int64_t now_utime) {
     return;
   guard_hold_told_ = true;  // once a hold: the mission's replan moves the robot on, or the goal's time runs out
   ++counters_.guard_blocks;
+  // Marked before the replan is asked for, so that the replan goes round it.
+  const auto holding =
+      planning::holding_points(scan_points_, curvature_per_m, options_.guard.body_radius_m, options_.guard_marks);
+  if (mission_.pose() && guard_marks_.add(holding, *mission_.pose(), now_utime)) ++counters_.guard_marks;
   if (mission_.on_guard_block(now_utime)) ++counters_.guard_block_replans;
 }
 

@@ -54,6 +54,10 @@ struct ExplorerCounters {
   // Plans the map alone gave no way, planned again with the live view
   // (live_view_when_stuck_only).
   std::int64_t live_view_plans = 0;
+  // Guard marks made (one a block with returns in the way: guard_mark_*),
+  // and plans in which the marks left no way, planned again without them.
+  std::int64_t guard_marks = 0;
+  std::int64_t guard_marks_dropped_plans = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -70,6 +74,8 @@ struct ExplorerCounters {
     v.total("guard_blocks", guard_blocks);
     v.total("guard_block_replans", guard_block_replans);
     v.total("live_view_plans", live_view_plans);
+    v.total("guard_marks", guard_marks);
+    v.total("guard_marks_dropped_plans", guard_marks_dropped_plans);
   }
 };
 
@@ -209,15 +215,16 @@ class ExplorerNode {
   // `map`; null when off or without a scan.
   std::shared_ptr<const mapping::TypedMultiPolygon> live_view_at(const planning::Pose2& robot,
                                                                  const mapping::TypedMultiPolygon* map) const;
-  // What the mission's request leaves to the explorer: the live view, and
-  // for a tight plan the trail.
-  void complete(planning::PlanRequest& request);
+  // What the mission's request leaves to the explorer: the live view, the
+  // keep-out with the guard's marks, and for a tight plan the trail.
+  void complete(planning::PlanRequest& request, std::int64_t now_utime);
   // A finished plan's failures the explorer counts (keep_out_failures), logged.
   void count_failures(const planning::PlanResult& result);
   // One control step's guard outcome: `held` when it stopped a robot the
-  // follower wanted to drive forward. A hold of guard_block_us while MOVING
-  // is told to the mission once (Mission::on_guard_block).
-  void note_guard_hold(bool held, std::int64_t now_utime);
+  // follower wanted to drive forward on the arc of `curvature_per_m`. A
+  // hold of guard_block_us while MOVING is told to the mission once
+  // (Mission::on_guard_block), and what holds the robot is marked.
+  void note_guard_hold(bool held, double curvature_per_m, std::int64_t now_utime);
   // A finished plan's wall and CPU time, in the totals and in its kind's.
   void add_plan_time(planning::PlanKind kind, double wall_ms, double cpu_ms);
 
@@ -247,6 +254,7 @@ class ExplorerNode {
   std::optional<std::int64_t> last_step_utime_;  // the previous control step
   std::optional<std::int64_t> guard_held_since_;  // the guard has held the robot still since (driving wanted)
   bool guard_hold_told_ = false;                  // this hold was told to the mission
+  planning::GuardMarks guard_marks_;              // what held the robot, map frame (planning/guard_marks.hpp)
 };
 
 }  // namespace pex::explorer

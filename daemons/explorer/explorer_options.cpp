@@ -183,6 +183,12 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
       config.get<double>("guard_block_ms", static_cast<double>(o.guard_block_us) * 1e-3, in_range(0.0, 60000.0)) * 1e3);
   m.max_guard_blocks_per_goal =
       config.get<int>("max_guard_blocks_per_goal", m.max_guard_blocks_per_goal, in_range(0, 1000));
+  auto& marks = o.guard_marks;
+  marks.lifetime_s = config.get<double>("guard_mark_lifetime_s", marks.lifetime_s, in_range(0.0, 1e6));
+  marks.holding_depth_m = config.get<double>("guard_mark_depth_m", marks.holding_depth_m, in_range(0.0, 1.0));
+  marks.max_reach_m = config.get<double>("guard_mark_reach_m", marks.max_reach_m, in_range(0.0, 5.0));
+  marks.width_m = config.get<double>("guard_mark_width_m", marks.width_m, in_range(0.01, 1.0));
+  marks.max_marks = config.get<int>("max_guard_marks", marks.max_marks, in_range(0, 1000));
   o.max_beams = static_cast<std::size_t>(
       config.get<int>("max_beams", static_cast<int>(o.max_beams), in_range(1, 1 << 20)));
   o.min_scan_returns = config.get<int>("min_scan_returns", o.min_scan_returns, in_range(0, 1 << 20));

@@ -8,6 +8,7 @@
 #include "map_message.hpp"
 #include "planning/mission.hpp"
 #include "planning/live_view.hpp"
+#include "planning/guard_marks.hpp"
 #include "planning/scan_guard.hpp"
 
 namespace pex::runtime {
@@ -38,6 +39,9 @@ struct ExplorerOptions {
   // on) is a guard block: the mission replans round it and starts the goal's
   // progress anew (Mission::on_guard_block). 0: not told.
   std::int64_t guard_block_us = 1'000'000;
+  // What held the robot in a guard block is kept out of the plans for a
+  // while (planning/guard_marks.hpp); lifetime 0: no marks.
+  planning::GuardMarkOptions guard_marks;
   std::size_t max_beams = 8192;           // a LIDAR_SCAN with more beams is refused as bad input
   // A LIDAR_SCAN with fewer returns is refused as no view (a laser covered
   // or dazzled): it keeps no scan fresh, so the robot stops as without

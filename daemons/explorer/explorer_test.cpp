@@ -6,6 +6,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <tuple>
 
 #include "explorer_node.hpp"
 #include "explorer_options.hpp"
@@ -155,11 +156,18 @@ TEST(ExplorerOptions, ShippedConfigsLoadAndEveryKeyIsRead) {
     EXPECT_TRUE(o.live_view_when_stuck_only) << files.back();
     EXPECT_EQ(o.guard_block_us, 1'000'000) << files.back();
     EXPECT_EQ(o.mission.max_guard_blocks_per_goal, 8) << files.back();
+    // What held the robot is kept out of the plans ("Guard marks").
+    EXPECT_EQ(o.guard_marks.lifetime_s, 300.0) << files.back();
+    EXPECT_EQ(o.guard_marks.holding_depth_m, 0.10) << files.back();
+    EXPECT_EQ(o.guard_marks.max_reach_m, 0.5) << files.back();
+    EXPECT_EQ(o.guard_marks.width_m, 0.05) << files.back();
+    EXPECT_EQ(o.guard_marks.max_marks, 32) << files.back();
   }
 }
 
 TEST(ExplorerOptions, RejectsBadValues) {
   for (const char* text : {"pose_channel = \"MAP\"", "robot_radius_m = -1.0", "max_speed_mps = 0.0",
+                           "guard_mark_lifetime_s = -1.0", "max_guard_marks = -1", "guard_mark_width_m = 0.0",
                            "turn_in_place_rad = 0.2\nturn_in_place_exit_rad = 0.5",
                            "robot_radius_m = 1.5\ncandidate_snap_distance_m = 1.0",
                            "robot_radius_m = 0.3\nreach_past_frontier_m = 0.3", "reach_past_frontier_m = -0.01",
@@ -466,6 +474,9 @@ TEST(ExplorerNode, TheScanGuardStopsTheRobotBeforeWhatTheLaserSeesAhead) {
     return guarded_drive(options, scan_of_wall_ahead(wall_m));
   };
   ExplorerOptions options;
+  // The guard alone: after a hold of 1 s a guard mark would turn the robot
+  // away from the wall (AGuardHoldIsToldToTheMissionOnceAHold).
+  options.guard_marks.lifetime_s = 0.0;
   const auto [far_v, far_limited] = drive(options, 5.0);
   EXPECT_GT(far_v, 0.3);  // 4.75 m free: full speed
   EXPECT_EQ(far_limited, 0);
@@ -497,15 +508,21 @@ TEST(ExplorerNode, AGuardHoldIsToldToTheMissionOnceAHold) {
       said = said || node.last_output().status.find("held by the scan guard") != std::string::npos;
     }
     EXPECT_EQ(said, node.counters().guard_block_replans > 0);
-    return std::pair{node.counters().guard_blocks, node.counters().guard_block_replans};
+    return std::tuple{node.counters().guard_blocks, node.counters().guard_block_replans, node.counters().guard_marks};
   };
+  using Counts = std::tuple<std::int64_t, std::int64_t, std::int64_t>;
   ExplorerOptions options;
-  EXPECT_EQ(holds(options), (std::pair<std::int64_t, std::int64_t>{2, 2}));
+  // Marked at the first hold (the wall 1 cm ahead), the way on is a plan
+  // round the mark: the robot turns away, and the wall seen again ahead
+  // holds no robot that wants to drive into it.
+  EXPECT_EQ(holds(options), (Counts{1, 1, 1}));
+  options.guard_marks.lifetime_s = 0.0;  // no marks: the same way, held again
+  EXPECT_EQ(holds(options), (Counts{2, 2, 0}));
   options.guard_block_us = 0;
-  EXPECT_EQ(holds(options), (std::pair<std::int64_t, std::int64_t>{0, 0}));
+  EXPECT_EQ(holds(options), (Counts{0, 0, 0}));
   options.guard_block_us = 1'000'000;
   options.mission.max_guard_blocks_per_goal = 1;  // told twice, replanned for once
-  EXPECT_EQ(holds(options), (std::pair<std::int64_t, std::int64_t>{2, 1}));
+  EXPECT_EQ(holds(options), (Counts{2, 1, 0}));
 }
 
 // The laser blind to both sides (beams beyond 0.5 rad without a return):
