@@ -248,14 +248,26 @@ namespace pex::cola {
 // as the tenth-percentile of (host receive time - device transmission time)
 // over the last `window` scans: transport delay only ever adds to it, so the
 // smallest samples are the truest, and the percentile (not the minimum) lets
-// a few samples taken with a receive clock that was behind go by. A sample
-// that disagrees with the estimate by more than `max_step_us` (the sensor
-// restarted, the host clock jumped) starts the estimate afresh.
+// a few samples taken with a receive clock that was behind go by.
+//
+// A sample further than `max_step_us` from the estimate is an outlier and
+// leaves the estimate alone: after a stall of the reader (a loaded computer,
+// a network hiccup) the telegrams that waited are read at once, at one
+// receive time, and starting the estimate afresh on them stamped every one
+// of them with that time — a second of scans placed at the pose of its end.
+// Only a run of outliers that agree with each other (within max_step_us) for
+// `new_offset_after_us` of device time is a new offset (the host clock
+// stepped): the estimate starts afresh on that run. Until the window holds
+// `settled_samples` there are no outliers: the first telegrams of a
+// connection may have waited too, and the smallest sample is the truest. A
+// restarted sensor is a new connection, and the reader calls reset().
 class DeviceClock {
  public:
   struct Options {
-    std::size_t window = 250;             // scans (10 s at 25 Hz)
+    std::size_t window = 250;                   // scans (10 s at 25 Hz)
     std::int64_t max_step_us = 500'000;
+    std::int64_t new_offset_after_us = 1'000'000;  // device time
+    std::size_t settled_samples = 25;              // scans (1 s at 25 Hz)
   };
   DeviceClock() = default;
   explicit DeviceClock(Options options) : options_(options) {}
@@ -266,9 +278,16 @@ class DeviceClock {
   };
   Mapped map(std::uint32_t scan_device_us, std::uint32_t transmit_device_us, std::int64_t host_receive_us);
   void reset();
+  // New offsets taken (the estimate started afresh on a run of outliers).
   std::uint64_t resets() const { return resets_; }
+  // Samples further than max_step_us from the estimate, all told.
+  std::uint64_t outliers() const { return outliers_; }
 
  private:
+  struct Sample {
+    std::int64_t transmit_us;  // unwrapped device time
+    std::int64_t offset_us;    // host receive - transmit
+  };
   std::int64_t unwrap(std::uint32_t raw);
   std::int64_t robust_minimum() const;
 
@@ -278,7 +297,9 @@ class DeviceClock {
   std::int64_t wraps_ = 0;
   std::vector<std::int64_t> offsets_;  // ring of recent samples
   std::size_t next_ = 0;
+  std::vector<Sample> outlier_run_;    // the outliers since the last sample that agreed with the estimate
   std::uint64_t resets_ = 0;
+  std::uint64_t outliers_ = 0;
 };
 
 }  // namespace pex::cola

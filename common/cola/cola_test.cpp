@@ -305,10 +305,89 @@ TEST(DeviceClock, LowPercentileDelayOffsetWrapAndRestart) {
   // The tenth-smallest of the 100 delays is 11 ms: the mapped host time is the true one + 11 ms.
   EXPECT_EQ(m.host_us, host0 + m.device_us + 11'000);
   EXPECT_EQ(clock.resets(), 0u);
-  // The sensor restarts: its clock starts again at 0; the estimate starts afresh.
+  EXPECT_EQ(clock.outliers(), 0u);
+  // The sensor restarts (a new connection): its clock starts again at 0 and
+  // the reader resets the estimate.
+  clock.reset();
   m = clock.map(100, 5000, host0 + 50'000'000);
-  EXPECT_EQ(clock.resets(), 1u);
+  EXPECT_EQ(m.device_us, 100);
   EXPECT_EQ(m.host_us, host0 + 50'000'000 - 4900);
+}
+
+// 250 scans at 25 Hz from device time 1 s, received 1 ms after they were
+// sent; returns the host time of device time 0 they give (the offset).
+std::int64_t settle(DeviceClock& clock, std::int64_t host0, std::int64_t& device) {
+  DeviceClock::Mapped m{};
+  for (int i = 0; i < 250; ++i, device += 40'000)
+    m = clock.map(static_cast<std::uint32_t>(device - 30'000), static_cast<std::uint32_t>(device), host0 + device + 1000);
+  return m.host_us - m.device_us;
+}
+
+// The reader stalled (a loaded computer): the 20 telegrams sent in 0.76 s
+// meanwhile are read at once, at one receive time. Each scan keeps its own
+// time; starting the estimate afresh on the first of them stamped them all
+// with the time they were read.
+TEST(DeviceClock, ABacklogReadAtOnceAfterAStallKeepsEachScansOwnTime) {
+  DeviceClock clock;
+  const std::int64_t host0 = 1'700'000'000'000'000;
+  std::int64_t device = 1'000'000;
+  ASSERT_EQ(settle(clock, host0, device), host0 + 1000);
+  const std::int64_t read_at = host0 + device + 19 * 40'000 + 1000;  // when the last one was sent
+  for (int i = 0; i < 20; ++i, device += 40'000) {
+    const auto m = clock.map(static_cast<std::uint32_t>(device - 30'000), static_cast<std::uint32_t>(device), read_at);
+    EXPECT_EQ(m.host_us, host0 + 1000 + device - 30'000) << "telegram " << i << " of the backlog";
+  }
+  // Read 0.52-0.76 s late: outliers; the later ones agree with the estimate.
+  EXPECT_EQ(clock.outliers(), 7u);
+  EXPECT_EQ(clock.resets(), 0u);
+  // And the stream goes on as before.
+  const auto m = clock.map(static_cast<std::uint32_t>(device - 30'000), static_cast<std::uint32_t>(device),
+                           host0 + device + 1000);
+  EXPECT_EQ(m.host_us, host0 + 1000 + device - 30'000);
+}
+
+// The first telegrams of a connection waited (five, read at once 0.8 s after
+// the last of them was sent): the estimate is young, so the timely ones that
+// follow correct it at once rather than being taken as outliers for a second.
+TEST(DeviceClock, ABacklogAtTheStartIsCorrectedByTheTimelyTelegramsAfterIt) {
+  DeviceClock clock;
+  const std::int64_t host0 = 1'700'000'000'000'000;
+  std::int64_t device = 1'000'000;
+  const std::int64_t read_at = host0 + device + 4 * 40'000 + 800'000;
+  for (int i = 0; i < 5; ++i, device += 40'000)
+    clock.map(static_cast<std::uint32_t>(device - 30'000), static_cast<std::uint32_t>(device), read_at);
+  DeviceClock::Mapped m{};
+  for (int i = 0; i < 5; ++i, device += 40'000)
+    m = clock.map(static_cast<std::uint32_t>(device - 30'000), static_cast<std::uint32_t>(device),
+                  host0 + device + 1000);
+  EXPECT_EQ(m.host_us, m.device_us + host0 + 1000);
+  EXPECT_EQ(clock.outliers(), 0u);
+  EXPECT_EQ(clock.resets(), 0u);
+}
+
+// The host clock steps (forward 50 s, then back an hour): the estimate keeps
+// the old offset until the new one has held for new_offset_after_us of device
+// time, then takes it.
+TEST(DeviceClock, AHostClockThatSteppedIsFollowedOnceTheNewOffsetHeld) {
+  for (const std::int64_t step : {50'000'000ll, -3'600'000'000ll}) {
+    DeviceClock clock;
+    const std::int64_t host0 = 1'700'000'000'000'000;
+    std::int64_t device = 1'000'000;
+    ASSERT_EQ(settle(clock, host0, device), host0 + 1000);
+    const std::int64_t first = device;
+    DeviceClock::Mapped m{};
+    for (; device - first < 1'000'000; device += 40'000) {
+      m = clock.map(static_cast<std::uint32_t>(device - 30'000), static_cast<std::uint32_t>(device),
+                    host0 + step + device + 1000);
+      EXPECT_EQ(m.host_us, host0 + 1000 + device - 30'000) << "step " << step << ", device time " << device;
+    }
+    EXPECT_EQ(clock.resets(), 0u);
+    m = clock.map(static_cast<std::uint32_t>(device - 30'000), static_cast<std::uint32_t>(device),
+                  host0 + step + device + 1000);
+    EXPECT_EQ(clock.resets(), 1u) << "step " << step;
+    EXPECT_EQ(m.host_us, host0 + step + 1000 + device - 30'000);
+    EXPECT_EQ(clock.outliers(), 26u);
+  }
 }
 
 // A receive clock that was behind now and then (the simulated clock's tick

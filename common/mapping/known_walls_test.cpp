@@ -150,8 +150,11 @@ TEST(KnownWalls, AMapsObstacleBandStopsABlindSectorAndItsWallsStay) {
   ASSERT_FALSE(walls.empty());
   const auto e = no_return_extents(blind, spec.angle_min, spec.angle_increment, at, options, walls);
   EXPECT_GT(e.beams_stopped, 0);
-  for (std::size_t i = 0; i < e.extent_m.size(); ++i)
-    if (blind[i] == 0.0f) EXPECT_LE(e.extent_m[i], 2.0f / std::cos(kPi / 6) + 1e-3f) << "beam " << i;
+  for (std::size_t i = 0; i < e.extent_m.size(); ++i) {
+    if (blind[i] == 0.0f) {
+      EXPECT_LE(e.extent_m[i], 2.0f / std::cos(kPi / 6) + 1e-3f) << "beam " << i;
+    }
+  }
   PolygonMap stopped = map, open = map;
   const auto with_stop = scan_to_polygon(blind, spec.angle_min, spec.angle_increment, at, options, e.extent_m);
   const auto without = scan_to_polygon(blind, spec.angle_min, spec.angle_increment, at, options);

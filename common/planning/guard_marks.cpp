@@ -48,17 +48,17 @@ bool GuardMarks::add(std::span<const Point> holding, const geometry::Pose2& robo
   mapping::Polygon hull;
   bg::convex_hull(points, hull);
   namespace sb = bg::strategy::buffer;
-  const sb::distance_symmetric<double> half_width(0.5 * options_.width_m);
   MultiPolygon area;
+  const auto grow = [&](const auto& geometry) {
+    bg::buffer(geometry, area, sb::distance_symmetric<double>(0.5 * options_.width_m), sb::side_straight(),
+               sb::join_round(8), sb::end_round(8), sb::point_circle(8));
+  };
   if (bg::area(hull) > kMinHullAreaM2) {
-    bg::buffer(hull, area, half_width, sb::side_straight(), sb::join_round(8), sb::end_round(8), sb::point_circle(8));
+    grow(hull);
   } else if (bg::perimeter(hull) > kMinHullAreaM2) {
-    bg::model::linestring<Point> outline(hull.outer().begin(), hull.outer().end());
-    bg::buffer(outline, area, half_width, sb::side_straight(), sb::join_round(8), sb::end_round(8),
-               sb::point_circle(8));
+    grow(bg::model::linestring<Point>(hull.outer().begin(), hull.outer().end()));
   } else {
-    bg::model::multi_point<Point> one{points.front()};
-    bg::buffer(one, area, half_width, sb::side_straight(), sb::join_round(8), sb::end_round(8), sb::point_circle(8));
+    grow(bg::model::multi_point<Point>{points.front()});
   }
   if (area.empty()) return false;
   marks_.push_back({mapping::with_uniform_type(area, mapping::EdgeType::kObstacle), now_utime});

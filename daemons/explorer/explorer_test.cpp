@@ -503,7 +503,9 @@ TEST(ExplorerNode, AGuardHoldIsToldToTheMissionOnceAHold) {
       const bool clear = t > 3'000'000 && t <= 4'000'000;
       EXPECT_NO_THROW(node.on_pose(pose, t));
       EXPECT_NO_THROW(node.on_scan(scan_of_wall_ahead(clear ? 5.0 : 0.26), t));
-      if (t % 1'000'000 == 0) EXPECT_NO_THROW(node.on_map(corridor(), t));
+      if (t % 1'000'000 == 0) {
+        EXPECT_NO_THROW(node.on_map(corridor(), t));
+      }
       node.step(t);
       said = said || node.last_output().status.find("held by the scan guard") != std::string::npos;
     }

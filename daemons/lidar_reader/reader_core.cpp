@@ -226,6 +226,8 @@ void ReaderCore::on_scan(const cola::ScanData& scan, std::int64_t now_us, std::i
   have_device_us_ = true;
   // Device times map to host time through the offset observed at reception.
   const auto mapped = clock_.map(scan.time_since_startup_us, scan.time_of_transmission_us, now_utime);
+  counters_.device_clock_outliers = static_cast<std::int64_t>(clock_.outliers());
+  counters_.device_clock_resets = static_cast<std::int64_t>(clock_.resets());
   outputs_.publish_scan(laser_scan(scan, *dist, mapped));
   ++counters_.scans_published;
   report(pex::daemon_status_t::STATE_OK, "");

@@ -70,6 +70,9 @@ struct ReaderCounters {
   std::int64_t skipped_bytes = 0;        // outside any telegram
   std::int64_t truncated_telegrams = 0;  // cut off by a new STX
   std::int64_t oversize_telegrams = 0;   // longer than max_telegram_bytes
+  // The device clock's (cola::DeviceClock), over every connection.
+  std::int64_t device_clock_outliers = 0;  // scans received more than 0.5 s off its estimate (a backlog read at once)
+  std::int64_t device_clock_resets = 0;    // new offsets taken (the host clock stepped)
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -84,6 +87,8 @@ struct ReaderCounters {
     v.total("skipped_bytes", skipped_bytes);
     v.total("truncated_telegrams", truncated_telegrams);
     v.total("oversize_telegrams", oversize_telegrams);
+    v.total("device_clock_outliers", device_clock_outliers);
+    v.total("device_clock_resets", device_clock_resets);
   }
 };
 

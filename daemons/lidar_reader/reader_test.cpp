@@ -118,13 +118,15 @@ class Rig {
 
   void run(int ms) {
     for (int t = 0; t < ms; t += 20) {
-      now_us += 20'000;
-      if (connected && device.streaming && !device.stalled && (ticks++ % 2 == 0)) {
-        device.to_reader += cola::encode_scan_data(scan_data(++device.scan_counter, device_us()));
-      }
+      tick();
       core.poll(now_us);
       deliver();
     }
+  }
+  // The reader does not run for `ms` (a loaded computer): the device sends
+  // on, and what it sent is read at once when the reader runs again.
+  void stall(int ms) {
+    for (int t = 0; t < ms; t += 20) tick();
   }
   // Bytes from the device now, in the order given, each in its own read.
   void receive(const std::vector<std::string>& reads) {
@@ -182,6 +184,13 @@ class Rig {
     out.error = [this](std::string_view key, const std::string& text) { errors.emplace_back(key, text); };
     out.reject = [this](std::string_view key, const std::string& text) { rejects.emplace_back(key, text); };
     return out;
+  }
+  // 20 ms go by; the device sends a scan every other tick while it streams.
+  void tick() {
+    now_us += 20'000;
+    if (connected && device.streaming && !device.stalled && (ticks++ % 2 == 0)) {
+      device.to_reader += cola::encode_scan_data(scan_data(++device.scan_counter, device_us()));
+    }
   }
   // What the device sent, read as the shell's fd watch would: until none is left.
   void deliver() {
@@ -273,6 +282,29 @@ TEST(ReaderCore, ScanBecomesALaserScanOnTheHostClock) {
   // received (with no delay here) at the stamping clock's now.
   EXPECT_EQ(s.utime, rig.now_us + kUtimeOffset - kTransmissionDelayUs);
   EXPECT_EQ(s.device_utime, rig.device_us());
+}
+
+// The reader stalls for 0.8 s, short of the stale timeout: the scans sent
+// meanwhile are read at once and each keeps its own time (the device clock's
+// estimate started afresh on them stamped them all with the time they were
+// read: a turning robot's scans drawn at one pose, walls across a door).
+TEST(ReaderCore, ScansThatWaitedForAStalledReaderKeepTheirOwnTimes) {
+  Rig rig;
+  rig.run(11'000);  // 10 s of scans: the device clock's estimate settled
+  ASSERT_TRUE(rig.streaming());
+  const std::size_t before = rig.scans.size();
+  ASSERT_GT(before, 200u);
+  const std::int64_t offset = rig.scans.back().utime - rig.scans.back().device_utime;
+  rig.stall(800);
+  rig.run(20);
+  ASSERT_TRUE(rig.streaming());
+  ASSERT_GE(rig.scans.size(), before + 20);
+  for (std::size_t i = before; i < rig.scans.size(); ++i) {
+    EXPECT_EQ(rig.scans[i].utime - rig.scans[i].device_utime, offset) << "scan " << i - before << " after the stall";
+    EXPECT_EQ(rig.scans[i].device_utime - rig.scans[i - 1].device_utime, 40'000);
+  }
+  EXPECT_GT(rig.core.counters().device_clock_outliers, 0);
+  EXPECT_EQ(rig.core.counters().device_clock_resets, 0);
 }
 
 TEST(ReaderCore, FailedConnectionsBackOffDoublingUpToTheMaximum) {

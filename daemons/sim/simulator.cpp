@@ -296,7 +296,8 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   node_.watch_fd(can_->fd(), [this] { receive_can(); });
   node_.subscribe<pex::sim_fault_t>(runtime::channels::kSimFault, [this](const pex::sim_fault_t& msg) {
     if (msg.fault != pex::sim_fault_t::FAULT_LASER_STALL && msg.fault != pex::sim_fault_t::FAULT_LASER_REFUSE &&
-        msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND && msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR)
+        msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND && msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR &&
+        msg.fault != pex::sim_fault_t::FAULT_LASER_HELD)
       throw std::invalid_argument("unknown fault " + std::to_string(msg.fault));
     if (!std::isfinite(msg.duration_s) || msg.duration_s < 0.0 || msg.duration_s > 3600.0)
       throw std::invalid_argument("fault duration " + std::to_string(msg.duration_s) + " s not in [0, 3600]");
@@ -309,6 +310,7 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
     spdlog::warn("fault from {}: laser {} for {} s", msg.source,
                  msg.fault == pex::sim_fault_t::FAULT_LASER_STALL    ? "stall"
                  : msg.fault == pex::sim_fault_t::FAULT_LASER_REFUSE ? "refuses connections"
+                 : msg.fault == pex::sim_fault_t::FAULT_LASER_HELD   ? "telegrams held (delivered at once at the end)"
                  : sector ? fmt::format("blind from {:.2f} to {:.2f} rad (no echo there)", msg.sector_from_rad,
                                         msg.sector_to_rad)
                           : std::string("blind (no echo on any beam)"),
@@ -380,6 +382,16 @@ void Simulator::start_laser_fault(std::int8_t fault, double duration_s) {
 void Simulator::end_laser_fault() {
   const bool refused = laser_fault_ == pex::sim_fault_t::FAULT_LASER_REFUSE;
   laser_fault_ = 0;
+  // What waited reaches the clients now, in one go.
+  for (auto& client : clients_) {
+    if (client->held.empty() || client->closed) continue;
+    std::string error;
+    if (!hwio::write_all(client->fd.get(), client->held, 200, &error)) {
+      spdlog::warn("CoLa client dropped: {}", error);
+      client->closed = true;
+    }
+    client->held.clear();
+  }
   if (refused && !open_listener()) {
     // The port is taken meanwhile: try again next tick.
     laser_fault_ = pex::sim_fault_t::FAULT_LASER_REFUSE;
@@ -518,6 +530,18 @@ void Simulator::send_scan() {
     if (bytes.empty()) {
       bytes = cola::encode_scan_data(
           protocol_.make_scan(ranges, device_time, client->remission, client->remission_16bit));
+    }
+    if (laser_fault_ == pex::sim_fault_t::FAULT_LASER_HELD) {
+      // Bounded as a link's buffers are (about a minute of scans): beyond, the connection is lost.
+      constexpr std::size_t kMaxHeldBytes = 8u << 20;
+      if (client->held.size() + bytes.size() > kMaxHeldBytes) {
+        spdlog::warn("CoLa client dropped: {} bytes held", client->held.size());
+        client->closed = true;
+        client->held.clear();
+      } else {
+        client->held += bytes;
+      }
+      continue;
     }
     // A client that does not keep up (its socket buffer of several scans is
     // full for 20 ms) is dropped rather than allowed to stall the simulation.

@@ -61,6 +61,7 @@ struct ColaClient {
   bool remission = true;
   bool remission_16bit = false;
   bool closed = false;
+  std::string held;  // scan telegrams held back by FAULT_LASER_HELD
 };
 
 // The simulated LMS111's protocol side: answers requests as SICK's telegram

@@ -39,6 +39,10 @@
 //   explorer and the mapper refuse them, the same stop, the map keeps its
 //   walls, the mission ends DONE; the same with pex-slam in the set.
 //
+//   the scan telegrams held 0.8 s and then delivered at once, ten times while
+//   the robot drives: each scan keeps its own time (no new device clock
+//   offset), the map keeps its walls, the mission ends DONE.
+//
 //   the simulator frozen 5 s (SIGSTOP): every daemon on its clock says ERROR
 //   and is OK again when it goes on; the mission ends DONE.
 //
@@ -399,6 +403,49 @@ TEST(Faults, LaserBlind10sTheRobotStandsTheMapKeepsItsWallsAndTheMissionEndsDone
 // still follows SLAM's updates after the fault.
 TEST(Faults, LaserBlind10sOnSlamTheRobotStandsAndTheMissionEndsDone) {
   laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_BLIND, 10.0, false, true);
+}
+
+// The scan telegrams wait and then come at once (the reader's computer
+// stalled, a switch held them): 0.8 s of scans, short of the reader's stale
+// timeout, again and again while the robot drives. Each scan keeps the time
+// it was taken: cola::DeviceClock takes the late ones as outliers, not as a
+// new offset (starting afresh on them stamped a whole backlog with the time
+// it was read: the scans of a turning robot drawn at the pose of the stall's
+// end). The map keeps its walls and the mission ends DONE.
+TEST(Faults, LaserTelegramsHeldAndDeliveredAtOnceKeepTheirTimesAndTheMapItsWalls) {
+  ExplorationSet set("faults-held", {.speed = 2.0});
+  Truth truth(set.bus());
+  int held = 0;
+  while (held < 10 && !mission_finished(set.phase())) {
+    const bool moving = set.spin_sim(
+        [&] {
+          return mission_finished(set.phase()) ||
+                 (set.phase() == pex::explore_state_t::PHASE_MOVING && truth.speed() > 0.2);
+        },
+        120.0);
+    ASSERT_TRUE(moving) << set.report_with_logs();
+    if (mission_finished(set.phase())) break;
+    pex::sim_fault_t msg{};
+    msg.utime = set.clock()->utime;
+    msg.fault = pex::sim_fault_t::FAULT_LASER_HELD;
+    msg.duration_s = 0.8;
+    msg.source = "faults_test";
+    const double fault_s = set.sim_seconds();
+    set.bus().publish(std::string(ch::kSimFault), msg);
+    ++held;
+    // The stream back and the robot on its way before the next.
+    set.spin_sim([&] { return false; }, 3.0);
+    ASSERT_GT(set.sim_seconds(), fault_s + 2.9);
+  }
+  ASSERT_GE(held, 5) << "the mission ended before the faults";
+  expect_done_with_the_world_mapped(set);
+  const auto& reader = set.bus().status().at("lidar_reader");
+  EXPECT_EQ(counter_of(set.bus().status().at("sim"), "laser_faults"), held);
+  EXPECT_GE(counter_of(reader, "device_clock_outliers"), held) << "no scan came late: the fault did not hold them";
+  EXPECT_EQ(counter_of(reader, "device_clock_resets"), 0);
+  EXPECT_LT(counter_of(reader, "disconnects"), 1);  // -1: never counted; the stream went on
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
 }
 
 // Part of the laser's window covered (a cable hanging in front of it): the
