@@ -585,12 +585,14 @@ DeviceClock::Mapped DeviceClock::map(std::uint32_t scan_device_us, std::uint32_t
   const std::int64_t scan = transmit - static_cast<std::int64_t>(
                                            static_cast<std::uint32_t>(transmit_device_us - scan_device_us));
   const std::int64_t sample = host_receive_us - transmit;
+  const auto near = [&](std::int64_t offset_us) {
+    return sample >= offset_us - options_.max_step_us && sample <= offset_us + options_.max_step_us;
+  };
   if (!offsets_.empty() && offsets_.size() >= options_.settled_samples) {
     const std::int64_t best = robust_minimum();
-    if (sample < best - options_.max_step_us || sample > best + options_.max_step_us) {
+    if (!near(best)) {
       ++outliers_;
-      const bool agrees = !outlier_run_.empty() && sample >= outlier_run_.front().offset_us - options_.max_step_us &&
-                          sample <= outlier_run_.front().offset_us + options_.max_step_us;
+      const bool agrees = !outlier_run_.empty() && near(outlier_run_.front().offset_us);
       if (!agrees || outlier_run_.size() >= std::max<std::size_t>(options_.window, 1)) outlier_run_.clear();
       outlier_run_.push_back({transmit, sample});
       if (transmit - outlier_run_.front().transmit_us < options_.new_offset_after_us) return Mapped{scan, scan + best};

@@ -385,11 +385,7 @@ void Simulator::end_laser_fault() {
   // What waited reaches the clients now, in one go.
   for (auto& client : clients_) {
     if (client->held.empty() || client->closed) continue;
-    std::string error;
-    if (!hwio::write_all(client->fd.get(), client->held, 200, &error)) {
-      spdlog::warn("CoLa client dropped: {}", error);
-      client->closed = true;
-    }
+    send_or_drop(*client, client->held, 200);
     client->held.clear();
   }
   if (refused && !open_listener()) {
@@ -545,11 +541,15 @@ void Simulator::send_scan() {
     }
     // A client that does not keep up (its socket buffer of several scans is
     // full for 20 ms) is dropped rather than allowed to stall the simulation.
-    std::string error;
-    if (!hwio::write_all(client->fd.get(), bytes, 20, &error)) {
-      spdlog::warn("CoLa client dropped: {}", error);
-      client->closed = true;
-    }
+    send_or_drop(*client, bytes, 20);
+  }
+}
+
+void Simulator::send_or_drop(ColaClient& client, std::string_view bytes, int timeout_ms) {
+  std::string error;
+  if (!hwio::write_all(client.fd.get(), bytes, timeout_ms, &error)) {
+    spdlog::warn("CoLa client dropped: {}", error);
+    client.closed = true;
   }
 }
 

@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "canopen/canopen.hpp"
@@ -110,6 +111,8 @@ class Simulator {
   void publish_clock();
   void laser_step();
   void send_scan();
+  // Scan telegrams to a client; one that cannot take them within timeout_ms is dropped.
+  void send_or_drop(ColaClient& client, std::string_view bytes, int timeout_ms);
   // SIM_CLOCK's utime, and every stamp of ours: the wall time the simulation
   // started plus the simulated time since.
   std::int64_t sim_utime() const { return wall_start_utime_ + sim_time_us_; }
