@@ -7,7 +7,9 @@
 #include <boost/geometry.hpp>
 #include <boost/geometry/geometries/multi_point.hpp>
 
+#include "archive/byte_archive.hpp"
 #include "geometry/point.hpp"
+#include "mapping/map_archive.hpp"
 #include "planning/keep_out.hpp"
 #include "planning/scan_guard.hpp"
 
@@ -20,6 +22,8 @@ using mapping::Point;
 namespace {
 // Below this a hull is a line of returns or one return (m^2, m).
 constexpr double kMinHullAreaM2 = 1e-8;
+constexpr char kMarksMagic[] = "PEXGMARK";
+constexpr std::uint32_t kMarksVersion = 1;
 }  // namespace
 
 std::vector<Point> holding_points(std::span<const Point> points_robot_frame, double curvature_per_m,
@@ -70,7 +74,8 @@ bool GuardMarks::add(std::span<const Point> holding, const geometry::Pose2& robo
 int GuardMarks::expire(std::int64_t now_utime) {
   const auto lifetime_us = static_cast<std::int64_t>(options_.lifetime_s * 1e6);
   const auto old = std::remove_if(marks_.begin(), marks_.end(),
-                                  [&](const Mark& m) { return now_utime - m.utime > lifetime_us; });
+                                  [&](const Mark& m) { return now_utime - m.utime > lifetime_us || m.utime > now_utime; });
+  // (A mark made after now comes from a run of another clock.)
   const auto dropped = static_cast<int>(marks_.end() - old);
   marks_.erase(old, marks_.end());
   if (dropped > 0) changed_ = true;
@@ -80,6 +85,42 @@ int GuardMarks::expire(std::int64_t now_utime) {
 void GuardMarks::clear() {
   if (!marks_.empty()) changed_ = true;
   marks_.clear();
+}
+
+std::string GuardMarks::checkpoint() const {
+  if (marks_.empty()) return {};
+  archive::ByteWriter w;
+  w.put<std::uint64_t>(marks_.size());
+  for (const Mark& m : marks_) {
+    w.put<std::int64_t>(m.utime);
+    mapping::write_typed_multipolygon(w, m.area);
+  }
+  return archive::seal(kMarksMagic, kMarksVersion, w.bytes());
+}
+
+std::string GuardMarks::restore(std::string_view checkpoint) {
+  std::vector<Mark> restored;
+  try {
+    const std::string payload = archive::unseal(kMarksMagic, kMarksVersion, checkpoint);
+    archive::ByteReader r(payload);
+    // A mark is at least its time and an empty polygon list's count.
+    const auto n = r.get_count(2 * sizeof(std::uint64_t));
+    restored.reserve(n);
+    for (std::uint64_t i = 0; i < n; ++i) {
+      Mark m;
+      m.utime = r.get<std::int64_t>();
+      m.area = mapping::read_typed_multipolygon(r, "guard mark " + std::to_string(i));
+      restored.push_back(std::move(m));
+    }
+    r.expect_end();
+  } catch (const archive::ArchiveError& e) {
+    return e.what();
+  }
+  const auto keep = static_cast<std::size_t>(std::max(0, options_.max_marks));
+  if (restored.size() > keep) restored.erase(restored.begin(), restored.end() - static_cast<std::ptrdiff_t>(keep));
+  marks_ = std::move(restored);
+  changed_ = true;
+  return {};
 }
 
 std::shared_ptr<const mapping::TypedMultiPolygon> GuardMarks::with_keep_out(

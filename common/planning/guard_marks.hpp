@@ -16,6 +16,8 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "geometry/pose2.hpp"
@@ -56,11 +58,20 @@ class GuardMarks {
   // one mark more (the oldest dropped beyond max_marks). Returns whether a
   // mark was made (not without points, nor with marks off).
   bool add(std::span<const mapping::Point> holding, const geometry::Pose2& robot, std::int64_t now_utime);
-  // Drops the marks older than lifetime_s. Returns how many.
+  // Drops the marks older than lifetime_s, and those made after now_utime
+  // (taken up from a checkpoint of another clock's run: a rebooted robot,
+  // a restarted simulator). Returns how many.
   int expire(std::int64_t now_utime);
   // Drops them all (a new map frame: SLAM restarted).
   void clear();
   std::size_t size() const { return marks_.size(); }
+  // The marks with their times, as a sealed archive ("" when there are none),
+  // so that a restarted explorer does not drive into the glass again; they
+  // are in the map frame of the SLAM epoch the caller keeps beside them.
+  std::string checkpoint() const;
+  // Takes a checkpoint up in place of the marks held (the newest max_marks
+  // of it); "" or why it was refused (then the marks are left as they were).
+  std::string restore(std::string_view checkpoint);
   // Every mark as one obstacle area, united with `keep_out` (the operator's,
   // may be null): a new pointer whenever the marks change, the same one in
   // between (planning caches key on it). Null when there are no marks.

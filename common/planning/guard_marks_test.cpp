@@ -99,6 +99,57 @@ TEST(GuardMarks, AMarkIsTheHoldInTheMapFrameKeptForItsLifetimeAndNoMoreThanMax) 
   EXPECT_FALSE(off.add(pane, robot, 0));
 }
 
+// A restarted explorer takes its marks up from a checkpoint: the newest
+// max_marks of them, with their times; a damaged checkpoint leaves the marks
+// as they were; a mark from another clock's run (made "after" now) goes.
+TEST(GuardMarks, TheMarksTakenUpFromACheckpointAreTheMarksThatWereKept) {
+  GuardMarkOptions options;
+  options.lifetime_s = 10.0;
+  GuardMarks marks(options);
+  EXPECT_EQ(marks.checkpoint(), "");  // none: nothing to keep
+  const auto pane = line_across(0.30, -0.05, 0.05);
+  ASSERT_TRUE(marks.add(pane, {3.0, 1.0, M_PI / 2}, 1'000'000));
+  ASSERT_TRUE(marks.add(pane, {5.0, 1.0, M_PI / 2}, 2'000'000));
+  ASSERT_TRUE(marks.add(pane, {7.0, 1.0, M_PI / 2}, 3'000'000));
+  const std::string saved = marks.checkpoint();
+  ASSERT_FALSE(saved.empty());
+
+  GuardMarks all(options);
+  ASSERT_EQ(all.restore(saved), "");
+  ASSERT_EQ(all.size(), 3u);
+  for (double x : {3.0, 5.0, 7.0}) {
+    EXPECT_TRUE(covers(*all.with_keep_out(nullptr), Point(x, 1.3))) << x;
+  }
+  EXPECT_FALSE(covers(*all.with_keep_out(nullptr), Point(4.0, 1.3)));
+  EXPECT_EQ(all.expire(11'000'001), 1);  // the times came along: the mark of 1 s is the one that goes
+  EXPECT_FALSE(covers(*all.with_keep_out(nullptr), Point(3.0, 1.3)));
+
+  options.max_marks = 2;
+  GuardMarks fewer(options);
+  ASSERT_EQ(fewer.restore(saved), "");
+  EXPECT_EQ(fewer.size(), 2u);
+  EXPECT_FALSE(covers(*fewer.with_keep_out(nullptr), Point(3.0, 1.3)));  // the oldest left out
+  EXPECT_TRUE(covers(*fewer.with_keep_out(nullptr), Point(7.0, 1.3)));
+
+  // Damaged: every byte flipped in turn, and cut short; refused, the marks kept.
+  for (std::size_t i = 0; i < saved.size(); i += 7) {
+    std::string bad = saved;
+    bad[i] = static_cast<char>(bad[i] ^ 0x5a);
+    EXPECT_NE(fewer.restore(bad), "") << i;
+    EXPECT_EQ(fewer.size(), 2u);
+  }
+  EXPECT_NE(fewer.restore(saved.substr(0, saved.size() - 1)), "");
+  EXPECT_NE(fewer.restore("not a checkpoint"), "");
+  EXPECT_EQ(fewer.size(), 2u);
+
+  // Taken up by a run whose clock started again (a rebooted robot): the
+  // marks are from "the future" and go at the first expiry.
+  GuardMarks rebooted(options);
+  ASSERT_EQ(rebooted.restore(saved), "");
+  EXPECT_EQ(rebooted.expire(500'000), 2);
+  EXPECT_EQ(rebooted.with_keep_out(nullptr), nullptr);
+}
+
 // Two rooms, the wall between them at x = 4 .. 4.2: glass below y = 1.5,
 // a door at 1.5 .. 2.5, plaster above. The map has the plaster only: the
 // glass was seen through, so both rooms are one free area below y = 2.5.

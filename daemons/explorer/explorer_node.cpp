@@ -106,6 +106,39 @@ std::string TrailKeeper::restore(std::string_view checkpoint) {
   return {};
 }
 
+namespace {
+constexpr char kTrailsAndMarksMagic[] = "PEXTRMRK";
+constexpr std::uint32_t kTrailsAndMarksVersion = 1;
+}  // namespace
+
+std::string ExplorerNode::trail_checkpoint() const {
+  archive::ByteWriter w;
+  w.put_string(trails_.checkpoint());
+  w.put_string(guard_marks_.checkpoint());
+  return archive::seal(kTrailsAndMarksMagic, kTrailsAndMarksVersion, w.bytes());
+}
+
+std::string ExplorerNode::restore_trails(const std::string& checkpoint) {
+  std::string trails, marks;
+  try {
+    const std::string payload = archive::unseal(kTrailsAndMarksMagic, kTrailsAndMarksVersion, checkpoint);
+    archive::ByteReader r(payload);
+    trails = r.get_string();
+    marks = r.get_string();
+    r.expect_end();
+  } catch (const archive::ArchiveError& e) {
+    // The file of an explorer from before the marks: the trails alone.
+    if (trails_.restore(checkpoint).empty()) return {};
+    return e.what();
+  }
+  planning::GuardMarks marks_restored(options_.guard_marks);
+  if (!marks.empty())
+    if (auto why = marks_restored.restore(marks); !why.empty()) return "guard marks: " + why;
+  if (auto why = trails_.restore(trails); !why.empty()) return why;
+  guard_marks_ = std::move(marks_restored);
+  return {};
+}
+
 void ExplorerNode::on_map(const pex::polygon_map_t& msg, std::int64_t now_utime) {
   DecodedMap decoded = decode_map(msg, options_.map);
   if (!decoded.ok) throw std::invalid_argument(decoded.error);

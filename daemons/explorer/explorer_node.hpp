@@ -147,11 +147,15 @@ class ExplorerNode {
   // step): "" when restored, else why not (the mission then starts afresh).
   std::string checkpoint_text() const;
   std::string restore(const std::string& checkpoint_text);
-  // The way the robot drove, likewise (a file of its own, trail_checkpoint_file):
-  // a restarted explorer can still take the robot back through a gap the map
-  // has shut since it drove through.
-  std::string trail_checkpoint() const { return trails_.checkpoint(); }
-  std::string restore_trails(const std::string& checkpoint) { return trails_.restore(checkpoint); }
+  // The way the robot drove and the guard marks, likewise (a file of their
+  // own, trail_checkpoint_file): a restarted explorer can still take the
+  // robot back through a gap the map has shut since it drove through, and
+  // does not send it into the glass that held it again. Both are in the
+  // frame of the SLAM epoch the trail holds (a new one drops the marks as
+  // ever); both are taken up, or neither. A file written before the marks
+  // were in it (the trail alone) is taken up too.
+  std::string trail_checkpoint() const;
+  std::string restore_trails(const std::string& checkpoint);
 
   // One control step: the command to publish now. Never waits for a plan.
   pex::velocity_cmd_t step(std::int64_t now_utime);

@@ -527,6 +527,68 @@ TEST(ExplorerNode, AGuardHoldIsToldToTheMissionOnceAHold) {
   EXPECT_EQ(holds(options), (Counts{2, 1, 0}));
 }
 
+// The explorer restarted after a guard mark (kill -9, systemd starts it
+// again): with the trail checkpoint it keeps the mark and plans round it,
+// as the first run did; without the checkpoint, or when SLAM has started a
+// new map frame meanwhile, the pane holds the robot once more.
+TEST(ExplorerNode, ARestartedExplorerKeepsItsGuardMarksFromTheTrailCheckpoint) {
+  enum class Restart { kFromCheckpoint, kWithoutCheckpoint, kFromCheckpointNewEpoch };
+  auto holds_after_restart = [](Restart restart) {
+    ExplorerOptions options;
+    const pex::pose_t pose = mid_corridor();
+    auto slam_update = [](std::int64_t epoch, std::int64_t generation) {
+      pex::slam_update_t u{};
+      u.epoch = epoch;
+      u.generation = generation;
+      pex::particle_t p{};
+      p.x = 10.0;
+      p.y = 1.5;
+      p.parent = 0;
+      u.particles.push_back(p);
+      u.nparticles = 1;
+      return u;
+    };
+    auto run = [&](ExplorerNode& node, std::int64_t from, std::int64_t to) {
+      for (std::int64_t t = from; t <= to; t += 100'000) {
+        EXPECT_NO_THROW(node.on_pose(pose, t));
+        EXPECT_NO_THROW(node.on_scan(scan_of_wall_ahead(0.26), t));
+        if (t % 1'000'000 == 0) {
+          EXPECT_NO_THROW(node.on_map(corridor(), t));
+        }
+        node.step(t);
+      }
+    };
+    ExplorerNode first(options);
+    EXPECT_NO_THROW(first.on_slam_update(slam_update(1, 0)));
+    run(first, 0, 2'000'000);
+    EXPECT_EQ(first.counters().guard_marks, 1);
+    ExplorerNode second(options);
+    if (restart != Restart::kWithoutCheckpoint) {
+      EXPECT_EQ(second.restore_trails(first.trail_checkpoint()), "");
+    }
+    const std::int64_t epoch = restart == Restart::kFromCheckpointNewEpoch ? 2 : 1;
+    EXPECT_NO_THROW(second.on_slam_update(slam_update(epoch, epoch == 1 ? 1 : 0)));
+    run(second, 2'100'000, 5'000'000);
+    return second.counters().guard_blocks;
+  };
+  EXPECT_EQ(holds_after_restart(Restart::kFromCheckpoint), 0);
+  EXPECT_EQ(holds_after_restart(Restart::kWithoutCheckpoint), 1);
+  EXPECT_EQ(holds_after_restart(Restart::kFromCheckpointNewEpoch), 1);
+
+  // The file of an explorer from before the marks (the trails alone) is taken up.
+  TrailKeeper old_file;
+  pex::slam_update_t u{};
+  u.epoch = 1;
+  pex::particle_t p{};
+  p.parent = 0;
+  u.particles.push_back(p);
+  u.nparticles = 1;
+  EXPECT_NO_THROW(old_file.on_slam_update(u));
+  ExplorerNode node{ExplorerOptions{}};
+  EXPECT_EQ(node.restore_trails(old_file.checkpoint()), "");
+  EXPECT_NE(node.restore_trails("PEXTRMRK and then nothing of the sort"), "");
+}
+
 // The laser blind to both sides (beams beyond 0.5 rad without a return):
 // the guard reads the corridor's walls from the map for them, and walls
 // beside the robot do not slow it.
