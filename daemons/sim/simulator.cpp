@@ -581,10 +581,7 @@ void Simulator::read_client(ColaClient& client) {
     if (laser_fault_ == pex::sim_fault_t::FAULT_LASER_STALL) continue;  // read, never answered
     for (auto& event : client.parser.push(std::string_view(buffer, r.bytes))) {
       if (auto* reply = std::get_if<cola::ReplyEvent>(&event)) {
-        std::string error;
-        if (!hwio::write_all(client.fd.get(), protocol_.answer(client, reply->telegram), 200, &error)) {
-          client.closed = true;
-        }
+        send_or_drop(client, protocol_.answer(client, reply->telegram), 200);
       } else if (auto* bad = std::get_if<cola::ErrorEvent>(&event)) {
         node_.reject("cola", "malformed request: " + bad->message);
       }

@@ -111,7 +111,7 @@ class Simulator {
   void publish_clock();
   void laser_step();
   void send_scan();
-  // Scan telegrams to a client; one that cannot take them within timeout_ms is dropped.
+  // Bytes to a client (scan telegrams, replies); one that cannot take them within timeout_ms is dropped, with a log line.
   void send_or_drop(ColaClient& client, std::string_view bytes, int timeout_ms);
   // SIM_CLOCK's utime, and every stamp of ours: the wall time the simulation
   // started plus the simulated time since.
