@@ -37,8 +37,12 @@ int main(int argc, char** argv) {
     // Else from a saved map (initial_map_file), if one is configured.
     if (!restored) pex::polygon_mapper::start_from_initial_map(*mapper);
     // Health: without scans or poses the map stands still (DEGRADED, says which).
+    // With SLAM, SLAM_POSE says it is there: SLAM_UPDATE comes only after
+    // 0.5 m or 0.25 rad, or with the robot standing, so a robot creeping to a
+    // goal went 3-5 s without one, a dozen times a mission, and the mapper
+    // called its pose source away each time.
     const std::string& source = mapper->options().pose_source;
-    const std::string pose_channel(source == "slam"       ? ch::kSlamUpdate
+    const std::string pose_channel(source == "slam"       ? ch::kSlamPose
                                    : source == "odometry" ? ch::kOdometry
                                                           : ch::kSimTruth);
     auto watch = std::make_shared<pex::runtime::InputWatch>();
@@ -58,12 +62,14 @@ int main(int argc, char** argv) {
       watch->seen(ch::kLidarScan, node.monotonic_us());
     });
     if (source == "slam") {
-      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, watch, publish_maps](const pex::slam_update_t& update) {
+      node.subscribe<pex::pose_t>(ch::kSlamPose, [&node, watch](const pex::pose_t&) {
+        watch->seen(ch::kSlamPose, node.monotonic_us());
+      });
+      node.subscribe<pex::slam_update_t>(ch::kSlamUpdate, [&node, mapper, publish_maps](const pex::slam_update_t& update) {
         const auto epoch_changes = mapper->counters().slam_epoch_changes;
         const bool switched = mapper->on_slam_update(update);
         if (mapper->counters().slam_epoch_changes != epoch_changes)
           spdlog::warn("SLAM started afresh (epoch {}): its frame is not the old map's, which is dropped", update.epoch);
-        watch->seen(ch::kSlamUpdate, node.monotonic_us());
         // A new best particle: its map goes out now, consistent with its trajectory.
         if (switched) publish_maps(node.now_utime());
       });

@@ -34,7 +34,7 @@ struct MapperOptions {
   double insert_max_interval_s = 1.0;
   double publish_rate_hz = 1.0;
   bool publish_free_space = true;         // MAP_FREE beside MAP, at the same rate
-  double input_timeout_s = 3.0;           // no scan or no pose/update this long: DEGRADED (health)
+  double input_timeout_s = 3.0;           // no scan or no pose (with SLAM: SLAM_POSE) this long: DEGRADED (health)
   double pose_buffer_s = 5.0;             // poses kept for pairing with scans
   double max_pose_gap_s = 0.5;            // poses bracketing a scan may be this far apart
   int max_pending_scans = 20;             // scans waiting for a newer pose

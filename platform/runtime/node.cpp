@@ -39,6 +39,12 @@ void RateLimitedLog::log(spdlog::level::level_enum level, const std::string& key
   e.suppressed = 0;
 }
 
+void RateLimitedLog::restart(const std::string& key) {
+  auto& e = entries_[key];
+  e.last = std::chrono::steady_clock::now();
+  e.suppressed = 0;
+}
+
 namespace {
 
 void on_lcm_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Node* node) {
@@ -272,11 +278,22 @@ void Node::error(std::string_view what_key, const std::string& text) {
 }
 
 void Node::set_state(int8_t state, std::string reason) {
+  // A change of state is logged at once; a new reason for the same state at
+  // most every 10 s (with the count held back): an input watch's reason
+  // counts the time ("no SLAM_UPDATE for 3.4 s") and changed at every check,
+  // which logged a line four times a second for as long as the input was
+  // away (a robot standing still after its mission: 100-200 lines a run).
+  // DAEMON_STATUS carries the latest reason either way.
   if (state != state_ || reason != state_reason_) {
-    if (state == pex::daemon_status_t::STATE_OK)
-      spdlog::info("state OK{}{}", reason.empty() ? "" : ": ", reason);
-    else
-      spdlog::warn("state {}{}{}", daemon_state_name(state), reason.empty() ? "" : ": ", reason);
+    const auto level = state == pex::daemon_status_t::STATE_OK ? spdlog::level::info : spdlog::level::warn;
+    const std::string text =
+        fmt::format("state {}{}{}", daemon_state_name(state), reason.empty() ? "" : ": ", reason);
+    if (state != state_) {
+      spdlog::log(level, "{}", text);
+      state_log_.restart("state");
+    } else {
+      state_log_.log(level, "state", text);
+    }
   }
   const int8_t before = published_state();
   state_ = state;

@@ -55,6 +55,8 @@ class RateLimitedLog {
   explicit RateLimitedLog(std::chrono::milliseconds period = std::chrono::seconds(1))
       : period_(period) {}
   void log(spdlog::level::level_enum level, const std::string& key, const std::string& text);
+  // A line about `key` was just logged another way: its period starts now.
+  void restart(const std::string& key);
 
  private:
   struct Entry {
@@ -247,6 +249,8 @@ class Node {
   std::map<std::string, int64_t> counters_;
   std::vector<std::function<void()>> counter_sources_;  // collect_counters
   RateLimitedLog rate_limited_;
+  // A new reason for the same state, at most every 10 s: see set_state.
+  RateLimitedLog state_log_{std::chrono::seconds(10)};
   int next_watch_id_ = 1;
   int signal_fd_ = -1;
   bool stop_ = false;

@@ -13,12 +13,18 @@
 //   DONE with the world mapped and nothing beyond it. Without the checkpoint
 //   the restarted SLAM is a new filter: a new epoch, and the mapper drops
 //   its maps.
+//
+//   A robot creeping (SLAM_UPDATE only every 0.5 m) keeps the mapper OK: it
+//   knows SLAM is there by SLAM_POSE; SLAM killed, the mapper says so, and
+//   is OK again once SLAM is back.
 #include <gtest/gtest.h>
 
+#include <pex/daemon_status_t.hpp>
 #include <pex/explore_state_t.hpp>
 #include <pex/polygon_map_t.hpp>
 #include <pex/pose_t.hpp>
 #include <pex/slam_update_t.hpp>
+#include <pex/velocity_cmd_t.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -137,4 +143,59 @@ TEST(SlamFaults, KilledSlamGoesOnFromItsCheckpointWithTheSameEpochAndNoJump) {
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
   if (!::testing::Test::HasFailure()) std::filesystem::remove_all(std::filesystem::path(checkpoint).parent_path());
+}
+
+// SLAM updates after 0.5 m or 0.25 rad, and with the robot standing; a robot
+// creeping to a goal goes seconds without an update. The mapper watched
+// SLAM_UPDATE and went DEGRADED ("no SLAM_UPDATE for 3.1 s") a dozen times a
+// mission; it watches SLAM_POSE (odometry rate), which stops only when SLAM
+// does.
+TEST(SlamFaults, ACreepingRobotKeepsTheMapperOkAndAKilledSlamMakesItDegraded) {
+  ExplorationSet set("faults-creep", {.speed = 2.0, .slam = true, .held_back = {"explorer"}});
+  std::vector<double> update_times;  // simulated s of each SLAM_UPDATE
+  std::vector<std::pair<double, pex::daemon_status_t>> mapper;  // each status of the mapper, with simulated s
+  set.bus().on<pex::slam_update_t>(std::string(ch::kSlamUpdate),
+                                   [&](const pex::slam_update_t&) { update_times.push_back(set.sim_seconds()); });
+  set.bus().on<pex::daemon_status_t>(std::string(ch::kDaemonStatus), [&](const pex::daemon_status_t& s) {
+    if (s.name == "polygon_mapper") mapper.emplace_back(set.sim_seconds(), s);
+  });
+  auto mapper_ok = [&] { return !mapper.empty() && mapper.back().second.state == pex::daemon_status_t::STATE_OK; };
+  ASSERT_TRUE(set.spin_sim([&] { return !update_times.empty() && mapper_ok(); }, 30.0)) << set.report_with_logs();
+
+  // 10 simulated seconds at 4 cm/s: 0.4 m, no filter update, and no standing
+  // republication either (more than 1 cm driven since the last update).
+  const double creep_from = set.sim_seconds();
+  const std::size_t statuses_before = mapper.size();
+  ASSERT_TRUE(set.bus().spin_until(
+      [&] {
+        set.bus().publish(std::string(ch::kBaseCmd), velocity_command(0.04, 0.0, "slam_faults_test"));
+        set.bus().spin_for(std::chrono::milliseconds(50));
+        return set.sim_seconds() >= creep_from + 10.0;
+      },
+      std::chrono::seconds(60)))
+      << set.report_with_logs();
+  set.bus().publish(std::string(ch::kBaseCmd), velocity_command(0.0, 0.0, "slam_faults_test"));
+  double longest_gap_s = 0.0, last = creep_from;
+  for (const double t : update_times)
+    if (t > creep_from) longest_gap_s = std::max(longest_gap_s, t - last), last = t;
+  longest_gap_s = std::max(longest_gap_s, set.sim_seconds() - last);
+  // The case itself: longer without an update than the mapper's input_timeout_s (3 s).
+  ASSERT_GT(longest_gap_s, 4.0) << "SLAM updated every " << longest_gap_s << " s: the robot did not creep";
+  ASSERT_GT(mapper.size(), statuses_before + 3) << "too few heartbeats of the mapper while creeping";
+  for (std::size_t i = statuses_before; i < mapper.size(); ++i)
+    EXPECT_EQ(+mapper[i].second.state, +pex::daemon_status_t::STATE_OK)
+        << "at " << mapper[i].first << " s, the robot creeping, SLAM there:\n"
+        << set.process("polygon_mapper")->output();
+
+  set.process("slam")->kill_hard();
+  auto slam_reported_away = [&] {
+    return !mapper.empty() && mapper.back().second.state == pex::daemon_status_t::STATE_DEGRADED &&
+           set.process("polygon_mapper")->output().find("no SLAM_POSE") != std::string::npos;
+  };
+  EXPECT_TRUE(set.spin_sim(slam_reported_away, 10.0)) << set.report_with_logs();
+  // And OK again once SLAM is back (a new filter: the mapper starts its maps afresh).
+  set.restart("slam");
+  EXPECT_TRUE(set.spin_sim(mapper_ok, 20.0)) << set.report_with_logs();
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
 }
