@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # A building of wings for pex-sim, to try the whole set on a layout family the
 # shipped worlds and scripts/make-office-floor.py do not have (docs/
-# exploration.md, "Sessions 53-54: buildings of wings").
+# exploration.md, "Sessions 53–54: buildings of wings").
 #   scripts/make-wing-building.py [--glass] SHAPE SEED OUT.wkt
 # SHAPE: L, T, U or ring (four wings round a closed core: a corridor loop).
 # Each wing is a corridor 1.8-2.6 m wide with a row of rooms 4.5-7 m deep on
