@@ -64,7 +64,7 @@ struct ShownCounters {
 // An input watch's reason counts the time ("no SLAM_UPDATE for 3.4 s"), so
 // it changes at every check while the input is away: each change of state is
 // a log line, the same state with a new reason one line in 10 s at most
-// (held back, counted); DAEMON_STATUS carries the newest reason either way.
+// (held back, counted); the systemd status line has the newest reason.
 TEST(Node, AStateIsLoggedWhenItChangesNotAtEveryNewCountOfItsReason) {
   std::ostringstream log;
   auto logger = std::make_shared<spdlog::logger>("capture", std::make_shared<spdlog::sinks::ostream_sink_st>(log));
