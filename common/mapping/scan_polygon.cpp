@@ -220,7 +220,8 @@ ScanPolygonResult scan_to_polygon(std::span<const float> ranges, double angle_mi
     bool joins = continues;
     if (continues && beam[k] == Beam::kReturn) {
       const double r_prev = range_at(k - 1);
-      const double break_m = r_prev * sin_step / sin_gap + 3.0 * o.break_sigma_m;
+      double break_m = r_prev * sin_step / sin_gap + 3.0 * o.break_sigma_m;
+      if (o.break_max_gap_m > 0.0) break_m = std::min(break_m, o.break_max_gap_m);
       joins = bg::distance(sensor_points[k - 1], sensor_points[k]) <= break_m;
     }
     if (joins) {

@@ -47,6 +47,14 @@ struct ScanPolygonOptions {
   // break distance grows with the range.
   double break_lambda_rad = 10.0 * std::numbers::pi / 180.0;
   double break_sigma_m = 0.01;
+  // ... and never more than this apart (0: no cap). The adaptive distance
+  // grows with range and with a wall seen at a slant: 0.9 m at 16 m, so a
+  // wall seen along its length from afar, with no beam through a door in it,
+  // was drawn across the door, and the door's obstacle band closed it in the
+  // planning map for good (docs/mapping.md, "Doors seen at a slant"). A gap
+  // narrower than the robot closes nothing it could pass. Off in the shipped
+  // config: the walls it dots with frontier made missions longer (same place).
+  double break_max_gap_m = 0.0;
   // RDP tolerance for cluster polylines.
   double rdp_epsilon_m = 0.03;
   // Merge step after RDP: a vertex is dropped while the returns of its two

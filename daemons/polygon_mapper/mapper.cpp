@@ -46,6 +46,7 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.scan.return_margin_m = scan.get<double>("return_margin_m", o.scan.return_margin_m, runtime::in_range(0.0, 0.5));
   o.scan.break_lambda_rad = scan.get<double>("break_lambda_rad", o.scan.break_lambda_rad, runtime::in_range(0.01, 1.5));
   o.scan.break_sigma_m = scan.get<double>("break_sigma_m", o.scan.break_sigma_m, non_negative<double>());
+  o.scan.break_max_gap_m = scan.get<double>("break_max_gap_m", o.scan.break_max_gap_m, non_negative<double>());
   o.scan.rdp_epsilon_m = scan.get<double>("rdp_epsilon_m", o.scan.rdp_epsilon_m, non_negative<double>());
   o.scan.merge_max_rms_m = scan.get<double>("merge_max_rms_m", o.scan.merge_max_rms_m, non_negative<double>());
   o.scan.merge_max_deviation_m =
