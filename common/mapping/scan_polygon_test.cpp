@@ -109,9 +109,6 @@ TEST(ScanToPolygon, NoReturnBeamsEndAtTheFreeRangeAsFrontier) {
   EXPECT_NEAR(area(map), sector, 0.02 * sector);
 }
 
-// A room 3 m deep and 16 m wide seen from its middle: the near wall is drawn,
-// the side walls beyond the obstacle range are not, and their beams end in a
-// frontier at that range (free space seen, the wall to be seen from nearer).
 // A corridor wall with a 0.85 m door, seen along its length from 16 m
 // away (the sensor 2.66 m off the wall): its returns are about 0.9 m apart
 // there, no beam passes the door, and the adaptive break distance (0.9 m at
@@ -162,6 +159,9 @@ TEST(ScanToPolygon, AWallSeenAlongItsLengthFromAfarIsNotDrawnAcrossADoor) {
   EXPECT_NEAR(bg::area(capped.polygon.geometry), bg::area(uncapped.polygon.geometry), 1e-6);
 }
 
+// A room 3 m deep and 16 m wide seen from its middle: the near wall is drawn,
+// the side walls beyond the obstacle range are not, and their beams end in a
+// frontier at that range (free space seen, the wall to be seen from nearer).
 TEST(ScanToPolygon, ReturnsBeyondTheObstacleRangeGiveFreeSpaceToItNotWalls) {
   std::vector<Wall> walls;
   add_box(walls, -8, -3, 8, 3);

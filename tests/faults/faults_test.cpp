@@ -80,18 +80,9 @@ namespace ch = pex::runtime::channels;
 
 namespace {
 
-pex::velocity_cmd_t command(double v) { return velocity_command(v, 0.0, "faults_test"); }
-
-// Drives as an explorer would, a BASE_CMD of v every 50 ms, until `done`
-// (false after 60 s of wall time: only a hung set gets there).
+// BASE_CMDs of this test name it as their source.
 bool drive_until(Bus& bus, double v, const std::function<bool()>& done) {
-  return bus.spin_until(
-      [&] {
-        bus.publish(std::string(ch::kBaseCmd), command(v));
-        bus.spin_for(50ms);
-        return done();
-      },
-      60s);
+  return pex::testing::drive_until(bus, v, done, "faults_test");
 }
 
 // pex-sim's config on two_rooms (4 m of free floor ahead of the start pose), in `dir`.

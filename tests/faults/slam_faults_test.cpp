@@ -166,13 +166,7 @@ TEST(SlamFaults, ACreepingRobotKeepsTheMapperOkAndAKilledSlamMakesItDegraded) {
   // republication either (more than 1 cm driven since the last update).
   const double creep_from = set.sim_seconds();
   const std::size_t statuses_before = mapper.size();
-  ASSERT_TRUE(set.bus().spin_until(
-      [&] {
-        set.bus().publish(std::string(ch::kBaseCmd), velocity_command(0.04, 0.0, "slam_faults_test"));
-        set.bus().spin_for(std::chrono::milliseconds(50));
-        return set.sim_seconds() >= creep_from + 10.0;
-      },
-      std::chrono::seconds(60)))
+  ASSERT_TRUE(drive_until(set.bus(), 0.04, [&] { return set.sim_seconds() >= creep_from + 10.0; }, "slam_faults_test"))
       << set.report_with_logs();
   set.bus().publish(std::string(ch::kBaseCmd), velocity_command(0.0, 0.0, "slam_faults_test"));
   double longest_gap_s = 0.0, last = creep_from;

@@ -299,4 +299,14 @@ pex::velocity_cmd_t velocity_command(double v, double omega, const std::string& 
   return c;
 }
 
+bool drive_until(Bus& bus, double v, const std::function<bool()>& done, const std::string& source) {
+  return bus.spin_until(
+      [&] {
+        bus.publish(std::string(pex::runtime::channels::kBaseCmd), velocity_command(v, 0.0, source));
+        bus.spin_for(std::chrono::milliseconds(50));
+        return done();
+      },
+      std::chrono::seconds(60));
+}
+
 }  // namespace pex::testing

@@ -141,6 +141,10 @@ std::int64_t counter_of(const pex::daemon_status_t& status, const std::string& n
 // A BASE_CMD stamped with the wall clock, as a test drives the robot.
 pex::velocity_cmd_t velocity_command(double v, double omega, const std::string& source);
 
+// Drives as an explorer would, a BASE_CMD of v (straight on) every 50 ms,
+// until `done` (false after 60 s of wall time: only a hung set gets there).
+bool drive_until(Bus& bus, double v, const std::function<bool()>& done, const std::string& source);
+
 // "polygon_mapper" -> "pex-polygon-mapper"
 std::string program_of(const std::string& daemon_name);
 
