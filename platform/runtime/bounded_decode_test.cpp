@@ -4,8 +4,6 @@
 // patches them (cmake/PexLcmBoundedDecode.cmake). This binary counts every
 // allocation with its own operator new, so it is a test binary of its own.
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ostream_sink.h>
-#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <climits>
@@ -28,6 +26,7 @@
 #include <pex/velocity_cmd_t.hpp>
 
 #include "runtime/channels.hpp"
+#include "runtime/log_capture.hpp"
 #include "runtime/node.hpp"
 
 namespace {
@@ -355,12 +354,7 @@ TEST(BoundedDecode, DamagedMessagesStayWithinTheBound) {
 // The node counts what fails to decode as rejected input (not as its own
 // error), says which channel and why in a rate-limited line, and goes on.
 TEST(BoundedDecode, NodeRejectsHostileCountsAndNamesTheChannel) {
-  std::ostringstream log;
-  auto logger = std::make_shared<spdlog::logger>("capture", std::make_shared<spdlog::sinks::ostream_sink_st>(log));
-  logger->set_pattern("%v");
-  const auto previous = spdlog::default_logger();
-  spdlog::set_default_logger(logger);
-
+  const pex::runtime::LogCapture log;
   pex::runtime::Node node(pex::runtime::NodeOptions{"t", "", true, "", 1.0});
   int calls = 0;
   node.subscribe<pex::laser_scan_t>(pex::runtime::channels::kLidarScan, [&](const pex::laser_scan_t&) { ++calls; });
@@ -373,7 +367,7 @@ TEST(BoundedDecode, NodeRejectsHostileCountsAndNamesTheChannel) {
   }
   EXPECT_EQ(node.msgs_rejected(), 3);
   EXPECT_EQ(calls, 0);
-  const std::string logged = log.str();
+  const std::string logged = log.text();
   const std::string first_line = logged.substr(0, logged.find('\n'));
   EXPECT_NE(first_line.find(channel), std::string::npos) << first_line;
   EXPECT_NE(first_line.find("count or string length beyond the bytes left"), std::string::npos) << first_line;
@@ -382,14 +376,11 @@ TEST(BoundedDecode, NodeRejectsHostileCountsAndNamesTheChannel) {
   const auto flood = hostile(nranges, INT32_MAX);
   for (int i = 0; i < 1000; ++i) node.dispatch(channel, flood.data(), static_cast<int>(flood.size()), t++);
   EXPECT_EQ(node.msgs_rejected(), 1003);
-  const std::string text = log.str();
-  EXPECT_LT(std::count(text.begin(), text.end(), '\n'), 10) << text;
+  EXPECT_LT(log.lines(), 10) << log.text();
 
   const auto good = encode(scan(10, 0));
   node.dispatch(channel, good.data(), static_cast<int>(good.size()), t++);
   EXPECT_EQ(calls, 1);
-
-  spdlog::set_default_logger(previous);
 }
 
 // The reason names what is wrong: another type, bytes left over, too few bytes.

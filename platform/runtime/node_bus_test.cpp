@@ -13,9 +13,6 @@
 #include <sstream>
 #include <string>
 
-#include <spdlog/sinks/ostream_sink.h>
-#include <spdlog/spdlog.h>
-
 #include <atomic>
 #include <vector>
 #include <thread>
@@ -26,6 +23,7 @@
 #include "runtime/channels.hpp"
 #include "runtime/node.hpp"
 #include "runtime/daemon_state.hpp"
+#include "runtime/log_capture.hpp"
 #include <pex/daemon_status_t.hpp>
 
 using pex::runtime::ClockSource;
@@ -145,21 +143,22 @@ TEST(NodeHealthWords, JournalAndSystemdStatusSayTheStateInWords) {
   std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
   ASSERT_EQ(::bind(sock, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
   ::setenv("NOTIFY_SOCKET", path.c_str(), 1);
-  std::ostringstream journal;
-  auto before = spdlog::default_logger();
-  spdlog::set_default_logger(std::make_shared<spdlog::logger>("t", std::make_shared<spdlog::sinks::ostream_sink_mt>(journal)));
+  std::string journal;
   {
-    Node node(NodeOptions{"t", kUrl, false, "", 1.0});
-    node.set_state(pex::daemon_status_t::STATE_DEGRADED, "no scans for 2.0 s");
+    const pex::runtime::LogCapture log;
+    {
+      Node node(NodeOptions{"t", kUrl, false, "", 1.0});
+      node.set_state(pex::daemon_status_t::STATE_DEGRADED, "no scans for 2.0 s");
+    }
+    journal = log.text();
   }
-  spdlog::set_default_logger(before);
   ::unsetenv("NOTIFY_SOCKET");
   std::string notified;
   char buf[512];
   for (ssize_t n; (n = ::recv(sock, buf, sizeof buf, MSG_DONTWAIT)) > 0;) notified += std::string(buf, n) + "\n";
   ::close(sock);
   ::unlink(path.c_str());
-  EXPECT_NE(journal.str().find("state DEGRADED: no scans for 2.0 s"), std::string::npos) << journal.str();
+  EXPECT_NE(journal.find("state DEGRADED: no scans for 2.0 s"), std::string::npos) << journal;
   EXPECT_NE(notified.find("STATUS=DEGRADED (no scans for 2.0 s), in "), std::string::npos) << notified;
   EXPECT_EQ(notified.find("STATUS=state "), std::string::npos) << notified;
 }

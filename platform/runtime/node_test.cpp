@@ -2,8 +2,6 @@
 #include "runtime/run_guarded.hpp"
 
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ostream_sink.h>
-#include <spdlog/spdlog.h>
 
 #include <fstream>
 
@@ -19,11 +17,13 @@
 #include <pex/pose_t.hpp>
 #include <pex/sim_clock_t.hpp>
 
+#include "runtime/log_capture.hpp"
 #include "runtime/log_file_error.hpp"
 #include "runtime/channels.hpp"
 
 
 using pex::runtime::ClockSource;
+using pex::runtime::LogCapture;
 using pex::runtime::LogFileError;
 using pex::runtime::Node;
 using pex::runtime::NodeOptions;
@@ -66,34 +66,23 @@ struct ShownCounters {
 // a log line, the same state with a new reason one line in 10 s at most
 // (held back, counted); the systemd status line has the newest reason.
 TEST(Node, AStateIsLoggedWhenItChangesNotAtEveryNewCountOfItsReason) {
-  std::ostringstream log;
-  auto logger = std::make_shared<spdlog::logger>("capture", std::make_shared<spdlog::sinks::ostream_sink_st>(log));
-  logger->set_pattern("%v");
-  const auto previous = spdlog::default_logger();
-  spdlog::set_default_logger(logger);
-  auto lines_with = [&](const std::string& what) {
-    std::istringstream in(log.str());
-    int n = 0;
-    for (std::string line; std::getline(in, line);) n += line.find(what) != std::string::npos;
-    return n;
-  };
+  const LogCapture log;
   {
     Node node(NodeOptions{"t", "", true, "", 1.0});
     node.set_state(daemon_status_t::STATE_OK);
     for (int tenths = 31; tenths < 231; ++tenths)  // 20 s of checks four times a second, in a test's microseconds
       node.set_state(daemon_status_t::STATE_DEGRADED, "no SLAM_UPDATE for " + std::to_string(tenths / 10) + "." +
                                                           std::to_string(tenths % 10) + " s");
-    EXPECT_EQ(lines_with("state DEGRADED: no SLAM_UPDATE for 3.1 s"), 1) << log.str();
-    EXPECT_EQ(lines_with("state DEGRADED"), 1) << log.str();
+    EXPECT_EQ(log.lines_with("state DEGRADED: no SLAM_UPDATE for 3.1 s"), 1) << log.text();
+    EXPECT_EQ(log.lines_with("state DEGRADED"), 1) << log.text();
     EXPECT_EQ(node.published_state(), static_cast<int8_t>(daemon_status_t::STATE_DEGRADED));
     node.set_state(daemon_status_t::STATE_OK);
     node.set_state(daemon_status_t::STATE_DEGRADED, "no LIDAR_SCAN for 3.0 s");
     node.set_state(daemon_status_t::STATE_ERROR, "no LIDAR_SCAN for 3.5 s");
-    EXPECT_EQ(lines_with("state OK"), 2) << log.str();
-    EXPECT_EQ(lines_with("state DEGRADED: no LIDAR_SCAN for 3.0 s"), 1) << log.str();
-    EXPECT_EQ(lines_with("state ERROR: no LIDAR_SCAN for 3.5 s"), 1) << log.str();
+    EXPECT_EQ(log.lines_with("state OK"), 2) << log.text();
+    EXPECT_EQ(log.lines_with("state DEGRADED: no LIDAR_SCAN for 3.0 s"), 1) << log.text();
+    EXPECT_EQ(log.lines_with("state ERROR: no LIDAR_SCAN for 3.5 s"), 1) << log.text();
   }
-  spdlog::set_default_logger(previous);
 }
 
 TEST(Node, DispatchDecodesAndCallsHandler) {
