@@ -81,6 +81,7 @@ int run_once(int argc, char** argv) {
     const double v = std::stod(arg.substr(eq + 1));
     if (key == "linear_update_m") options.linear_update_m = v;
     else if (key == "angular_update_rad") options.angular_update_rad = v;
+    else if (key == "standing_update_s") options.standing_update_s = v;
     else if (key == "score_sigma_m2") options.grid.score_sigma_m2 = v;
     else if (key == "likelihood_sigma_m2") options.grid.likelihood_sigma_m2 = v;
     else if (key == "kernel_radius_cells") options.grid.kernel_radius_cells = static_cast<int>(v);

@@ -50,6 +50,8 @@ bool ParticleFilter::process(const RangeScan& scan, const Pose2& odometry) {
   if (!initialized_) {
     if (points.beams.empty()) return false;
     initialize(points, odometry);
+    standing_odometry_ = odometry;
+    standing_since_utime_ = scan.utime;
     return true;
   }
   const Pose2 step = relative(last_odometry_, odometry);
@@ -57,12 +59,31 @@ bool ParticleFilter::process(const RangeScan& scan, const Pose2& odometry) {
   linear_since_update_m_ += std::hypot(step.x_m, step.y_m);
   angular_since_update_rad_ += std::abs(step.theta_rad);
   for (Particle& p : particles_) p.pose = sample_motion(p.pose, step, options_.motion, rng_);
+  track_standing(scan.utime, odometry);
   if (points.beams.empty()) return false;
-  if (linear_since_update_m_ < options_.linear_update_m &&
-      angular_since_update_rad_ < options_.angular_update_rad)
-    return false;
+  const bool gated = linear_since_update_m_ >= options_.linear_update_m ||
+                     angular_since_update_rad_ >= options_.angular_update_rad;
+  if (!gated && !standing_update_due(scan.utime, odometry)) return false;
+  standing_updates_ += !gated;
   update(points, odometry);
   return true;
+}
+
+void ParticleFilter::track_standing(std::int64_t utime, const Pose2& odometry) {
+  const Pose2 moved = relative(standing_odometry_, odometry);
+  if (std::hypot(moved.x_m, moved.y_m) > options_.standing_tolerance_m ||
+      std::abs(moved.theta_rad) > options_.standing_tolerance_rad || utime < standing_since_utime_) {
+    standing_odometry_ = odometry;
+    standing_since_utime_ = utime;
+  }
+}
+
+bool ParticleFilter::standing_update_due(std::int64_t utime, const Pose2& odometry) const {
+  if (!(options_.standing_update_s > 0.0)) return false;
+  if (static_cast<double>(utime - standing_since_utime_) < options_.standing_update_s * 1e6) return false;
+  const Pose2 net = relative(odometry_at_update_, odometry);
+  return std::hypot(net.x_m, net.y_m) > options_.standing_update_min_m ||
+         std::abs(net.theta_rad) > options_.standing_update_min_rad;
 }
 
 void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry) {
@@ -323,7 +344,8 @@ std::vector<Pose2> ParticleFilter::best_trajectory() const {
 
 namespace {
 constexpr std::string_view kCheckpointMagic = "PEXSLAMF";
-constexpr std::uint32_t kCheckpointVersion = 3;  // 2: corrected odometry steps, check statistics; 3: odometry drift
+// 2: corrected odometry steps, check statistics; 3: odometry drift; 4: where the robot stands
+constexpr std::uint32_t kCheckpointVersion = 4;
 }  // namespace
 
 std::string ParticleFilter::checkpoint() const {
@@ -352,6 +374,9 @@ std::string ParticleFilter::checkpoint() const {
   out.put<double>(last_update_.odometry_check_ratio);
   out.put<std::int64_t>(corrected_odometry_steps_);
   drift_.write(out);
+  put_pose(out, standing_odometry_);
+  out.put<std::int64_t>(standing_since_utime_);
+  out.put<std::int64_t>(standing_updates_);
 
   // The trajectory tree: every node a particle reaches, once, parents before
   // their children (a particle's chain is walked up to the first node already
@@ -428,6 +453,9 @@ std::string ParticleFilter::restore(std::string_view checkpoint) {
     restored.last_update_.odometry_check_ratio = in.get<double>();
     restored.corrected_odometry_steps_ = in.get<std::int64_t>();
     restored.drift_.read(in);
+    restored.standing_odometry_ = get_pose(in);
+    restored.standing_since_utime_ = in.get<std::int64_t>();
+    restored.standing_updates_ = in.get<std::int64_t>();
 
     constexpr std::size_t kNodeBytes = 3 * sizeof(double) + 2 * sizeof(std::int64_t);
     const std::uint64_t node_count = in.get_count(kNodeBytes);

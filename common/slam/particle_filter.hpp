@@ -51,6 +51,20 @@ struct ParticleFilterOptions {
   // length) or turned this much since the last update.
   double linear_update_m = 0.5;
   double angular_update_rad = 0.25;
+  // A robot that stops short of both gates (at a goal, on a pause) would
+  // never have the view where it stands matched and mapped: the particles'
+  // maps, and the polygon maps made at the updates, lack it until the robot
+  // drives on (GMapping's temporalUpdate serves the same end). Once the
+  // odometry has stayed within standing_tolerance_m / _rad of one pose for
+  // standing_update_s of scan time, and that pose is more than
+  // standing_update_min_m / _rad (net, not path: a standing base's encoder
+  // jitter does not add up) from the pose of the last update, one update
+  // runs there. 0: never.
+  double standing_update_s = 0.5;
+  double standing_tolerance_m = 0.005;
+  double standing_tolerance_rad = 0.005;
+  double standing_update_min_m = 0.01;
+  double standing_update_min_rad = 0.01;
   // Resample when N_eff < resample_threshold * particle_count.
   double resample_threshold = 0.5;
   // Weights are exp(log_w / (likelihood_gain * particle_count)) before
@@ -150,6 +164,8 @@ class ParticleFilter {
   // last update: what the update gate measures.
   double travel_since_update_m() const { return linear_since_update_m_; }
   double turn_since_update_rad() const { return angular_since_update_rad_; }
+  // Updates run because the robot stood (standing_update_s), of all updates.
+  std::int64_t standing_updates() const { return standing_updates_; }
   // The best particle's pose at every update generation so far (index = generation).
   std::vector<Pose2> best_trajectory() const;
 
@@ -172,6 +188,9 @@ class ParticleFilter {
 
  private:
   void initialize(const ScanPoints& points, const Pose2& odometry);
+  // Follows where the odometry stands still (standing_update_s).
+  void track_standing(std::int64_t utime, const Pose2& odometry);
+  bool standing_update_due(std::int64_t utime, const Pose2& odometry) const;
   void update(const ScanPoints& points, const Pose2& odometry);
   void resample(const std::vector<double>& weights);
   // The odometry check (OdometryCheckOptions): the translation scale of this
@@ -191,6 +210,11 @@ class ParticleFilter {
   Pose2 odometry_at_update_;
   double linear_since_update_m_ = 0.0;
   double angular_since_update_rad_ = 0.0;
+  // The odometry pose the robot has stayed near, and the scan time it came
+  // there (standing_update_s).
+  Pose2 standing_odometry_;
+  std::int64_t standing_since_utime_ = 0;
+  std::int64_t standing_updates_ = 0;
   UpdateStats last_update_;
   std::int64_t corrected_odometry_steps_ = 0;
   OdometryDrift drift_;

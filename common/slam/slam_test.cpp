@@ -533,6 +533,63 @@ TEST(ParticleFilter, ScansWithoutReturnsOrBadOdometryAreIgnored) {
   EXPECT_EQ(filter.generation(), 0);
 }
 
+// A robot that stops short of the update gates (0.3 m here, after 0.2 m) is
+// updated where it stands once it has stood standing_update_s, once: the
+// encoder's jitter while it stands neither delays nor repeats it, a robot
+// that creeps never gets one, and the count of standing time survives a
+// checkpoint.
+TEST(ParticleFilter, ARobotThatStopsShortOfTheGatesIsUpdatedWhereItStands) {
+  const Drive d = drive(3);
+  constexpr std::int64_t kScanUs = 100000;  // 10 Hz
+  // Drives d's first three poses (0.2 m), then stands 5 s at the third, its
+  // odometry jittering by +-0.5 mm and 0.5 mrad; returns the scan index (from
+  // 0) of every update after the first scan.
+  auto stop_short = [&](ParticleFilterOptions options, std::string* saved_after_scans = nullptr) {
+    ParticleFilter filter(options);
+    std::vector<int> updates;
+    for (int i = 0; i < 53; ++i) {
+      const std::size_t at = static_cast<std::size_t>(std::min(i, 2));
+      const double jitter = i > 2 ? 0.0005 * ((i % 2) ? 1.0 : -1.0) : 0.0;
+      const Pose2 odometry{d.odometry[at].x_m + jitter, d.odometry[at].y_m, d.odometry[at].theta_rad + jitter};
+      if (saved_after_scans && i == 6) *saved_after_scans = filter.checkpoint();
+      if (filter.process(scan_from(d.truth[at], i * kScanUs), odometry) && i > 0) updates.push_back(i);
+    }
+    return std::pair{updates, filter.standing_updates()};
+  };
+  ParticleFilterOptions options = small_filter(5);
+  options.standing_update_s = 0.5;
+  const auto [updates, standing] = stop_short(options);
+  EXPECT_EQ(updates, std::vector<int>{7});  // it came to stand at scan 2: 0.5 s later
+  EXPECT_EQ(standing, 1);
+
+  options.standing_update_s = 0.0;  // off: the view where it stands waits for the next drive
+  EXPECT_TRUE(stop_short(options).first.empty());
+
+  // A robot creeping at 2 cm/s (2 mm a scan, beyond the 5 mm tolerance in
+  // three scans) is never standing: only the 0.3 m gate updates it.
+  options.standing_update_s = 0.5;
+  ParticleFilter creeping(options);
+  for (int i = 0; i < 100; ++i)
+    creeping.process(scan_from({-2.0 + 0.002 * i, -1.5, 0.0}, i * kScanUs), {-2.0 + 0.002 * i, -1.5, 0.0});
+  EXPECT_EQ(creeping.generation(), 0);  // 0.198 m: short of the gate
+  EXPECT_EQ(creeping.standing_updates(), 0);
+
+  // Saved after 0.4 s of standing, the restored filter updates at the same scan.
+  std::string saved;
+  stop_short(options, &saved);
+  ParticleFilter restored(options);
+  ASSERT_EQ(restored.restore(saved), "");
+  bool updated_at_7 = false;
+  for (int i = 6; i < 9; ++i) {
+    const Pose2 odometry{d.odometry[2].x_m + 0.0005 * ((i % 2) ? 1.0 : -1.0), d.odometry[2].y_m,
+                         d.odometry[2].theta_rad + 0.0005 * ((i % 2) ? 1.0 : -1.0)};
+    const bool updated = restored.process(scan_from(d.truth[2], i * kScanUs), odometry);
+    EXPECT_EQ(updated, i == 7) << "scan " << i;
+    updated_at_7 |= updated && i == 7;
+  }
+  EXPECT_TRUE(updated_at_7);
+}
+
 TEST(OdometrySync, InterpolatesAndWaitsForOdometry) {
   OdometrySyncOptions options;
   options.limits.enabled = false;  // 1 m in 100 us: pairing only, not physics
@@ -860,10 +917,11 @@ TEST(FilterCheckpoint, BrokenInputIsRefusedWithAReasonAndChangesNothing) {
     flipped[at] = static_cast<char>(flipped[at] ^ 0x10);
     refused(flipped, at == 9 ? "version" : "checksum");
   }
-  const std::string payload = archive::unseal("PEXSLAMF", 3, good);
+  const std::string payload = archive::unseal("PEXSLAMF", 4, good);
   refused(archive::seal("PEXSLAMF", 1, payload), "format version 1");  // before the odometry check
   refused(archive::seal("PEXSLAMF", 2, payload), "format version 2");  // before the odometry drift
-  refused(archive::seal("PEXSLAMF", 4, payload), "format version 4");
+  refused(archive::seal("PEXSLAMF", 3, payload), "format version 3");  // before the standing update
+  refused(archive::seal("PEXSLAMF", 5, payload), "format version 5");
   refused(OdometrySync().checkpoint(), "not a PEXSLAMF archive");
   // Well formed, but not this filter's: another particle count or cell size.
   ParticleFilterOptions more = small_filter(5);
@@ -895,11 +953,14 @@ TEST(FilterCheckpoint, BrokenInputIsRefusedWithAReasonAndChangesNothing) {
   for (int i = 0; i < 7; ++i) lying.put<double>(0.0);  // the odometry drift: its sums and estimate
   lying.put<std::int64_t>(0);                          // ... steps observed and refused
   lying.put<std::int64_t>(0);
+  for (int i = 0; i < 3; ++i) lying.put<double>(0.0);  // where the robot stands, since when, updates there
+  lying.put<std::int64_t>(0);
+  lying.put<std::int64_t>(0);
   lying.put<std::uint64_t>(1);  // one trajectory node ...
   for (int i = 0; i < 3; ++i) lying.put<double>(0.0);
   lying.put<std::int64_t>(0);
   lying.put<std::int64_t>(3);  // ... whose parent is node 3
-  refused(archive::seal("PEXSLAMF", 3, lying.bytes()), "trajectory node 0 has parent 3");
+  refused(archive::seal("PEXSLAMF", 4, lying.bytes()), "trajectory node 0 has parent 3");
   // And the good one is taken up.
   EXPECT_EQ(filter.restore(good), "");
   EXPECT_TRUE(filter.checkpoint() == good);

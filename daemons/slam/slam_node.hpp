@@ -89,6 +89,7 @@ class SlamNode {
     v.total("scans_processed", scans_processed_);
     v.total("filter_updates", filter_.generation() + 1);
     v.total("updates_republished", republished_);
+    v.total("standing_updates", filter_.standing_updates());
     v.total("corrected_odometry_steps", filter_.corrected_odometry_steps());
     v.total("unconstrained_updates", filter_.unconstrained_updates());
     // The learnt drift in micro-units (counters are integers): urad per

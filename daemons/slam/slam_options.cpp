@@ -15,6 +15,7 @@ SlamNodeOptions load_options(runtime::ConfigReader& config) {
   f.particle_count = config.get<int>("particles", f.particle_count, in_range(1, 1000));
   f.linear_update_m = config.get<double>("linear_update_m", f.linear_update_m, non_negative<double>());
   f.angular_update_rad = config.get<double>("angular_update_rad", f.angular_update_rad, non_negative<double>());
+  f.standing_update_s = config.get<double>("standing_update_s", f.standing_update_s, non_negative<double>());
   f.resample_threshold = config.get<double>("resample_threshold", f.resample_threshold, in_range(0.0, 1.0));
   f.likelihood_gain = config.get<double>("likelihood_gain", f.likelihood_gain, positive<double>());
   f.threads = config.get<int>("threads", f.threads, in_range(1, 64));
