@@ -149,6 +149,24 @@ std::optional<Point> approach_point(const ConfigurationSpace& cspace, int piece_
   return std::nullopt;
 }
 
+// Points of the arc [from_m, to_m] of a chain other than its middle, nearest
+// the middle first, kStep apart, at most kPoints (the arc's ends among them
+// when the arc is short): where a candidate whose middle no place sees is
+// looked at from instead (plan_exploration).
+std::vector<Point> off_middle_points(const std::vector<Point>& chain, double from_m, double to_m) {
+  constexpr double kStep = 0.25;
+  constexpr std::size_t kPoints = 8;
+  const double middle = 0.5 * (from_m + to_m), half = 0.5 * (to_m - from_m);
+  std::vector<Point> out;
+  for (int k = 1; half > 0.0 && out.size() < kPoints; ++k) {
+    const double s = std::min(k * kStep, half);  // the last step ends at the arc's ends
+    out.push_back(point_at_arc_length(chain, middle - s));
+    if (out.size() < kPoints) out.push_back(point_at_arc_length(chain, middle + s));
+    if (s >= half) break;
+  }
+  return out;
+}
+
 // Whether the robot's disk reaches `reach_m` past the frontier somewhere
 // along [from_m, to_m] of `chain` (PlannerOptions::reach_past_frontier_m).
 // The arc is sampled every kStep. At a sample f the disk (centre c within
@@ -618,6 +636,27 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
         out_of_view = nearest.has_value();
       }
     }
+    // A chain's candidate stands at the middle of its arc, and the middle
+    // may be hidden where the rest of the arc is not: a room seen through
+    // its door at a slant, a cabinet inside the door hiding the middle of
+    // the wedge's far frontier (ring2, session 55: the room was never
+    // entered). Out of view only if no point of the arc is in view.
+    Point frontier_point = fp.point;
+    if (!position && out_of_view && own_piece >= 0 && options.approach_range_m > 0.0) {
+      for (const Point& f : off_middle_points(chains[static_cast<std::size_t>(fp.chain)].points, fp.arc_from_m,
+                                              fp.arc_to_m)) {
+        if (auto a = approach_point(cspace, own_piece, f, options.approach_range_m, obstacles,
+                                    cache ? &cache->approaches : nullptr)) {
+          position = a;
+          piece = own_piece;
+          approach = true;
+          frontier_point = f;
+          ++plan.stats.approach_candidates;
+          ++plan.stats.approached_off_middle;
+          break;
+        }
+      }
+    }
     if (!position && out_of_view) {
       ++plan.stats.candidates_out_of_view;
       plan.out_of_view_frontier_points.push_back(fp.point);
@@ -640,7 +679,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
       continue;
     }
     GoalCandidate c;
-    c.frontier_point = fp.point;
+    c.frontier_point = frontier_point;
     c.position = *position;
     c.approach = approach;
     c.chain = fp.chain;

@@ -171,6 +171,9 @@ struct PlanStats {
   // frontier point, and no approach point: no reachable place sees it.
   int candidates_out_of_view = 0;
   int approach_candidates = 0;       // candidates moved to an approach point (GoalCandidate::approach)
+  // Of those, the ones whose middle no place sees, approached at another
+  // point of their arc (the candidate's frontier_point is that point).
+  int approached_off_middle = 0;
   // No C-space point near enough and no approach point, but one within
   // approach_range_m sees the frontier: the candidate stands there (in
   // another piece than the robot's: no path, unless step 5 settles it).

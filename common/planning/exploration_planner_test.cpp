@@ -134,6 +134,31 @@ TEST(PlanExploration, NoApproachThroughAWall) {
   }
 }
 
+// A room seen through its 1 m door: a strip 3 m deep below the corridor, its
+// far side frontier, and a cabinet (0.3 x 0.2 m) just before the middle of
+// that frontier. No place the robot can stand sees the middle past the
+// cabinet, but the rest of the frontier is in view from the strip (ring2,
+// session 55: the candidate at the middle was out of view, the room never
+// entered).
+TEST(PlanExploration, AFrontierWhoseMiddleIsHiddenIsApproachedWhereItIsInView) {
+  const mapping::TypedMultiPolygon map = {typed_polygon(
+      {{Point(0, 0), Point(4, 0), Point(4, -3), Point(5, -3), Point(5, 0), Point(10, 0), Point(10, 2), Point(0, 2)},
+       {E::kObstacle, E::kObstacle, E::kFrontier, E::kObstacle, E::kObstacle, E::kObstacle, E::kObstacle,
+        E::kObstacle}},
+      {testing::rectangle_hole(4.35, -2.95, 4.65, -2.75)})};
+  const Plan plan = plan_exploration(map, Pose2{2, 1, 0}, {}, options());
+  ASSERT_TRUE(plan.ok) << plan.error;
+  EXPECT_EQ(plan.stats.candidates_out_of_view, 0);
+  EXPECT_EQ(plan.stats.approached_off_middle, 1);
+  ASSERT_EQ(plan.candidates.size(), 1u);
+  const GoalCandidate& c = plan.candidates[0];
+  EXPECT_TRUE(c.approach);
+  EXPECT_NEAR(c.frontier_point.y(), -3.0, 1e-9);
+  EXPECT_GT(std::abs(c.frontier_point.x() - 4.5), 0.2);  // not the middle, which the cabinet hides
+  EXPECT_TRUE(c.reachable);
+  EXPECT_LT(c.position.y(), 0.0);  // in the strip, beyond the door
+}
+
 // A sliver of free space behind the corridor's top wall, 0.1 m wide and 4 m
 // long, its far side frontier (what a scan seen through a gap, or a scan
 // placed a little off, leaves beyond a thin wall). Its frontier is 0.47 m

@@ -77,6 +77,8 @@ std::string describe(const pex::polygon_map_t& map, const pex::pose_t& pose,
       out += "no path\n";
   }
   for (const auto& p : plan.narrow_frontier_points) out += format("  frontier (%.2f, %.2f): too narrow\n", p.x(), p.y());
+  for (const auto& p : plan.out_of_view_frontier_points)
+    out += format("  frontier (%.2f, %.2f): out of view (no C-space point sees it: behind a wall)\n", p.x(), p.y());
   for (const auto& p : plan.pocket_frontier_points)
     out += format("  frontier (%.2f, %.2f): pocket (no robot reaches past it)\n", p.x(), p.y());
   for (const auto& p : plan.enclosed_frontier_points)
@@ -141,6 +143,8 @@ std::string to_svg(const mapping::TypedMultiPolygon& map, const geometry::Pose2&
     out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#e00000\"/>\n", X(p.x()), Y(p.y()));
   for (const auto& p : plan.pocket_frontier_points)
     out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#8000c0\"/>\n", X(p.x()), Y(p.y()));
+  for (const auto& p : plan.out_of_view_frontier_points)
+    out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#606060\"/>\n", X(p.x()), Y(p.y()));
   for (const auto& p : plan.enclosed_frontier_points)
     out += format("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"#a06000\"/>\n", X(p.x()), Y(p.y()));
   for (const auto& p : plan.behind_narrow_gap_points)

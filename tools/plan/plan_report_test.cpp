@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "planning/test_maps.hpp"
 
 using namespace pex::planning;
@@ -87,6 +89,27 @@ TEST(PlanReport, ACandidateInAnotherPieceSaysWhichPiece) {
   EXPECT_NE(piece, cspace.piece_of(Point(1.0, 1.0)));
   EXPECT_NE(text.find("no path: in C-space piece " + std::to_string(piece) + ", not the robot's"), std::string::npos)
       << text;
+}
+
+// A frontier no C-space point sees (a sliver behind the corridor's wall) is
+// listed with where it is, as pockets and enclosed ones are: a mission that
+// ended DONE with "N behind walls" is traced from these lines.
+TEST(PlanReport, AFrontierOutOfViewIsListedWithWhereItIs) {
+  Fixture f;
+  const TypedMultiPolygon map = {
+      typed_polygon(rectangle(0, 0, 20, 3)),
+      typed_polygon(rectangle(5, 3.05, 9, 3.15,
+                              {EdgeType::kObstacle, EdgeType::kFrontier, EdgeType::kFrontier, EdgeType::kFrontier}))};
+  const pex::geometry::Pose2 robot{2.0, 1.5, 0.0};
+  const Plan plan = plan_exploration(map, robot, {}, f.options);
+  ASSERT_EQ(plan.out_of_view_frontier_points.size(), 1u);
+  ConfigurationSpace cspace;
+  cspace.build(map, f.options.cspace);
+  const std::string text = pex::plan_tool::describe(f.msg, f.pose, cspace, plan);
+  const auto& p = plan.out_of_view_frontier_points[0];
+  char line[96];
+  std::snprintf(line, sizeof line, "frontier (%.2f, %.2f): out of view", p.x(), p.y());
+  EXPECT_NE(text.find(line), std::string::npos) << text;
 }
 
 TEST(PlanReport, AFailedPlanSaysWhy) {
