@@ -70,9 +70,11 @@ bool ParticleFilter::process(const RangeScan& scan, const Pose2& odometry) {
 }
 
 void ParticleFilter::track_standing(std::int64_t utime, const Pose2& odometry) {
+  // Written so that a pose that is not finite (a restored checkpoint's)
+  // moves the anchor rather than holds it.
   const Pose2 moved = relative(standing_odometry_, odometry);
-  if (std::hypot(moved.x_m, moved.y_m) > options_.standing_tolerance_m ||
-      std::abs(moved.theta_rad) > options_.standing_tolerance_rad || utime < standing_since_utime_) {
+  if (!(std::hypot(moved.x_m, moved.y_m) <= options_.standing_tolerance_m) ||
+      !(std::abs(moved.theta_rad) <= options_.standing_tolerance_rad) || utime < standing_since_utime_) {
     standing_odometry_ = odometry;
     standing_since_utime_ = utime;
   }
@@ -80,7 +82,9 @@ void ParticleFilter::track_standing(std::int64_t utime, const Pose2& odometry) {
 
 bool ParticleFilter::standing_update_due(std::int64_t utime, const Pose2& odometry) const {
   if (!(options_.standing_update_s > 0.0)) return false;
-  if (static_cast<double>(utime - standing_since_utime_) < options_.standing_update_s * 1e6) return false;
+  // In double: stamps of any value (a checkpoint's) cannot overflow.
+  const double stood_us = static_cast<double>(utime) - static_cast<double>(standing_since_utime_);
+  if (!(stood_us >= options_.standing_update_s * 1e6)) return false;
   const Pose2 net = relative(odometry_at_update_, odometry);
   return std::hypot(net.x_m, net.y_m) > options_.standing_update_min_m ||
          std::abs(net.theta_rad) > options_.standing_update_min_rad;
