@@ -32,6 +32,23 @@ struct Fixture {
   }
 };
 
+// A plan on `map` from `robot` with the fixture's options, its C-space and
+// what pex-plan says of it.
+struct Described {
+  Plan plan;
+  ConfigurationSpace cspace;
+  std::string text;
+};
+Described describe_plan(Fixture& f, const TypedMultiPolygon& map, const pex::geometry::Pose2& robot) {
+  Described d;
+  d.plan = plan_exploration(map, robot, {}, f.options);
+  d.cspace.build(map, f.options.cspace);
+  f.pose.x = robot.x_m;
+  f.pose.y = robot.y_m;
+  d.text = pex::plan_tool::describe(f.msg, f.pose, d.cspace, d.plan);
+  return d;
+}
+
 }  // namespace
 
 TEST(PlanReport, DescribesPiecesCandidatesAndTheBestOne) {
@@ -61,12 +78,8 @@ TEST(PlanReport, ACandidateGreedyDidNotSearchSaysSo) {
   Fixture f;
   const TypedMultiPolygon map{typed_polygon(
       rectangle(0, 0, 20, 3, {EdgeType::kObstacle, EdgeType::kFrontier, EdgeType::kObstacle, EdgeType::kFrontier}))};
-  const pex::geometry::Pose2 robot{2.0, 1.5, 0.0};
-  const Plan plan = plan_exploration(map, robot, {}, f.options);
+  const auto [plan, cspace, text] = describe_plan(f, map, {2.0, 1.5, 0.0});
   ASSERT_EQ(plan.candidates.size(), 2u);
-  ConfigurationSpace cspace;
-  cspace.build(map, f.options.cspace);
-  const std::string text = pex::plan_tool::describe(f.msg, f.pose, cspace, plan);
   EXPECT_NE(text.find("<- best"), std::string::npos) << text;
   EXPECT_NE(text.find("reachable, path not searched"), std::string::npos) << text;
   EXPECT_EQ(text.find("inf"), std::string::npos) << text;
@@ -76,14 +89,8 @@ TEST(PlanReport, ACandidateInAnotherPieceSaysWhichPiece) {
   Fixture f;
   f.options.approach_range_m = 0.0;
   const TypedMultiPolygon map = a_room_cut_off_behind_a_slit();
-  const pex::geometry::Pose2 robot{1.0, 1.0, 0.0};
-  const Plan plan = plan_exploration(map, robot, {}, f.options);
+  const auto [plan, cspace, text] = describe_plan(f, map, {1.0, 1.0, 0.0});
   ASSERT_EQ(plan.candidates.size(), 1u);
-  ConfigurationSpace cspace;
-  cspace.build(map, f.options.cspace);
-  f.pose.x = robot.x_m;
-  f.pose.y = robot.y_m;
-  const std::string text = pex::plan_tool::describe(f.msg, f.pose, cspace, plan);
   const int piece = cspace.piece_of(plan.candidates[0].position);
   ASSERT_GE(piece, 0);
   EXPECT_NE(piece, cspace.piece_of(Point(1.0, 1.0)));
@@ -100,12 +107,8 @@ TEST(PlanReport, AFrontierOutOfViewIsListedWithWhereItIs) {
       typed_polygon(rectangle(0, 0, 20, 3)),
       typed_polygon(rectangle(5, 3.05, 9, 3.15,
                               {EdgeType::kObstacle, EdgeType::kFrontier, EdgeType::kFrontier, EdgeType::kFrontier}))};
-  const pex::geometry::Pose2 robot{2.0, 1.5, 0.0};
-  const Plan plan = plan_exploration(map, robot, {}, f.options);
+  const auto [plan, cspace, text] = describe_plan(f, map, {2.0, 1.5, 0.0});
   ASSERT_EQ(plan.out_of_view_frontier_points.size(), 1u);
-  ConfigurationSpace cspace;
-  cspace.build(map, f.options.cspace);
-  const std::string text = pex::plan_tool::describe(f.msg, f.pose, cspace, plan);
   const auto& p = plan.out_of_view_frontier_points[0];
   char line[96];
   std::snprintf(line, sizeof line, "frontier (%.2f, %.2f): out of view", p.x(), p.y());
