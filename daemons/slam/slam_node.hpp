@@ -30,7 +30,8 @@ struct SlamNodeOptions {
   double max_sensor_offset_m = 10.0;
   // With no filter update for this long (scan time), the particle set is
   // published again with the current scan: identity parents, no resampling,
-  // the filter untouched. A standing robot makes no updates, and a mapper
+  // the filter untouched. A standing robot makes no updates (but the one of
+  // ParticleFilterOptions::standing_update_s where it stopped), and a mapper
   // (re)started meanwhile would wait for one for ever while the explorer
   // waits for its map. 0 = never.
   double republish_period_s = 1.0;
