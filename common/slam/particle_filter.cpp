@@ -49,9 +49,7 @@ bool ParticleFilter::process(const RangeScan& scan, const Pose2& odometry) {
   const ScanPoints points = to_scan_points(scan, options_.scan);
   if (!initialized_) {
     if (points.beams.empty()) return false;
-    initialize(points, odometry);
-    standing_odometry_ = odometry;
-    standing_since_utime_ = scan.utime;
+    initialize(points, odometry, scan.utime);
     return true;
   }
   const Pose2 step = relative(last_odometry_, odometry);
@@ -90,7 +88,7 @@ bool ParticleFilter::standing_update_due(std::int64_t utime, const Pose2& odomet
          std::abs(net.theta_rad) > options_.standing_update_min_rad;
 }
 
-void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry) {
+void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry, std::int64_t utime) {
   auto map = map_factory_();
   points_beyond_map_extent_ += static_cast<std::int64_t>(map->insert(odometry, points));
   auto root = std::make_shared<const TrajectoryNode>(odometry, 0, nullptr);
@@ -109,6 +107,8 @@ void ParticleFilter::initialize(const ScanPoints& points, const Pose2& odometry)
   odometry_at_update_ = odometry;
   linear_since_update_m_ = 0.0;
   angular_since_update_rad_ = 0.0;
+  standing_odometry_ = odometry;
+  standing_since_utime_ = utime;
   last_update_ = UpdateStats{};
   last_update_.effective_sample_size = static_cast<double>(particles_.size());
 }

@@ -187,7 +187,7 @@ class ParticleFilter {
   std::string restore(std::string_view checkpoint);
 
  private:
-  void initialize(const ScanPoints& points, const Pose2& odometry);
+  void initialize(const ScanPoints& points, const Pose2& odometry, std::int64_t utime);
   // Follows where the odometry stands still (standing_update_s).
   void track_standing(std::int64_t utime, const Pose2& odometry);
   bool standing_update_due(std::int64_t utime, const Pose2& odometry) const;

@@ -544,15 +544,18 @@ TEST(ParticleFilter, ARobotThatStopsShortOfTheGatesIsUpdatedWhereItStands) {
   // Drives d's first three poses (0.2 m), then stands 5 s at the third, its
   // odometry jittering by +-0.5 mm and 0.5 mrad; returns the scan index (from
   // 0) of every update after the first scan.
+  auto odometry_at_scan = [&](int i) {
+    const std::size_t at = static_cast<std::size_t>(std::min(i, 2));
+    const double jitter = i > 2 ? 0.0005 * ((i % 2) ? 1.0 : -1.0) : 0.0;
+    return Pose2{d.odometry[at].x_m + jitter, d.odometry[at].y_m, d.odometry[at].theta_rad + jitter};
+  };
+  auto scan_at = [&](int i) { return scan_from(d.truth[static_cast<std::size_t>(std::min(i, 2))], i * kScanUs); };
   auto stop_short = [&](ParticleFilterOptions options, std::string* saved_after_scans = nullptr) {
     ParticleFilter filter(options);
     std::vector<int> updates;
     for (int i = 0; i < 53; ++i) {
-      const std::size_t at = static_cast<std::size_t>(std::min(i, 2));
-      const double jitter = i > 2 ? 0.0005 * ((i % 2) ? 1.0 : -1.0) : 0.0;
-      const Pose2 odometry{d.odometry[at].x_m + jitter, d.odometry[at].y_m, d.odometry[at].theta_rad + jitter};
       if (saved_after_scans && i == 6) *saved_after_scans = filter.checkpoint();
-      if (filter.process(scan_from(d.truth[at], i * kScanUs), odometry) && i > 0) updates.push_back(i);
+      if (filter.process(scan_at(i), odometry_at_scan(i)) && i > 0) updates.push_back(i);
     }
     return std::pair{updates, filter.standing_updates()};
   };
@@ -581,9 +584,7 @@ TEST(ParticleFilter, ARobotThatStopsShortOfTheGatesIsUpdatedWhereItStands) {
   ASSERT_EQ(restored.restore(saved), "");
   bool updated_at_7 = false;
   for (int i = 6; i < 9; ++i) {
-    const Pose2 odometry{d.odometry[2].x_m + 0.0005 * ((i % 2) ? 1.0 : -1.0), d.odometry[2].y_m,
-                         d.odometry[2].theta_rad + 0.0005 * ((i % 2) ? 1.0 : -1.0)};
-    const bool updated = restored.process(scan_from(d.truth[2], i * kScanUs), odometry);
+    const bool updated = restored.process(scan_at(i), odometry_at_scan(i));
     EXPECT_EQ(updated, i == 7) << "scan " << i;
     updated_at_7 |= updated && i == 7;
   }
