@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "mapping/blind_beams.hpp"
+
 namespace pex::mapping {
 
 namespace {
@@ -152,10 +154,14 @@ NoReturnExtents extents_against(const Map& map, std::span<const float> ranges, d
 template <class Map>
 ScanPolygonResult polygon_against(const Map& map, std::span<const float> ranges, double angle_min,
                                   double angle_increment, const geometry::Pose2& sensor_pose,
-                                  const ScanPolygonOptions& options, int* beams_stopped) {
+                                  const ScanPolygonOptions& options, int* beams_stopped, BlindBeams* blind) {
   const auto stopped = extents_against(map, ranges, angle_min, angle_increment, sensor_pose, options);
   if (beams_stopped) *beams_stopped = stopped.beams_stopped;
-  return scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, options, stopped.extent_m);
+  if (!blind) return scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, options, stopped.extent_m);
+  blind->observe(ranges, options.range_min_m, options.range_max_m, stopped.extent_m, options.free_range_m);
+  const auto extents =
+      blind->extents(ranges, options.range_min_m, options.range_max_m, stopped.extent_m, options.free_range_m);
+  return scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, options, extents);
 }
 
 }  // namespace
@@ -174,14 +180,14 @@ NoReturnExtents no_return_extents_in(const TypedMultiPolygon& map, std::span<con
 
 ScanPolygonResult scan_to_polygon_in(const PolygonMap& map, std::span<const float> ranges, double angle_min,
                                      double angle_increment, const geometry::Pose2& sensor_pose,
-                                     const ScanPolygonOptions& options, int* beams_stopped) {
-  return polygon_against(map, ranges, angle_min, angle_increment, sensor_pose, options, beams_stopped);
+                                     const ScanPolygonOptions& options, int* beams_stopped, BlindBeams* blind) {
+  return polygon_against(map, ranges, angle_min, angle_increment, sensor_pose, options, beams_stopped, blind);
 }
 
 ScanPolygonResult scan_to_polygon_in(const TypedMultiPolygon& map, std::span<const float> ranges, double angle_min,
                                      double angle_increment, const geometry::Pose2& sensor_pose,
-                                     const ScanPolygonOptions& options, int* beams_stopped) {
-  return polygon_against(map, ranges, angle_min, angle_increment, sensor_pose, options, beams_stopped);
+                                     const ScanPolygonOptions& options, int* beams_stopped, BlindBeams* blind) {
+  return polygon_against(map, ranges, angle_min, angle_increment, sensor_pose, options, beams_stopped, blind);
 }
 
 }  // namespace pex::mapping

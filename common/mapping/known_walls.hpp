@@ -20,6 +20,8 @@
 
 namespace pex::mapping {
 
+class BlindBeams;
+
 // A wall the map holds, as a segment a -> b with what blocks on its right: a
 // beam crossing it from its left to its right side runs into the wall. (A
 // beam leaving the wall's inside, as from a sensor standing in an obstacle
@@ -71,13 +73,17 @@ NoReturnExtents no_return_extents_in(const TypedMultiPolygon& map, std::span<con
 // scan_to_polygon into `map`: with options.no_return_stops_at_walls, the
 // beams without a return stopped at map's walls first (known_walls within
 // free_range_m, no_return_extents); `beams_stopped`, if given, counts them.
-// What the mapper inserts, and what the benchmarks' emulated missions do as it.
+// With `blind` (blind_beams.hpp), the scan is observed by it first and its
+// blind beams give no free space. What the mapper inserts, and what the
+// benchmarks' emulated missions do as it.
 ScanPolygonResult scan_to_polygon_in(const PolygonMap& map, std::span<const float> ranges, double angle_min,
                                      double angle_increment, const geometry::Pose2& sensor_pose,
-                                     const ScanPolygonOptions& options, int* beams_stopped = nullptr);
+                                     const ScanPolygonOptions& options, int* beams_stopped = nullptr,
+                                     BlindBeams* blind = nullptr);
 // The same against a free-space map's obstacle edges (the explorer's live view).
 ScanPolygonResult scan_to_polygon_in(const TypedMultiPolygon& map, std::span<const float> ranges, double angle_min,
                                      double angle_increment, const geometry::Pose2& sensor_pose,
-                                     const ScanPolygonOptions& options, int* beams_stopped = nullptr);
+                                     const ScanPolygonOptions& options, int* beams_stopped = nullptr,
+                                     BlindBeams* blind = nullptr);
 
 }  // namespace pex::mapping

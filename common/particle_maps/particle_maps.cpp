@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "geometry/point.hpp"
+#include "mapping/blind_beams.hpp"
 #include "mapping/known_walls.hpp"
 
 namespace pex::particle_maps {
@@ -67,8 +68,14 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
 
   // The scan's polygon and obstacle band once, in the sensor frame; each
   // particle gets a moved copy.
-  const mapping::ScanPolygonResult local =
-      mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, Pose2{}, scan_options);
+  // Blind beams give no free space (their extents at the minimum range),
+  // in the shared polygon and in each particle's own.
+  auto with_blind = [&](std::span<const float> stopped_extent_m) {
+    return mapping::without_blind_beams(scan.ranges, scan_options.range_min_m, scan_options.range_max_m,
+                                        stopped_extent_m, scan_options.free_range_m, scan.blind);
+  };
+  const mapping::ScanPolygonResult local = mapping::scan_to_polygon(
+      scan.ranges, scan.angle_min, scan.angle_increment, Pose2{}, scan_options, with_blind({}));
   const mapping::PreparedScan prepared =
       local.ok ? mapping::prepare_scan(local.polygon, options_.map) : mapping::PreparedScan{};
 
@@ -107,7 +114,7 @@ UpdateResult ParticleMaps::update(const std::vector<ParticleState>& particles, c
         stopped[i] = extents.beams_stopped;
         if (extents.beams_stopped > 0) {
           const auto own = mapping::scan_to_polygon(scan.ranges, scan.angle_min, scan.angle_increment, sensor,
-                                                    scan_options, extents.extent_m);
+                                                    scan_options, with_blind(extents.extent_m));
           if (own.ok) {
             const auto result = next[i].insert(mapping::prepare_scan(own.polygon, options_.map));
             failed[i] = result.ok ? 0 : 1;

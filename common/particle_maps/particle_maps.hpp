@@ -38,6 +38,9 @@ struct SensorScan {
   double angle_min = 0.0;        // rad
   double angle_increment = 0.0;  // rad
   geometry::Pose2 sensor_in_base; // m, m, rad
+  // Per beam, 1 where the laser is blind (mapping::BlindBeams::mask; empty:
+  // none): such a beam gives no free space in any particle's map.
+  std::span<const std::uint8_t> blind;
 };
 
 struct UpdateResult {

@@ -30,7 +30,7 @@ std::vector<float> room_scan(const Pose2& pose, double w, double h) {
 }
 
 SensorScan scan_of(const std::vector<float>& ranges) {
-  return SensorScan{ranges, -M_PI / 2, M_PI / 180, Pose2{}};
+  return SensorScan{ranges, -M_PI / 2, M_PI / 180, Pose2{}, {}};
 }
 
 pex::particle_maps::ParticleMapsOptions options() { return {}; }
@@ -233,4 +233,41 @@ TEST(ParticleMaps, ABlindSectorsBeamsStopAtEachParticlesWalls) {
   EXPECT_GT(stopped[0], 40);
   EXPECT_GT(stopped[1], 40);
   EXPECT_GT(run(false, &stopped_off), 0.5) << "the blind sector carves the wall away";
+}
+
+// Beams found blind (SensorScan::blind, mapping::BlindBeams' mask) give no
+// free space in any particle's map, also where the map holds no wall to
+// stop them: the room's west half was never seen, and the blind sector,
+// turned to it, opens none of it.
+TEST(ParticleMaps, ABlindBeamGivesNoFreeSpaceInAnyParticlesMap) {
+  auto opens_west = [](bool masked) {
+    ParticleMaps maps(options());
+    const std::vector<ParticleState> first{{{3.0, 2.0, 0.0}, -1}, {{3.0, 2.0, 0.0}, -1}};
+    EXPECT_TRUE(maps.update(first, scan_of(room_scan({3.0, 2.0, 0.0}, 6, 4)), scan_options()).ok);
+    auto ranges = room_scan({3.0, 2.0, M_PI}, 6, 4);
+    std::vector<std::uint8_t> blind(ranges.size(), 0);
+    for (std::size_t i = 0; i < ranges.size(); ++i)
+      if (std::abs(-M_PI / 2 + static_cast<double>(i) * M_PI / 180) < 0.5) {
+        ranges[i] = 0.0f;
+        blind[i] = masked ? 1 : 0;
+      }
+    SensorScan scan = scan_of(ranges);
+    scan.blind = blind;
+    const std::vector<ParticleState> second{{{3.0, 2.0, M_PI}, 0}, {{3.0, 2.0, M_PI}, 1}};
+    const auto r = maps.update(second, scan, scan_options());
+    EXPECT_TRUE(r.ok && r.scan_inserted) << r.error;
+    int maps_open = 0;  // of the two, those free 2 m west of the robot
+    for (std::size_t i = 0; i < 2; ++i) {
+      const auto merged = maps.map(i).free_space();
+      EXPECT_TRUE(merged.ok) << merged.error;
+      for (const auto& p : merged.polygons)
+        if (boost::geometry::within(pex::mapping::Point(1.0, 2.0), p.geometry)) {
+          ++maps_open;
+          break;
+        }
+    }
+    return maps_open;
+  };
+  EXPECT_EQ(opens_west(true), 0);
+  EXPECT_EQ(opens_west(false), 2) << "unmasked, the blind beams open 4 m into the unseen half";
 }

@@ -1,5 +1,6 @@
 #include "planning/live_view.hpp"
 
+#include "mapping/blind_beams.hpp"
 #include "mapping/known_walls.hpp"
 #include "mapping/obstacle_band.hpp"
 #include "mapping/typed_ops.hpp"
@@ -8,7 +9,8 @@ namespace pex::planning {
 
 mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle_min, double angle_increment,
                                      double range_min_m, const geometry::Pose2& sensor_pose,
-                                     const LiveViewOptions& options, const mapping::TypedMultiPolygon* map) {
+                                     const LiveViewOptions& options, const mapping::TypedMultiPolygon* map,
+                                     std::span<const std::uint8_t> blind) {
   if (!(options.range_m > 0.0)) return {};
   mapping::ScanPolygonOptions scan;
   scan.range_min_m = range_min_m;
@@ -16,8 +18,12 @@ mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle
   scan.free_range_m = options.range_m;
   scan.obstacle_range_m = options.range_m;
   scan.no_return_stops_at_walls = options.no_return_stops_at_walls && map;
-  const auto polygon = map ? mapping::scan_to_polygon_in(*map, ranges, angle_min, angle_increment, sensor_pose, scan)
-                           : mapping::scan_to_polygon(ranges, angle_min, angle_increment, sensor_pose, scan);
+  const auto stopped = map ? mapping::no_return_extents_in(*map, ranges, angle_min, angle_increment, sensor_pose, scan)
+                           : mapping::NoReturnExtents{};
+  const auto polygon = mapping::scan_to_polygon(
+      ranges, angle_min, angle_increment, sensor_pose, scan,
+      mapping::without_blind_beams(ranges, scan.range_min_m, scan.range_max_m, stopped.extent_m, scan.free_range_m,
+                                   blind));
   if (!polygon.ok) return {};
   const mapping::TypedMultiPolygon free{polygon.polygon};
   const auto band = mapping::obstacle_band(polygon.polygon, options.obstacle_inner_m, options.obstacle_outer_m);

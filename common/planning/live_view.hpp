@@ -13,6 +13,7 @@
 // a frontier edge the view covers before the mapper has the scan would
 // vanish and the mission could end early. The scan guard stays in charge of
 // what the laser sees in the way. Pure: no clock, no I/O.
+#include <cstdint>
 #include <span>
 
 #include "mapping/scan_polygon.hpp"
@@ -39,10 +40,12 @@ struct LiveViewOptions {
 // map frame), every edge typed obstacle; empty when off or when the scan gives
 // no polygon. `map`: the planning map the view will be united into, whose
 // walls stop the beams without a return (no_return_stops_at_walls); null:
-// none known.
+// none known. `blind`: per beam, 1 where the laser is blind
+// (mapping::BlindBeams::mask; empty: none), a beam that opens nothing.
 mapping::TypedMultiPolygon live_view(std::span<const float> ranges, double angle_min, double angle_increment,
                                      double range_min_m, const geometry::Pose2& sensor_pose,
-                                     const LiveViewOptions& options, const mapping::TypedMultiPolygon* map = nullptr);
+                                     const LiveViewOptions& options, const mapping::TypedMultiPolygon* map = nullptr,
+                                     std::span<const std::uint8_t> blind = {});
 
 // `map` with `live` united in; `map` itself when `live` is empty or the union
 // fails (the plan then is the map's own).

@@ -174,6 +174,35 @@ TEST(LiveView, ABlindSectorDoesNotReopenTheMapsWalls) {
   EXPECT_GT(farthest_x(live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, robot, o, &map)), 4.5);
 }
 
+// Beams known blind (mapping::BlindBeams) open nothing, with a map or
+// without one: what lies along them is unknown, a wall not yet mapped too.
+TEST(LiveView, ABlindBeamOpensNothing) {
+  const mapping::testing::ScanSpec spec;
+  const Pose2 robot{2.0, 2.0, 0.0};
+  auto ranges = mapping::testing::cast_scan(two_rooms_walls(), robot, spec);
+  std::vector<std::uint8_t> blind(ranges.size(), 0);
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    if (std::abs(spec.angle_min + spec.angle_increment * static_cast<double>(i)) < 0.4) {
+      ranges[i] = 0.0f;
+      blind[i] = 1;
+    }
+  LiveViewOptions o;
+  o.range_m = 3.0;
+  const auto map = map_with_the_door_closed();
+  auto opens_ahead = [](const mapping::TypedMultiPolygon& view) {
+    for (const auto& p : view)
+      if (mapping::bg::within(mapping::Point(3.5, 2.0), p.geometry)) return true;
+    return false;
+  };
+  for (const mapping::TypedMultiPolygon* with : {&map, static_cast<const mapping::TypedMultiPolygon*>(nullptr)}) {
+    const auto view = live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, robot, o, with, blind);
+    ASSERT_FALSE(view.empty()) << "the beams that see still give a view";
+    EXPECT_FALSE(opens_ahead(view)) << (with ? "with" : "without") << " the map";
+    EXPECT_TRUE(opens_ahead(live_view(ranges, spec.angle_min, spec.angle_increment, 0.05, robot, o, with)))
+        << "not known blind, the beams open 1.5 m ahead (" << (with ? "with" : "without") << " the map)";
+  }
+}
+
 TEST(LiveView, AWallTheLaserSeesStaysClosed) {
   // The same map, but the door really is shut: the laser sees the wall, the
   // live view ends at it, with the band of its own returns, and nothing opens.

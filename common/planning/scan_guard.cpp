@@ -87,7 +87,8 @@ std::optional<std::array<double, 2>> wall_direction(std::span<const mapping::Poi
 
 std::vector<float> ranges_with_map_walls(std::span<const float> ranges, double angle_min, double angle_increment,
                                          double range_min, double range_max, const geometry::Pose2& sensor_in_map,
-                                         const mapping::TypedMultiPolygon& map, double reach_m, int* filled) {
+                                         const mapping::TypedMultiPolygon& map, double reach_m, int* filled,
+                                         mapping::BlindBeams* blind) {
   std::vector<float> out(ranges.begin(), ranges.end());
   if (filled) *filled = 0;
   if (!(reach_m > 0.0)) return out;
@@ -97,6 +98,7 @@ std::vector<float> ranges_with_map_walls(std::span<const float> ranges, double a
   o.free_range_m = reach_m;
   o.no_return_stops_at_walls = true;
   const auto stopped = mapping::no_return_extents_in(map, ranges, angle_min, angle_increment, sensor_in_map, o);
+  if (blind) blind->observe(ranges, range_min, range_max, stopped.extent_m, reach_m);
   for (std::size_t i = 0; i < stopped.extent_m.size(); ++i)
     if (!mapping::is_return(ranges[i], range_min, range_max) && stopped.extent_m[i] < reach_m)
       out[i] = stopped.extent_m[i];

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "geometry/pose2.hpp"
+#include "mapping/blind_beams.hpp"
 #include "mapping/typed_polygon.hpp"
 
 namespace pex::planning {
@@ -78,9 +79,12 @@ struct GuardScanOptions {
 // that edge; `sensor_in_map` is the sensor's pose in the map's frame.
 // `filled`, if given, counts those beams. Returns fill in nothing. Built on
 // mapping::known_walls / no_return_extents, as the mapper stops such beams.
+// `blind`, if given, observes the scan against those walls (which beams of
+// the laser are blind: mapping/blind_beams.hpp).
 std::vector<float> ranges_with_map_walls(std::span<const float> ranges, double angle_min, double angle_increment,
                                          double range_min, double range_max, const geometry::Pose2& sensor_in_map,
-                                         const mapping::TypedMultiPolygon& map, double reach_m, int* filled = nullptr);
+                                         const mapping::TypedMultiPolygon& map, double reach_m, int* filled = nullptr,
+                                         mapping::BlindBeams* blind = nullptr);
 
 // The points the guard checks, in the robot's frame: every return of the
 // scan (beam i at angle_min + i * angle_increment in the sensor's frame;

@@ -22,6 +22,7 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 ExplorerNode::ExplorerNode(ExplorerOptions options, Planning planning)
     : options_(std::move(options)),
       mission_(options_.mission),
+      blind_(options_.blind_beams),
       guard_(options_.guard),
       guard_marks_(options_.guard_marks) {
   if (planning == Planning::kWorkerThread) worker_ = std::make_unique<PlanWorker>();
@@ -218,7 +219,8 @@ void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime)
     int filled = 0;
     with_walls = planning::ranges_with_map_walls(msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min,
                                                  msg.range_max, geometry::compose(*mission_.pose(), mounting),
-                                                 *mission_.map(), options_.guard_scan.map_walls_m, &filled);
+                                                 *mission_.map(), options_.guard_scan.map_walls_m, &filled, &blind_);
+    counters_.blind_beams = blind_.count();
     if (filled > 0) guard_ranges = with_walls;
     counters_.guard_map_wall_beams += filled;
   }
@@ -226,6 +228,7 @@ void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime)
                                         mounting, options_.guard_scan);
   scan_utime_ = now_utime;
   last_scan_ = msg;
+  last_scan_blind_.assign(blind_.mask().begin(), blind_.mask().end());
   mission_.on_scan(now_utime);
 }
 
@@ -332,19 +335,20 @@ void ExplorerNode::note_guard_hold(bool held, double curvature_per_m, std::int64
 std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
                                                                const planning::Pose2& robot,
                                                                const planning::LiveViewOptions& options,
-                                                               const mapping::TypedMultiPolygon* map) {
+                                                               const mapping::TypedMultiPolygon* map,
+                                                               std::span<const std::uint8_t> blind) {
   if (!(options.range_m > 0.0)) return nullptr;
   // The sensor's pose in the map frame: the robot's, composed with the mounting.
   const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
-  auto view =
-      planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor, options, map);
+  auto view = planning::live_view(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, sensor, options,
+                                  map, blind);
   if (view.empty()) return nullptr;
   return std::make_shared<const mapping::TypedMultiPolygon>(std::move(view));
 }
 
 std::shared_ptr<const mapping::TypedMultiPolygon> ExplorerNode::live_view_at(
     const planning::Pose2& robot, const mapping::TypedMultiPolygon* map) const {
-  return last_scan_ ? live_view_of(*last_scan_, robot, options_.live_view, map) : nullptr;
+  return last_scan_ ? live_view_of(*last_scan_, robot, options_.live_view, map, last_scan_blind_) : nullptr;
 }
 
 pex::velocity_cmd_t ExplorerNode::stop_command(std::int64_t now_utime) {

@@ -58,6 +58,10 @@ struct ExplorerCounters {
   // and plans in which the marks left no way, planned again without them.
   std::int64_t guard_marks = 0;
   std::int64_t guard_marks_dropped_plans = 0;
+  // Beams of the laser blind now (mapping::BlindBeams, seen against the
+  // planning map's walls within guard_map_walls_m): the live view opens
+  // nothing along them.
+  std::int64_t blind_beams = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -76,17 +80,20 @@ struct ExplorerCounters {
     v.total("live_view_plans", live_view_plans);
     v.total("guard_marks", guard_marks);
     v.total("guard_marks_dropped_plans", guard_marks_dropped_plans);
+    v.total("blind_beams", blind_beams);
   }
 };
 
 // The live view (planning/live_view.hpp) of a LIDAR_SCAN taken at `robot`
 // (the laser's mounting applied), its beams without a return stopped at the
-// walls of `map` (the planning map it is for; null: none); null when off or
-// when it gives no polygon.
+// walls of `map` (the planning map it is for; null: none), its blind beams
+// (`blind`, per beam; empty: none) opening nothing; null when off or when it
+// gives no polygon.
 std::shared_ptr<const mapping::TypedMultiPolygon> live_view_of(const pex::laser_scan_t& scan,
                                                                const planning::Pose2& robot,
                                                                const planning::LiveViewOptions& options,
-                                                               const mapping::TypedMultiPolygon* map);
+                                                               const mapping::TypedMultiPolygon* map,
+                                                               std::span<const std::uint8_t> blind = {});
 
 // A SLAM_UPDATE as the driven trails take it (planning/driven_trail.hpp).
 planning::TrailUpdate trail_update_of(const pex::slam_update_t& msg);
@@ -252,6 +259,8 @@ class ExplorerNode {
   // scan_timeout_ms watches them).
   std::vector<mapping::Point> scan_points_;
   std::optional<pex::laser_scan_t> last_scan_;  // for the live view of the next plan
+  mapping::BlindBeams blind_;                   // the laser's, seen by the guard's map lookup
+  std::vector<std::uint8_t> last_scan_blind_;   // its mask for last_scan_
   std::optional<std::int64_t> scan_utime_;
   TrailKeeper trails_;
   planning::ScanGuard guard_;                  // with its model of the robot's speed

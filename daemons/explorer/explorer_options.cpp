@@ -199,6 +199,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.live_view.no_return_stops_at_walls =
       config.get<bool>("live_view_no_return_stops_at_walls", o.live_view.no_return_stops_at_walls);
   o.live_view_when_stuck_only = config.get<bool>("live_view_when_stuck_only", o.live_view_when_stuck_only);
+  o.blind_beams.after_stopped_scans =
+      config.get<int>("blind_after_stopped_scans", o.blind_beams.after_stopped_scans, in_range(0, 1000));
   return o;
 }
 

@@ -51,6 +51,9 @@ struct ExplorerOptions {
   planning::LiveViewOptions live_view;
   // ... only for the plans the map alone gives no way (PlanRequest::live_view_when_stuck_only).
   bool live_view_when_stuck_only = true;
+  // Beams blind (no echo at the planning map's walls within guard_map_walls_m,
+  // scan after scan) open nothing in the live view (mapping/blind_beams.hpp).
+  mapping::BlindBeamOptions blind_beams;
   // Keep-out lines and areas (planning/keep_out.hpp) from keep_out_file, in
   // the map frame; null: none. Every plan treats them as walls.
   std::shared_ptr<const mapping::TypedMultiPolygon> keep_out;

@@ -57,6 +57,8 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.scan.max_beams = scan.get<int>("max_beams", o.scan.max_beams, runtime::in_range(2, 1000000));
   o.scan.min_returns = scan.get<int>("min_returns", o.scan.min_returns, runtime::in_range(0, 1000000));
   o.scan.no_return_stops_at_walls = scan.get<bool>("no_return_stops_at_walls", o.scan.no_return_stops_at_walls);
+  o.blind_beams.after_stopped_scans =
+      scan.get<int>("blind_after_stopped_scans", o.blind_beams.after_stopped_scans, runtime::in_range(0, 1000));
   auto map = config.section("map");
   o.map.tile_size_m = map.get<double>("tile_size_m", o.map.tile_size_m, runtime::in_range(1.0, 1000.0));
   o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m, runtime::in_range(-1e5, 1e5));
@@ -104,7 +106,13 @@ Mapper::Mapper(MapperOptions options)
     : options_(std::move(options)),
       poses_(options_.pose_buffer_s),
       map_(options_.map),
-      particle_maps_(particle_maps::ParticleMapsOptions{options_.map, 1000, options_.threads}) {}
+      particle_maps_(particle_maps::ParticleMapsOptions{options_.map, 1000, options_.threads}),
+      blind_(options_.blind_beams) {}
+
+void Mapper::count_blind_beams(int blind_before) {
+  counters_.blind_beams = blind_.count();
+  if (blind_before == 0 && blind_.count() > 0) ++counters_.blind_onsets;
+}
 
 const mapping::PolygonMap& Mapper::map() const {
   if (best_ >= 0) return particle_maps_.map(static_cast<std::size_t>(best_));
@@ -203,9 +211,24 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
   }
   if (!continues && particle_maps_.size() > 0)
     for (std::size_t i = 0; i < particles.size(); ++i) particles[i].parent = static_cast<int>(i);
-  const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment,
-                                              {scan->sensor_x, scan->sensor_y, scan->sensor_theta}};
-  const auto result = particle_maps_.update(particles, sensor_scan, scan_options_for(*scan));
+  const mapping::ScanPolygonOptions scan_options = scan_options_for(*scan);
+  const geometry::Pose2 mounting{scan->sensor_x, scan->sensor_y, scan->sensor_theta};
+  // Which beams are blind, seen against the best particle's parent's map at
+  // its pose: the same for every particle (it is the laser's). A first
+  // update (or one in a new frame) has no map to see them against.
+  const auto& best_particle = particles[static_cast<std::size_t>(update.best)];
+  mapping::NoReturnExtents against_best;
+  if (best_particle.parent >= 0 && static_cast<std::size_t>(best_particle.parent) < particle_maps_.size())
+    against_best = mapping::no_return_extents_in(
+        particle_maps_.map(static_cast<std::size_t>(best_particle.parent)), scan->ranges, scan->angle_min,
+        scan->angle_increment, geometry::compose(best_particle.pose, mounting), scan_options);
+  const int blind_before = blind_.count();
+  blind_.observe(scan->ranges, scan_options.range_min_m, scan_options.range_max_m, against_best.extent_m,
+                 scan_options.free_range_m);
+  count_blind_beams(blind_before);
+  const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment, mounting,
+                                              blind_.mask()};
+  const auto result = particle_maps_.update(particles, sensor_scan, scan_options);
   if (!result.ok) throw std::invalid_argument("SLAM_UPDATE refused: " + result.error);
   restored_.reset();
   restored_any_epoch_ = false;
@@ -294,9 +317,11 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
   const mapping::ScanPolygonOptions scan_options = scan_options_for(scan);
   int stopped = 0;
+  const int blind_before = blind_.count();
   const auto polygon = mapping::scan_to_polygon_in(map_, scan.ranges, scan.angle_min, scan.angle_increment, sensor,
-                                                   scan_options, &stopped);
+                                                   scan_options, &stopped, &blind_);
   counters_.no_return_beams_stopped += stopped;
+  count_blind_beams(blind_before);
   if (!polygon.ok) {
     ++counters_.scan_polygon_errors;
     return true;

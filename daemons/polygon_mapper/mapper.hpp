@@ -12,6 +12,7 @@
 #include <pex/polygon_map_t.hpp>
 #include <pex/slam_update_t.hpp>
 
+#include "mapping/blind_beams.hpp"
 #include "mapping/polygon_map.hpp"
 #include "mapping/scan_polygon.hpp"
 #include "particle_maps/particle_maps.hpp"
@@ -39,6 +40,9 @@ struct MapperOptions {
   double max_pose_gap_s = 0.5;            // poses bracketing a scan may be this far apart
   int max_pending_scans = 20;             // scans waiting for a newer pose
   mapping::ScanPolygonOptions scan;       // range_max_m caps the sensor's own range_max
+  // Beams blind (no echo at the map's walls, scan after scan) give no free
+  // space ([scan] blind_after_stopped_scans; mapping/blind_beams.hpp).
+  mapping::BlindBeamOptions blind_beams;
   mapping::PolygonMapOptions map;
   int threads = 1;                        // slam: inserts of one update side by side
   // The published map (and the SLAM epoch it belongs to) across restarts,
@@ -101,6 +105,11 @@ struct MapperCounters {
   // particle's, on SLAM). A steady climb while the robot drives is a laser
   // blind in some sector; a few a scan are glass or dark surfaces.
   std::int64_t no_return_beams_stopped = 0;
+  // Beams of the laser blind now (mapping::BlindBeams: no echo at a wall the
+  // map holds, scan after scan), which give no free space; and how often the
+  // laser went from none blind to some.
+  std::int64_t blind_beams = 0;
+  std::int64_t blind_onsets = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -118,6 +127,8 @@ struct MapperCounters {
     v.total("slam_resyncs", slam_resyncs);
     v.total("slam_epoch_changes", slam_epoch_changes);
     v.total("no_return_beams_stopped", no_return_beams_stopped);
+    v.total("blind_beams", blind_beams);
+    v.total("blind_onsets", blind_onsets);
   }
 };
 
@@ -182,6 +193,8 @@ class Mapper {
   void drain_waiting_updates();
   // slam: applies the update if its scan is here; false if the scan is not.
   bool apply_slam_update(const pex::slam_update_t& update);
+  // The blind-beam counters after blind_ observed a scan (blind_before: its count before).
+  void count_blind_beams(int blind_before);
   // The scan-polygon options with the sensor's own range limits applied.
   mapping::ScanPolygonOptions scan_options_for(const pex::laser_scan_t& scan) const;
   // The map changed: both messages are merged anew when next asked for.
@@ -207,6 +220,7 @@ class Mapper {
   // slam
   particle_maps::ParticleMaps particle_maps_;
   std::deque<pex::slam_update_t> waiting_updates_;  // their scan has not arrived yet
+  mapping::BlindBeams blind_;  // the laser's, from the scans inserted (both pose sources)
   int best_ = -1;
   std::int64_t epoch_ = 0;       // SLAM lineage of the maps held (slam_update_t.epoch)
   std::int64_t generation_ = 0;  // of the last update applied

@@ -207,6 +207,38 @@ TEST(Mapper, ABlindSectorsBeamsStopAtTheWallsTheMapHolds) {
   EXPECT_EQ(stopped_off, 0);
 }
 
+// The same sector blind scan after scan: after two inserted scans with its
+// beams stopped at the room's walls the mapper counts them blind (once an
+// onset), and one scan that sees again clears them.
+TEST(Mapper, ASectorBlindScanAfterScanIsCountedBlindUntilItSeesAgain) {
+  std::vector<mapping::testing::Wall> walls;
+  mapping::testing::add_box(walls, 0, 0, 4, 3);
+  Mapper mapper(MapperOptions{});
+  const geometry::Pose2 at{2.0, 1.5, 0.0};
+  auto scan_at = [&](std::int64_t utime, bool blind) {
+    auto scan = make_scan(walls, at, utime);
+    for (std::size_t i = 0; i < scan.ranges.size() && blind; ++i) {
+      const double a = scan.angle_min + scan.angle_increment * static_cast<double>(i);
+      if (a > -0.6 && a < 0.6) scan.ranges[i] = 0.0f;
+    }
+    mapper.on_pose({utime - 10'000, at});
+    mapper.on_scan(scan);
+    mapper.on_pose({utime + 10'000, at});
+  };
+  scan_at(1'010'000, false);
+  // Standing still, a scan goes in every insert_max_interval_s (1 s).
+  scan_at(2'510'000, true);
+  EXPECT_EQ(mapper.counters().blind_beams, 0);
+  scan_at(4'010'000, true);
+  ASSERT_EQ(mapper.counters().scans_inserted, 3);
+  EXPECT_GT(mapper.counters().blind_beams, 100);  // 1.2 rad of 0.5-degree beams: 137
+  EXPECT_EQ(mapper.counters().blind_onsets, 1);
+  scan_at(5'510'000, false);
+  EXPECT_EQ(mapper.counters().blind_beams, 0);
+  EXPECT_EQ(mapper.counters().blind_onsets, 1);
+  EXPECT_LE(mapper.free_space_message(6'000'000)->free_area_m2, 12.0 + 1e-6);
+}
+
 TEST(Mapper, ScanNewerThanEveryPoseWaitsForOne) {
   std::vector<mapping::testing::Wall> walls;
   mapping::testing::add_box(walls, 0, 0, 10, 5);

@@ -57,7 +57,7 @@ struct SetOptions {
   // and the explorer on SLAM_POSE, as on the robot.
   bool slam = false;
   // (Braced: designated initializers may then leave them out without a warning.)
-  ConfigKeys explorer_keys{}, mapper_keys{}, slam_keys{};
+  ConfigKeys explorer_keys{}, mapper_keys{}, slam_keys{}, sim_keys{};
   // Daemons of the set not started with it ("sim", "slam", ...): start() starts them.
   std::vector<std::string> held_back{};
 };
@@ -71,6 +71,7 @@ class ExplorationSet {
     std::string sim = with_key(read_file(sim_config_of("sim")), "world_file",
                                "\"" + source_path("worlds/" + options.world + ".wkt") + "\"");
     sim = with_key(sim, "speed_factor", std::to_string(options.speed));
+    for (const auto& [key, value] : options.sim_keys) sim = with_key(sim, key, value);
     std::string mapper = with_key(read_file(sim_config_of("polygon_mapper")), "pose_source",
                                   options.slam ? "\"slam\"" : "\"sim_truth\"");
     for (const auto& [key, value] : options.mapper_keys) mapper = with_key(mapper, key, value);
@@ -89,7 +90,20 @@ class ExplorationSet {
       if (!first_truth_) first_truth_ = p;
       truth_ = p;
     });
-    bus_.on<pex::sim_clock_t>("SIM_CLOCK", [this](const pex::sim_clock_t& c) { clock_ = c; });
+    bus_.on<pex::sim_clock_t>("SIM_CLOCK", [this](const pex::sim_clock_t& c) {
+      // Where each contact began, for the report: a collision in a run on a
+      // loaded machine is seldom seen again.
+      if (c.collisions > (clock_ ? clock_->collisions : 0) && contacts_.size() < kContactsReported) {
+        std::string where = "contact " + std::to_string(c.collisions) + " at sim " +
+                            std::to_string(static_cast<double>(c.sim_time_us) * 1e-6) + " s";
+        if (truth_)
+          where += ": robot at " + std::to_string(truth_->x) + ", " + std::to_string(truth_->y) + ", heading " +
+                   std::to_string(truth_->theta) + " rad";
+        if (cmd_) where += "; last command v " + std::to_string(cmd_->v) + " m/s, omega " + std::to_string(cmd_->omega) + " rad/s";
+        contacts_.push_back(where);
+      }
+      clock_ = c;
+    });
     bus_.on<pex::velocity_cmd_t>("BASE_CMD", [this](const pex::velocity_cmd_t& c) { cmd_ = c; });
     bus_.on<pex::polygon_map_t>("MAP", [this](const pex::polygon_map_t& m) { map_ = m; });
 
@@ -161,6 +175,7 @@ class ExplorationSet {
     if (clock_)
       r += "sim time " + std::to_string(sim_seconds()) + " s, collisions " + std::to_string(clock_->collisions) +
            ", collision steps " + std::to_string(clock_->collision_steps) + "\n";
+    for (const auto& where : contacts_) r += where + "\n";
     if (truth_) r += "robot at " + std::to_string(truth_->x) + ", " + std::to_string(truth_->y) + "\n";
     return r;
   }
@@ -197,6 +212,8 @@ class ExplorationSet {
   std::optional<pex::sim_clock_t> clock_;
   std::optional<pex::velocity_cmd_t> cmd_;
   std::optional<pex::polygon_map_t> map_;
+  static constexpr std::size_t kContactsReported = 5;
+  std::vector<std::string> contacts_;  // where the first contacts began
 };
 
 
