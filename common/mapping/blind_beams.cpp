@@ -29,6 +29,7 @@ void BlindBeams::observe(std::span<const float> ranges, double range_min_m, doub
     count_ = 0;
   }
   if (options_.after_stopped_scans <= 0) return;
+  const int count_before = count_;
   const auto needed = static_cast<std::uint16_t>(
       std::min<int>(options_.after_stopped_scans, std::numeric_limits<std::uint16_t>::max()));
   for (std::size_t i = 0; i < ranges.size(); ++i) {
@@ -46,6 +47,7 @@ void BlindBeams::observe(std::span<const float> ranges, double range_min_m, doub
       }
     }
   }
+  if (count_before == 0 && count_ > 0) ++onsets_;
 }
 
 std::vector<float> BlindBeams::extents(std::span<const float> ranges, double range_min_m, double range_max_m,
@@ -67,16 +69,6 @@ std::vector<float> without_blind_beams(std::span<const float> ranges, double ran
   for (std::size_t i = 0; i < ranges.size(); ++i)
     if (blind[i] && !is_return(ranges[i], range_min_m, range_max_m)) out[i] = static_cast<float>(least);
   return out;
-}
-
-int BlindBeams::first() const {
-  const auto it = std::find(blind_.begin(), blind_.end(), std::uint8_t{1});
-  return it == blind_.end() ? -1 : static_cast<int>(it - blind_.begin());
-}
-
-int BlindBeams::last() const {
-  const auto it = std::find(blind_.rbegin(), blind_.rend(), std::uint8_t{1});
-  return it == blind_.rend() ? -1 : static_cast<int>(blind_.rend() - it) - 1;
 }
 
 }  // namespace pex::mapping

@@ -47,15 +47,15 @@ class BlindBeams {
   // Per beam of the last scan observed: 1 blind, 0 not.
   std::span<const std::uint8_t> mask() const { return blind_; }
   int count() const { return count_; }  // blind beams now
-  // The first and last blind beam (indices; equal to -1 when none), for the log.
-  int first() const;
-  int last() const;
+  // Scans after which some beam was blind when none was before.
+  std::int64_t onsets() const { return onsets_; }
 
  private:
   BlindBeamOptions options_;
   std::vector<std::uint16_t> stopped_runs_;  // per beam: stopped scans since its last return
   std::vector<std::uint8_t> blind_;
   int count_ = 0;
+  std::int64_t onsets_ = 0;
 };
 
 // What BlindBeams::extents gives, for a mask of blind beams (one value per

@@ -38,8 +38,9 @@ TEST(BlindBeams, ABeamWithoutAnEchoAtAKnownWallScanAfterScanIsBlindUntilItReturn
   EXPECT_TRUE(blind.blind(2));
   EXPECT_FALSE(blind.blind(3)) << "into the unknown: nothing says it should have seen something";
   EXPECT_FALSE(blind.blind(0));
-  EXPECT_EQ(blind.first(), 1);
-  EXPECT_EQ(blind.last(), 2);
+  EXPECT_EQ(std::vector<std::uint8_t>(blind.mask().begin(), blind.mask().end()),
+            (std::vector<std::uint8_t>{0, 1, 1, 0, 0}));
+  EXPECT_EQ(blind.onsets(), 1);
 
   // Blind beams give no free space: their extent is the minimum range,
   // whatever the map says (empty extents: no wall near this time).
@@ -61,6 +62,7 @@ TEST(BlindBeams, ABeamWithoutAnEchoAtAKnownWallScanAfterScanIsBlindUntilItReturn
   EXPECT_FALSE(blind.blind(1));
   blind.observe(ranges, kRangeMin, kRangeMax, stopped_at_wall(), kFreeRange);
   EXPECT_TRUE(blind.blind(1));
+  EXPECT_EQ(blind.onsets(), 1) << "beam 2 stayed blind throughout: no new onset";
 }
 
 TEST(BlindBeams, OffNeverFlagsAndAnotherBeamCountStartsAfresh) {
@@ -75,8 +77,7 @@ TEST(BlindBeams, OffNeverFlagsAndAnotherBeamCountStartsAfresh) {
   const std::vector<float> six(6, kNoEcho);
   blind.observe(six, kRangeMin, kRangeMax, {}, kFreeRange);
   EXPECT_EQ(blind.count(), 0);
-  EXPECT_EQ(blind.first(), -1);
-  EXPECT_EQ(blind.last(), -1);
+  EXPECT_EQ(std::vector<std::uint8_t>(blind.mask().begin(), blind.mask().end()), std::vector<std::uint8_t>(6, 0));
   EXPECT_TRUE(blind.extents(six, kRangeMin, kRangeMax, {}, kFreeRange).empty());
 }
 

@@ -109,9 +109,9 @@ Mapper::Mapper(MapperOptions options)
       particle_maps_(particle_maps::ParticleMapsOptions{options_.map, 1000, options_.threads}),
       blind_(options_.blind_beams) {}
 
-void Mapper::count_blind_beams(int blind_before) {
+void Mapper::count_blind_beams() {
   counters_.blind_beams = blind_.count();
-  if (blind_before == 0 && blind_.count() > 0) ++counters_.blind_onsets;
+  counters_.blind_onsets = blind_.onsets();
 }
 
 const mapping::PolygonMap& Mapper::map() const {
@@ -222,10 +222,9 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
     against_best = mapping::no_return_extents_in(
         particle_maps_.map(static_cast<std::size_t>(best_particle.parent)), scan->ranges, scan->angle_min,
         scan->angle_increment, geometry::compose(best_particle.pose, mounting), scan_options);
-  const int blind_before = blind_.count();
   blind_.observe(scan->ranges, scan_options.range_min_m, scan_options.range_max_m, against_best.extent_m,
                  scan_options.free_range_m);
-  count_blind_beams(blind_before);
+  count_blind_beams();
   const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment, mounting,
                                               blind_.mask()};
   const auto result = particle_maps_.update(particles, sensor_scan, scan_options);
@@ -317,11 +316,10 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   const geometry::Pose2 sensor = geometry::compose(robot, {scan.sensor_x, scan.sensor_y, scan.sensor_theta});
   const mapping::ScanPolygonOptions scan_options = scan_options_for(scan);
   int stopped = 0;
-  const int blind_before = blind_.count();
   const auto polygon = mapping::scan_to_polygon_in(map_, scan.ranges, scan.angle_min, scan.angle_increment, sensor,
                                                    scan_options, &stopped, &blind_);
   counters_.no_return_beams_stopped += stopped;
-  count_blind_beams(blind_before);
+  count_blind_beams();
   if (!polygon.ok) {
     ++counters_.scan_polygon_errors;
     return true;

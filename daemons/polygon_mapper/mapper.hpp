@@ -193,8 +193,8 @@ class Mapper {
   void drain_waiting_updates();
   // slam: applies the update if its scan is here; false if the scan is not.
   bool apply_slam_update(const pex::slam_update_t& update);
-  // The blind-beam counters after blind_ observed a scan (blind_before: its count before).
-  void count_blind_beams(int blind_before);
+  // The blind-beam counters after blind_ observed a scan.
+  void count_blind_beams();
   // The scan-polygon options with the sensor's own range limits applied.
   mapping::ScanPolygonOptions scan_options_for(const pex::laser_scan_t& scan) const;
   // The map changed: both messages are merged anew when next asked for.
