@@ -316,7 +316,7 @@ VisibilityCache& PlanCache::visibility(const CSpaceOptions& cspace) {
       slot.last_use = uses_;
       return *slot.cache;
     }
-  constexpr std::size_t kClearances = 2;
+  constexpr std::size_t kClearances = 3;
   if (slots_.size() >= kClearances) {
     const auto oldest = std::min_element(slots_.begin(), slots_.end(),
                                          [](const Slot& a, const Slot& b) { return a.last_use < b.last_use; });
@@ -474,7 +474,7 @@ std::optional<Point> gap_mouth(const ConfigurationSpace& cspace, int own_piece, 
 std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
     const ConfigurationSpace& plan_cspace, const TypedMultiPolygon& drivable, const Point& start,
     const PlannerOptions& options, const GoalFocus* focus, const DrivenWay* way,
-    const std::vector<int>& pieces, int own_piece, OffsetTileCache* offsets, Plan& plan) {
+    const std::vector<int>& pieces, int own_piece, PlanCache* cache, Plan& plan) {
   std::vector<std::size_t> apart;
   bool focus_apart = false;
   for (std::size_t i = 0; i < plan.candidates.size(); ++i) {
@@ -490,10 +490,14 @@ std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
   narrower.robot_radius_m -= options.narrow_gap_tolerance_m;
   narrower.clearance_margin_m = 0.0;
   ConfigurationSpace cspace;
-  // The offset tiles are kept for this clearance too: the endgame plans with
-  // the margin, without it and with this one by turns, on maps that change
-  // little (OffsetTileCache keeps what the last calls used).
-  if (!cspace.build(drivable, narrower, offsets, way).ok) return {};
+  // The offset tiles and the path graph's segment tests are kept for this
+  // clearance too: the endgame plans with the margin, without it and with
+  // this one by turns, on maps that change little (OffsetTileCache keeps what
+  // the last calls used, PlanCache a VisibilityCache per clearance). Without
+  // them each such plan built this C-space's whole graph afresh: 20 ms of a
+  // 50 ms tight plan on campus's 1900 reflex nodes (docs/exploration.md,
+  // "Planning time").
+  if (!cspace.build(drivable, narrower, cache ? &cache->offsets : nullptr, way).ok) return {};
   const auto robot_at = cspace.nearest_interior_point(start, options.start_snap_distance_m);
   if (!robot_at) return {};
   const int robot_piece = cspace.piece_of(*robot_at);
@@ -520,7 +524,8 @@ std::vector<std::pair<std::size_t, Point>> settle_behind_narrow_gaps(
   if (!within.empty()) {
     PathMatrixOptions row;
     row.between_targets = false;
-    const PathMatrix through = shortest_path_matrix(cspace, *robot_at, within_at, row);
+    const PathMatrix through =
+        shortest_path_matrix(cspace, *robot_at, within_at, row, cache ? &cache->visibility(narrower) : nullptr);
     plan.stats.segment_tests += through.segment_tests;
     for (std::size_t k = 0; k < within.size(); ++k) {
       if (through.path_from_start[k].empty()) continue;
@@ -781,7 +786,7 @@ Plan plan_exploration(const TypedMultiPolygon& map, const Pose2& robot, const st
   if ((plan.best < 0 || focus) && options.narrow_gap_tolerance_m > 0.0 &&
       options.cspace.clearance_margin_m == 0.0 && own_piece >= 0) {
     const auto mouths = settle_behind_narrow_gaps(cspace, passable ? *passable : map, *start, options, focus,
-                                                  way, pieces, own_piece, cache ? &cache->offsets : nullptr, plan);
+                                                  way, pieces, own_piece, cache, plan);
     // A candidate behind a gap about the robot's width is approached at the
     // gap's mouth: from there the laser sees through the gap, the live view
     // (mission.hpp) opens it as wide as it is, and the next plan goes

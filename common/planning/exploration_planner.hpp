@@ -287,8 +287,9 @@ class PlanCache {
   ApproachCache approaches;  // the approach points' tries
   KeepOutCache keep_out;     // the map without the keep-out (compute_plan)
   // The path graph's segment tests (pruned_graph.hpp), kept per clearance
-  // (the mission plans without the margin now and then, and back): the
-  // last two clearances asked for.
+  // (the mission plans without the margin now and then, and back; a plan
+  // with no goal tests the narrow gaps with a narrower disk): the last three
+  // clearances asked for.
   VisibilityCache& visibility(const CSpaceOptions& cspace);
   VisibilityCache::Counters visibility_counters() const;  // summed over the clearances
 
