@@ -85,7 +85,7 @@ double polyline_length(const std::vector<Point>& points) {
 }
 
 std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& cspace,
-                                                  const mapping::MultiPolygon& passages) {
+                                                  const mapping::MultiPolygon& passages, const Point* robot) {
   auto outside = subtracted(passages, cspace);
   if (!outside) return std::nullopt;
   // The C-space's edges, each with the polygon it bounds. A part of the
@@ -133,7 +133,7 @@ std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& c
     touch_from(part.outer());
     for (const auto& hole : part.inners())
       if (touched.size() < 2) touch_from(hole);
-    if (touched.size() >= 2) bridges.push_back(std::move(part));
+    if (touched.size() >= 2 || (robot && bg::covered_by(*robot, part))) bridges.push_back(std::move(part));
   }
   if (bridges.empty()) return cspace;
   return united(cspace, bridges);
@@ -315,7 +315,8 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
     const auto cspace = mapping::geometry_of(polygons_);
     const auto passages = dilated_polylines(way_near_or_outside(cspace, *way), way->half_width_m);
     if (!passages.empty()) {
-      auto with_passages = with_bridges(cspace, passages);
+      // The way's newest point is where the robot stands (within a trail step).
+      auto with_passages = with_bridges(cspace, passages, &way->points.back());
       if (!with_passages) {
         result.error = "a passage has a coordinate not finite or beyond 1e9 m";
         return result;

@@ -90,8 +90,9 @@ class ConfigurationSpace {
   // one build to the next; the C-space does not depend on it. `way` (may
   // be null or empty): its corridor is positions of the robot's centre
   // known to be free whatever the map says; those of its parts that join
-  // two pieces of the C-space are united into it after the offset
-  // (with_bridges); their edges are typed kObstacle. A way with a point
+  // two pieces of the C-space, and the part holding its newest point (where
+  // the robot stands), are united into it after the offset (with_bridges);
+  // their edges are typed kObstacle. A way with a point
   // not finite or beyond 1e9 m adds nothing.
   BuildResult build(const TypedMultiPolygon& free_space, const CSpaceOptions& options,
                     OffsetTileCache* cache = nullptr, const DrivenWay* way = nullptr);
@@ -181,10 +182,15 @@ class ConfigurationSpace {
 // its polygons united in: the bridges across gaps the map has shut. A part
 // that touches one polygon only (a trail running a little outside the
 // C-space along a wall, or into a nook) adds no place the robot can get to,
-// only vertices that every plan would pay for, and is left out. nullopt: a
-// coordinate not finite or beyond 1e9 m.
+// only vertices that every plan would pay for, and is left out, unless it
+// holds `robot` (may be null): the robot stands in that nook, and the part
+// is its way back into the C-space (campus: a way in, then SLAM moved the
+// pose 0.37 m, the robot 0.54 m outside the C-space, the mission FAILED on
+// five plans that could not start). nullopt: a coordinate not finite or
+// beyond 1e9 m.
 std::optional<mapping::MultiPolygon> with_bridges(const mapping::MultiPolygon& cspace,
-                                                  const mapping::MultiPolygon& passages);
+                                                  const mapping::MultiPolygon& passages,
+                                                  const Point* robot = nullptr);
 
 // The stretches of `way` whose corridor may reach out of `cspace`: the rest
 // of it runs inside, farther than half_width_m (and 1 mm) from every edge of

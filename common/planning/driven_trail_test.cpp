@@ -299,6 +299,29 @@ TEST(TrailCorridor, AddsNothingWhereItJoinsNoTwoPieces) {
   EXPECT_EQ(with.polygons().size(), without.polygons().size());
 }
 
+// The same part of the way, but the robot is still out there: the way ends
+// in the band along the wall the C-space leaves out (SLAM moved the pose, or
+// the wall, by 5 cm). That part is where the robot stands and its way back
+// into the C-space: kept, so that a plan can start (campus: five plans
+// from a pose 0.54 m outside the C-space, and the mission FAILED).
+TEST(TrailCorridor, KeepsThePartTheRobotStandsIn) {
+  const auto map = testing::a_room_cut_off_behind_a_slit();
+  const auto options = testing::disk(0.25);
+  ConfigurationSpace without;
+  ASSERT_TRUE(without.build(map, options).ok);
+  const mapping::Point robot(3, 0.2), room(3, 1);
+  EXPECT_FALSE(without.covers(robot));
+  const std::vector<mapping::Point> trail{room, {1, 0.2}, robot};
+  const DrivenWay way{trail, 0.05};
+  ConfigurationSpace with;
+  ASSERT_TRUE(with.build(map, options, nullptr, &way).ok);
+  EXPECT_TRUE(with.covers(robot));
+  EXPECT_TRUE(with.covers(mapping::Point(2, 0.2)));
+  ASSERT_GE(with.piece_of(robot), 0);
+  EXPECT_EQ(with.piece_of(robot), with.piece_of(room)) << "joined to the room it leads back to";
+  EXPECT_EQ(with.polygons().size(), without.polygons().size());
+}
+
 // The C-space keeps only the stretches of the way that come near its edges
 // or run outside it (way_near_or_outside): the rest lies deep inside, and its
 // corridor adds nothing. The C-space must be the same as with the corridor
@@ -337,7 +360,7 @@ TEST(TrailCorridor, TheWayDeepInsideTheCSpaceChangesNothing) {
     for (const auto& s : stretches) kept += s.size();
     dropped_somewhere += kept < trail.size();
 
-    const auto whole = with_bridges(cspace, trail_corridor(trail, 0.05));
+    const auto whole = with_bridges(cspace, trail_corridor(trail, 0.05), &trail.back());
     ASSERT_TRUE(whole.has_value());
     ConfigurationSpace with;
     ASSERT_TRUE(with.build(map, options, nullptr, &way).ok) << "walk " << walk;
