@@ -316,7 +316,8 @@ ConfigurationSpace::BuildResult ConfigurationSpace::build(const TypedMultiPolygo
     const auto passages = dilated_polylines(way_near_or_outside(cspace, *way), way->half_width_m);
     if (!passages.empty()) {
       // The way's newest point is where the robot stands (within a trail step).
-      auto with_passages = with_bridges(cspace, passages, &way->points.back());
+      auto with_passages =
+          with_bridges(cspace, passages, way->keep_where_the_robot_stands ? &way->points.back() : nullptr);
       if (!with_passages) {
         result.error = "a passage has a coordinate not finite or beyond 1e9 m";
         return result;

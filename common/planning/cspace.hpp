@@ -33,6 +33,10 @@ using mapping::TypedMultiPolygon;
 struct DrivenWay {
   std::span<const Point> points;
   double half_width_m = 0.0;
+  // Keep also the corridor's part about the newest point (where the robot
+  // stands) when it joins no two pieces: for a robot farther outside the
+  // C-space than a plan's start may snap (with_bridges).
+  bool keep_where_the_robot_stands = false;
 };
 
 struct CSpaceOptions {
@@ -90,9 +94,9 @@ class ConfigurationSpace {
   // one build to the next; the C-space does not depend on it. `way` (may
   // be null or empty): its corridor is positions of the robot's centre
   // known to be free whatever the map says; those of its parts that join
-  // two pieces of the C-space, and the part holding its newest point (where
-  // the robot stands), are united into it after the offset (with_bridges);
-  // their edges are typed kObstacle. A way with a point
+  // two pieces of the C-space (and, with keep_where_the_robot_stands, the
+  // part holding its newest point) are united into it after the offset
+  // (with_bridges); their edges are typed kObstacle. A way with a point
   // not finite or beyond 1e9 m adds nothing.
   BuildResult build(const TypedMultiPolygon& free_space, const CSpaceOptions& options,
                     OffsetTileCache* cache = nullptr, const DrivenWay* way = nullptr);

@@ -301,10 +301,10 @@ TEST(TrailCorridor, AddsNothingWhereItJoinsNoTwoPieces) {
 
 // The same part of the way, but the robot is still out there: the way ends
 // in the band along the wall the C-space leaves out (SLAM moved the pose, or
-// the wall, by 5 cm). That part is where the robot stands and its way back
-// into the C-space: kept, so that a plan can start (campus: five plans
-// from a pose 0.54 m outside the C-space, and the mission FAILED).
-TEST(TrailCorridor, KeepsThePartTheRobotStandsIn) {
+// the wall, by 5 cm). With keep_where_the_robot_stands (the planner's second
+// try, for a robot farther out than a start may snap), that part is kept:
+// where the robot stands and its way back into the C-space.
+TEST(TrailCorridor, KeepsThePartTheRobotStandsInWhenAsked) {
   const auto map = testing::a_room_cut_off_behind_a_slit();
   const auto options = testing::disk(0.25);
   ConfigurationSpace without;
@@ -312,7 +312,11 @@ TEST(TrailCorridor, KeepsThePartTheRobotStandsIn) {
   const mapping::Point robot(3, 0.2), room(3, 1);
   EXPECT_FALSE(without.covers(robot));
   const std::vector<mapping::Point> trail{room, {1, 0.2}, robot};
-  const DrivenWay way{trail, 0.05};
+  DrivenWay way{trail, 0.05};
+  ConfigurationSpace plain;
+  ASSERT_TRUE(plain.build(map, options, nullptr, &way).ok);
+  EXPECT_FALSE(plain.covers(robot)) << "not asked: a part that joins nothing";
+  way.keep_where_the_robot_stands = true;
   ConfigurationSpace with;
   ASSERT_TRUE(with.build(map, options, nullptr, &way).ok);
   EXPECT_TRUE(with.covers(robot));
@@ -360,7 +364,7 @@ TEST(TrailCorridor, TheWayDeepInsideTheCSpaceChangesNothing) {
     for (const auto& s : stretches) kept += s.size();
     dropped_somewhere += kept < trail.size();
 
-    const auto whole = with_bridges(cspace, trail_corridor(trail, 0.05), &trail.back());
+    const auto whole = with_bridges(cspace, trail_corridor(trail, 0.05));
     ASSERT_TRUE(whole.has_value());
     ConfigurationSpace with;
     ASSERT_TRUE(with.build(map, options, nullptr, &way).ok) << "walk " << walk;

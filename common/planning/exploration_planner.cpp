@@ -264,7 +264,24 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
   plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(s.cspace.polygons()));
   plan.stats.reflex_nodes = static_cast<int>(s.cspace.reflex_nodes().size());
   s.robot_point = Point(robot.x_m, robot.y_m);
-  const auto start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
+  auto start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
+  if (!start && way && !way->points.empty() && !way->keep_where_the_robot_stands) {
+    // Farther outside than a start may snap, but on its trail (a way in,
+    // then SLAM moved the pose: campus, 0.54 m out, and the mission FAILED
+    // on five such plans): the C-space again with the trail's corridor
+    // about the robot, its way back in. Only then: where the robot is near
+    // the C-space the start snaps to it straight, not back along the trail.
+    DrivenWay standing = *way;
+    standing.keep_where_the_robot_stands = true;
+    const auto again = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr, &standing);
+    if (!again.ok) {
+      plan.error = again.error;
+      return std::nullopt;
+    }
+    plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(s.cspace.polygons()));
+    plan.stats.reflex_nodes = static_cast<int>(s.cspace.reflex_nodes().size());
+    start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
+  }
   if (!start) {
     plan.robot_outside_cspace = true;
     plan.error = "the robot is not within " + std::to_string(options.start_snap_distance_m) +

@@ -783,6 +783,31 @@ TEST(PlanExploration, TourOnePerChainStopsOnceAtEachFrontier) {
   }
 }
 
+// A robot in the middle of a slit narrower than itself in the map (it drove
+// in: the world's slit is wider), 0.75 m from the C-space, farther than a
+// start may snap: without its trail no plan starts; with it, the plan
+// starts where it stands and goes back the way it came.
+TEST(PlanPathTo, FromFartherOutThanAStartSnapsTheTrailLeadsBack) {
+  const auto map = testing::a_room_cut_off_behind_a_slit();
+  PlannerOptions o = options();
+  o.cspace.clearance_margin_m = 0.0;
+  const Pose2 robot{10.5, 2.0, 0.0};
+  const Point home(5.0, 1.0);
+  const Plan lost = plan_path_to(map, robot, home, o);
+  EXPECT_FALSE(lost.ok);
+  EXPECT_TRUE(lost.robot_outside_cspace);
+  const std::vector<Point> trail{{8.0, 2.0}, {10.5, 2.0}};
+  const DrivenWay way{trail, 0.05};
+  const Plan plan = plan_path_to(map, robot, home, o, nullptr, &way);
+  ASSERT_TRUE(plan.ok) << plan.error;
+  ASSERT_EQ(plan.best, 0);
+  const auto& path = plan.candidates[0].path;
+  ASSERT_GE(path.size(), 2u);
+  EXPECT_EQ(distance(path.front(), Point(10.5, 2.0)), 0.0);
+  EXPECT_NEAR(path[1].y(), 2.0, 0.05 + 1e-6) << "out along the trail's corridor, not across the slit's walls";
+  EXPECT_EQ(distance(path.back(), home), 0.0);
+}
+
 TEST(PlanPathTo, FindsThePathHomeOrSaysItIsUnreachable) {
   const auto map = corridor_with_a_room_seen_through_a_door();
   const Plan home = plan_path_to(map, Pose2{18, 1.5, 0}, Point(2, 1.5), options());
