@@ -139,6 +139,15 @@ TEST(SlamReplayFr079, ShippedConfigClosesTheLoops) {
     GTEST_SKIP() << "no FR079 log in " << kData;
   const fs::path dir = fs::temp_directory_path() / ("pex_slam_replay_fr079_" + std::to_string(::getpid()));
   fs::create_directories(dir);
+  // Removed on every way out, a failed ASSERT's too (run_in has printed the
+  // failed command's output already).
+  struct RemovedOnExit {
+    fs::path dir;
+    ~RemovedOnExit() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } removed_on_exit{dir};
   ASSERT_EQ(run_in(dir, kBin / "pex-carmen2lcm", (kData / "fr079.clf").string() + " " + (dir / "fr079.lcm").string()), 0);
   ASSERT_EQ(run_in(dir, kBin / "pex-slam", "--config " + kShippedConfig.string() + " --config " + kDatasetsConfig.string() + " --log " +
                                                (dir / "fr079.lcm").string() + " --poses " +
@@ -148,7 +157,6 @@ TEST(SlamReplayFr079, ShippedConfigClosesTheLoops) {
   const auto poses = ev::read_poses(poses_in);
   std::ifstream relations_in(kData / "fr079.relations");
   const auto relations = ev::read_relations(relations_in).relations;
-  fs::remove_all(dir);
   ASSERT_EQ(poses.malformed_lines, 0u);
   ev::MetricOptions options;
   options.split_gap_s = 100.0;
