@@ -256,13 +256,12 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
     return std::nullopt;
   }
   Setup s;
-  const auto built = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr, way);
-  if (!built.ok) {
-    plan.error = built.error;
-    return std::nullopt;
-  }
-  plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(s.cspace.polygons()));
-  plan.stats.reflex_nodes = static_cast<int>(s.cspace.reflex_nodes().size());
+  auto build = [&](const DrivenWay* along) {
+    const auto built = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr, along);
+    if (!built.ok) plan.error = built.error;
+    return built.ok;
+  };
+  if (!build(way)) return std::nullopt;
   s.robot_point = Point(robot.x_m, robot.y_m);
   auto start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
   if (!start && way && !way->points.empty() && !way->keep_where_the_robot_stands) {
@@ -273,15 +272,11 @@ std::optional<Setup> set_up(const TypedMultiPolygon& map, const Pose2& robot, co
     // the C-space the start snaps to it straight, not back along the trail.
     DrivenWay standing = *way;
     standing.keep_where_the_robot_stands = true;
-    const auto again = s.cspace.build(map, options.cspace, cache ? &cache->offsets : nullptr, &standing);
-    if (!again.ok) {
-      plan.error = again.error;
-      return std::nullopt;
-    }
-    plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(s.cspace.polygons()));
-    plan.stats.reflex_nodes = static_cast<int>(s.cspace.reflex_nodes().size());
+    if (!build(&standing)) return std::nullopt;
     start = s.cspace.nearest_interior_point(s.robot_point, options.start_snap_distance_m);
   }
+  plan.stats.cspace_vertices = static_cast<int>(mapping::vertex_count(s.cspace.polygons()));
+  plan.stats.reflex_nodes = static_cast<int>(s.cspace.reflex_nodes().size());
   if (!start) {
     plan.robot_outside_cspace = true;
     plan.error = "the robot is not within " + std::to_string(options.start_snap_distance_m) +
