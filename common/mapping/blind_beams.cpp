@@ -71,4 +71,16 @@ std::vector<float> without_blind_beams(std::span<const float> ranges, double ran
   return out;
 }
 
+std::vector<BeamRun> blind_runs(std::span<const std::uint8_t> blind) {
+  std::vector<BeamRun> runs;
+  for (std::size_t i = 0; i < blind.size(); ++i) {
+    if (!blind[i]) continue;
+    if (!runs.empty() && runs.back().last + 1 == i)
+      runs.back().last = i;
+    else
+      runs.push_back({i, i});
+  }
+  return runs;
+}
+
 }  // namespace pex::mapping

@@ -58,6 +58,15 @@ class BlindBeams {
   std::int64_t onsets_ = 0;
 };
 
+// Adjacent blind beams of a mask (BlindBeams::mask), first and last beam
+// index of each run, in beam order: where the laser cannot see, for the
+// operator (the mapper's DEGRADED reason says it in radians).
+struct BeamRun {
+  std::size_t first = 0;
+  std::size_t last = 0;
+};
+std::vector<BeamRun> blind_runs(std::span<const std::uint8_t> blind);
+
 // What BlindBeams::extents gives, for a mask of blind beams (one value per
 // beam of `ranges`, or empty: none blind): the extents scan_to_polygon takes.
 std::vector<float> without_blind_beams(std::span<const float> ranges, double range_min_m, double range_max_m,

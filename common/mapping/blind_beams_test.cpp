@@ -81,6 +81,19 @@ TEST(BlindBeams, OffNeverFlagsAndAnotherBeamCountStartsAfresh) {
   EXPECT_TRUE(blind.extents(six, kRangeMin, kRangeMax, {}, kFreeRange).empty());
 }
 
+TEST(BlindBeams, RunsAreTheAdjacentBlindBeamsInBeamOrder) {
+  EXPECT_TRUE(blind_runs({}).empty());
+  EXPECT_TRUE(blind_runs(std::vector<std::uint8_t>(5, 0)).empty());
+  const auto runs = blind_runs(std::vector<std::uint8_t>{1, 1, 0, 0, 1, 0, 1, 1, 1});
+  ASSERT_EQ(runs.size(), 3u);
+  EXPECT_EQ(runs[0].first, 0u);
+  EXPECT_EQ(runs[0].last, 1u);
+  EXPECT_EQ(runs[1].first, 4u);
+  EXPECT_EQ(runs[1].last, 4u);
+  EXPECT_EQ(runs[2].first, 6u);
+  EXPECT_EQ(runs[2].last, 8u);
+}
+
 TEST(BlindBeams, AFreeRangeThatRoundsInFloatIsNoWall) {
   // 2.1 m is below 2.1 in float: a beam that kept its free range was not
   // stopped, and must not count as evidence.

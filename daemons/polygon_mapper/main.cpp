@@ -86,8 +86,11 @@ int main(int argc, char** argv) {
     }
     const auto period = std::chrono::microseconds(static_cast<std::int64_t>(1e6 / mapper->options().publish_rate_hz));
     node.every(period, publish_maps);
-    node.every(std::chrono::milliseconds(250), [&node, watch](std::int64_t) {
-      const std::string why = watch->stale(node.monotonic_us());
+    // A laser blind in some sector (mapping::BlindBeams) is DEGRADED too: the
+    // map goes on, but the operator should look at the window.
+    node.every(std::chrono::milliseconds(250), [&node, watch, mapper](std::int64_t) {
+      std::string why = watch->stale(node.monotonic_us());
+      if (why.empty()) why = mapper->blind_laser_reason();
       node.set_state(why.empty() ? pex::daemon_status_t::STATE_OK : pex::daemon_status_t::STATE_DEGRADED, why);
     });
   });

@@ -5,6 +5,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "archive/byte_archive.hpp"
 #include "mapping/known_walls.hpp"
 #include "mapping/map_archive.hpp"
@@ -109,9 +111,33 @@ Mapper::Mapper(MapperOptions options)
       particle_maps_(particle_maps::ParticleMapsOptions{options_.map, 1000, options_.threads}),
       blind_(options_.blind_beams) {}
 
-void Mapper::count_blind_beams() {
+void Mapper::count_blind_beams(const pex::laser_scan_t& scan) {
   counters_.blind_beams = blind_.count();
   counters_.blind_onsets = blind_.onsets();
+  blind_angle_min_rad_ = scan.angle_min;
+  blind_angle_increment_rad_ = scan.angle_increment;
+}
+
+std::string Mapper::blind_laser_reason() const {
+  const auto runs = mapping::blind_runs(blind_.mask());
+  if (runs.empty()) return {};
+  // A covered window is one or two sectors; glass and dark surfaces at a
+  // slant leave single beams here and there: the widest three say where.
+  std::vector<mapping::BeamRun> widest(runs);
+  const std::size_t shown = std::min<std::size_t>(3, widest.size());
+  std::partial_sort(widest.begin(), widest.begin() + static_cast<std::ptrdiff_t>(shown), widest.end(),
+                    [](const auto& a, const auto& b) { return a.last - a.first > b.last - b.first; });
+  widest.resize(shown);
+  std::sort(widest.begin(), widest.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  auto bearing = [this](std::size_t beam) {
+    return blind_angle_min_rad_ + blind_angle_increment_rad_ * static_cast<double>(beam);
+  };
+  std::string sectors;
+  for (const auto& run : widest)
+    sectors += fmt::format("{}{:.2f}..{:.2f}", sectors.empty() ? "" : ", ", bearing(run.first), bearing(run.last));
+  if (runs.size() > shown) sectors += fmt::format(" and {} more", runs.size() - shown);
+  return fmt::format("laser blind on {} beams at {} rad (sensor frame): no echo where the map has walls", blind_.count(),
+                     sectors);
 }
 
 const mapping::PolygonMap& Mapper::map() const {
@@ -224,7 +250,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
         scan->angle_increment, geometry::compose(best_particle.pose, mounting), scan_options);
   blind_.observe(scan->ranges, scan_options.range_min_m, scan_options.range_max_m, against_best.extent_m,
                  scan_options.free_range_m);
-  count_blind_beams();
+  count_blind_beams(*scan);
   const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment, mounting,
                                               blind_.mask()};
   const auto result = particle_maps_.update(particles, sensor_scan, scan_options);
@@ -319,7 +345,7 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   const auto polygon = mapping::scan_to_polygon_in(map_, scan.ranges, scan.angle_min, scan.angle_increment, sensor,
                                                    scan_options, &stopped, &blind_);
   counters_.no_return_beams_stopped += stopped;
-  count_blind_beams();
+  count_blind_beams(scan);
   if (!polygon.ok) {
     ++counters_.scan_polygon_errors;
     return true;

@@ -158,6 +158,10 @@ class Mapper {
   std::optional<pex::polygon_map_t> free_space_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
+  // Where the laser is blind now ("" when it sees on every beam): the blind
+  // beams' count and their bearings in the sensor frame, for the daemon's
+  // DEGRADED reason. The map is still built, but the laser sees less of it.
+  std::string blind_laser_reason() const;
   // The counters and the map's size, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
   void visit_counters(Visitor& v) const {
@@ -193,8 +197,8 @@ class Mapper {
   void drain_waiting_updates();
   // slam: applies the update if its scan is here; false if the scan is not.
   bool apply_slam_update(const pex::slam_update_t& update);
-  // The blind-beam counters after blind_ observed a scan.
-  void count_blind_beams();
+  // The blind-beam counters, and the bearings of the beams, after blind_ observed `scan`.
+  void count_blind_beams(const pex::laser_scan_t& scan);
   // The scan-polygon options with the sensor's own range limits applied.
   mapping::ScanPolygonOptions scan_options_for(const pex::laser_scan_t& scan) const;
   // The map changed: both messages are merged anew when next asked for.
@@ -221,6 +225,8 @@ class Mapper {
   particle_maps::ParticleMaps particle_maps_;
   std::deque<pex::slam_update_t> waiting_updates_;  // their scan has not arrived yet
   mapping::BlindBeams blind_;  // the laser's, from the scans inserted (both pose sources)
+  double blind_angle_min_rad_ = 0.0;        // bearing of blind_'s beam 0 ...
+  double blind_angle_increment_rad_ = 0.0;  // ... and between its beams (the scan it last observed)
   int best_ = -1;
   std::int64_t epoch_ = 0;       // SLAM lineage of the maps held (slam_update_t.epoch)
   std::int64_t generation_ = 0;  // of the last update applied

@@ -1,6 +1,7 @@
 #include "mapper.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -233,8 +234,21 @@ TEST(Mapper, ASectorBlindScanAfterScanIsCountedBlindUntilItSeesAgain) {
   ASSERT_EQ(mapper.counters().scans_inserted, 3);
   EXPECT_GT(mapper.counters().blind_beams, 100);  // 1.2 rad of 0.5-degree beams: 137
   EXPECT_EQ(mapper.counters().blind_onsets, 1);
+  // The DEGRADED reason says where: one sector, about -0.6..0.6 rad.
+  const std::string reason = mapper.blind_laser_reason();
+  int beams = 0;
+  double from_rad = 0.0, to_rad = 0.0;
+  char after = 0;
+  ASSERT_EQ(std::sscanf(reason.c_str(), "laser blind on %d beams at %lf..%lf rad%c", &beams, &from_rad, &to_rad, &after),
+            4)
+      << reason;
+  EXPECT_EQ(beams, mapper.counters().blind_beams);
+  EXPECT_NEAR(from_rad, -0.6, 0.015) << reason;  // the first beam above -0.6, to 2 decimals
+  EXPECT_NEAR(to_rad, 0.6, 0.015) << reason;
+  EXPECT_EQ(after, ' ') << "one sector only: " << reason;
   scan_at(5'510'000, false);
   EXPECT_EQ(mapper.counters().blind_beams, 0);
+  EXPECT_EQ(mapper.blind_laser_reason(), "");
   EXPECT_EQ(mapper.counters().blind_onsets, 1);
   EXPECT_LE(mapper.free_space_message(6'000'000)->free_area_m2, 12.0 + 1e-6);
 }

@@ -477,6 +477,10 @@ void laser_blind_in_a_sector_then_done(bool slam) {
   // 72 m^2 it failed once in CI with a collision beside the pillar.
   EXPECT_EQ(counter_of(set.bus().status().at("polygon_mapper"), "blind_onsets"), 1);
   EXPECT_GE(counter_of(set.bus().status().at("polygon_mapper"), "blind_beams"), 46);
+  // And says so: DEGRADED, with where (the sector is 0.4..1.2 rad).
+  EXPECT_EQ(+set.bus().status().at("polygon_mapper").state, +pex::daemon_status_t::STATE_DEGRADED);
+  EXPECT_NE(set.process("polygon_mapper")->output().find("state DEGRADED: laser blind on"), std::string::npos)
+      << set.process("polygon_mapper")->output();
   EXPECT_GT(counter_of(set.bus().status().at("explorer"), "guard_map_wall_beams"), 100);
   set.stop_all();
   set.clean_up(::testing::Test::HasFailure());
