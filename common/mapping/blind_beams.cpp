@@ -26,18 +26,19 @@ void BlindBeams::observe(std::span<const float> ranges, double range_min_m, doub
   if (ranges.size() != blind_.size()) {
     stopped_runs_.assign(ranges.size(), 0);
     blind_.assign(ranges.size(), 0);
+    echoed_.assign(ranges.size(), 0);
     count_ = 0;
   }
-  if (options_.after_stopped_scans <= 0) return;
   const int count_before = count_;
   const auto needed = static_cast<std::uint16_t>(
-      std::min<int>(options_.after_stopped_scans, std::numeric_limits<std::uint16_t>::max()));
+      std::clamp<int>(options_.after_stopped_scans, 0, std::numeric_limits<std::uint16_t>::max()));
   for (std::size_t i = 0; i < ranges.size(); ++i) {
     if (is_return(ranges[i], range_min_m, range_max_m)) {
+      echoed_[i] = 1;
       stopped_runs_[i] = 0;
       count_ -= blind_[i];
       blind_[i] = 0;
-    } else if (stopped_at_wall(stopped_extent_m, i, free_range_m)) {
+    } else if (needed > 0 && stopped_at_wall(stopped_extent_m, i, free_range_m)) {
       // A beam without a return into open space is no evidence either way:
       // only one that missed a wall the map holds counts.
       if (stopped_runs_[i] < needed) ++stopped_runs_[i];
@@ -48,12 +49,19 @@ void BlindBeams::observe(std::span<const float> ranges, double range_min_m, doub
     }
   }
   if (count_before == 0 && count_ > 0) ++onsets_;
+  no_free_space_.assign(ranges.size(), 0);
+  never_echoed_ = 0;
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    const bool unproven = options_.no_free_space_before_first_echo && !echoed_[i];
+    never_echoed_ += unproven ? 1 : 0;
+    no_free_space_[i] = blind_[i] || unproven;
+  }
 }
 
 std::vector<float> BlindBeams::extents(std::span<const float> ranges, double range_min_m, double range_max_m,
                                        std::span<const float> stopped_extent_m, double free_range_m) const {
-  if (count_ == 0) return {stopped_extent_m.begin(), stopped_extent_m.end()};
-  return without_blind_beams(ranges, range_min_m, range_max_m, stopped_extent_m, free_range_m, blind_);
+  if (count_ == 0 && never_echoed_ == 0) return {stopped_extent_m.begin(), stopped_extent_m.end()};
+  return without_blind_beams(ranges, range_min_m, range_max_m, stopped_extent_m, free_range_m, no_free_space_);
 }
 
 std::vector<float> without_blind_beams(std::span<const float> ranges, double range_min_m, double range_max_m,

@@ -23,6 +23,13 @@ struct BlindBeamOptions {
   // A beam is blind once it had no return at a wall the map holds in this
   // many of its scans with no return in between (0: never; a return clears it).
   int after_stopped_scans = 2;
+  // A beam that has not returned an echo since the first scan observed gives
+  // no free space either. A sector blind from the start (the window covered
+  // when the robot boots, or a mapper restarted while it stays covered) has
+  // no wall the map holds to be found blind against, and its beams would
+  // carve free_range_m through the walls about the start; a laser that sees
+  // has every beam return within the first turns of the robot.
+  bool no_free_space_before_first_echo = true;
 };
 
 class BlindBeams {
@@ -46,6 +53,12 @@ class BlindBeams {
   bool blind(std::size_t beam) const { return beam < blind_.size() && blind_[beam] != 0; }
   // Per beam of the last scan observed: 1 blind, 0 not.
   std::span<const std::uint8_t> mask() const { return blind_; }
+  // Per beam: 1 where a beam without a return gives no free space (blind, or
+  // no echo yet with no_free_space_before_first_echo), 0 where it does. What
+  // extents() applies, for callers that make the polygon themselves.
+  std::span<const std::uint8_t> no_free_space_mask() const { return no_free_space_; }
+  // Beams that have not returned an echo yet (no_free_space_before_first_echo).
+  int never_echoed() const { return never_echoed_; }
   int count() const { return count_; }  // blind beams now
   // Scans after which some beam was blind when none was before.
   std::int64_t onsets() const { return onsets_; }
@@ -54,7 +67,10 @@ class BlindBeams {
   BlindBeamOptions options_;
   std::vector<std::uint16_t> stopped_runs_;  // per beam: stopped scans since its last return
   std::vector<std::uint8_t> blind_;
+  std::vector<std::uint8_t> echoed_;         // per beam: returned an echo since the first scan
+  std::vector<std::uint8_t> no_free_space_;  // blind_, or not echoed_ (with the option)
   int count_ = 0;
+  int never_echoed_ = 0;
   std::int64_t onsets_ = 0;
 };
 

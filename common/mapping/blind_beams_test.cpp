@@ -23,8 +23,10 @@ std::vector<float> five_beams() { return {3.0f, kNoEcho, kNoEcho, kNoEcho, 3.0f}
 // beam 3 runs into the unknown.
 std::vector<float> stopped_at_wall() { return {4.0f, 2.5f, 2.5f, 4.0f, 4.0f}; }
 
+// (The tests of the blind rule itself leave out the first-echo rule, which
+// would keep beams 1..3 of five_beams() from giving free space anyway.)
 TEST(BlindBeams, ABeamWithoutAnEchoAtAKnownWallScanAfterScanIsBlindUntilItReturns) {
-  BlindBeams blind({.after_stopped_scans = 2});
+  BlindBeams blind({.after_stopped_scans = 2, .no_free_space_before_first_echo = false});
   auto ranges = five_beams();
   blind.observe(ranges, kRangeMin, kRangeMax, stopped_at_wall(), kFreeRange);
   EXPECT_EQ(blind.count(), 0) << "one scan is glass at a slant as well";
@@ -66,12 +68,12 @@ TEST(BlindBeams, ABeamWithoutAnEchoAtAKnownWallScanAfterScanIsBlindUntilItReturn
 }
 
 TEST(BlindBeams, OffNeverFlagsAndAnotherBeamCountStartsAfresh) {
-  BlindBeams off({.after_stopped_scans = 0});
+  BlindBeams off({.after_stopped_scans = 0, .no_free_space_before_first_echo = false});
   for (int k = 0; k < 5; ++k) off.observe(five_beams(), kRangeMin, kRangeMax, stopped_at_wall(), kFreeRange);
   EXPECT_EQ(off.count(), 0);
   EXPECT_EQ(off.extents(five_beams(), kRangeMin, kRangeMax, stopped_at_wall(), kFreeRange), stopped_at_wall());
 
-  BlindBeams blind({.after_stopped_scans = 1});
+  BlindBeams blind({.after_stopped_scans = 1, .no_free_space_before_first_echo = false});
   blind.observe(five_beams(), kRangeMin, kRangeMax, stopped_at_wall(), kFreeRange);
   ASSERT_EQ(blind.count(), 2);
   const std::vector<float> six(6, kNoEcho);
@@ -79,6 +81,41 @@ TEST(BlindBeams, OffNeverFlagsAndAnotherBeamCountStartsAfresh) {
   EXPECT_EQ(blind.count(), 0);
   EXPECT_EQ(std::vector<std::uint8_t>(blind.mask().begin(), blind.mask().end()), std::vector<std::uint8_t>(6, 0));
   EXPECT_TRUE(blind.extents(six, kRangeMin, kRangeMax, {}, kFreeRange).empty());
+}
+
+// A sector blind from the first scan: no wall the map holds to find it blind
+// against. Its beams give no free space until each has returned an echo once;
+// they are not counted blind (nothing says the laser is at fault: a robot
+// starting in a hall sees no wall within range on some beams).
+TEST(BlindBeams, ABeamGivesNoFreeSpaceUntilItsFirstEcho) {
+  BlindBeams beams({.after_stopped_scans = 2});
+  auto ranges = five_beams();
+  beams.observe(ranges, kRangeMin, kRangeMax, {}, kFreeRange);
+  EXPECT_EQ(beams.count(), 0);
+  EXPECT_EQ(beams.never_echoed(), 3);
+  EXPECT_EQ(std::vector<std::uint8_t>(beams.no_free_space_mask().begin(), beams.no_free_space_mask().end()),
+            (std::vector<std::uint8_t>{0, 1, 1, 1, 0}));
+  auto e = beams.extents(ranges, kRangeMin, kRangeMax, {}, kFreeRange);
+  ASSERT_EQ(e.size(), ranges.size());
+  for (int i : {1, 2, 3}) EXPECT_FLOAT_EQ(e[i], static_cast<float>(kRangeMin)) << "beam " << i;
+  EXPECT_FALSE(e[0] < kFreeRange);
+
+  // Beam 3 returns once; from then on a scan without its echo gives it its free range.
+  ranges[3] = 2.0f;
+  beams.observe(ranges, kRangeMin, kRangeMax, {}, kFreeRange);
+  ranges[3] = kNoEcho;
+  beams.observe(ranges, kRangeMin, kRangeMax, {}, kFreeRange);
+  EXPECT_EQ(beams.never_echoed(), 2);
+  e = beams.extents(ranges, kRangeMin, kRangeMax, {}, kFreeRange);
+  ASSERT_EQ(e.size(), ranges.size());
+  EXPECT_FALSE(e[3] < kFreeRange) << "it has seen: its free range";
+  EXPECT_FLOAT_EQ(e[2], static_cast<float>(kRangeMin));
+
+  // Off: every beam without an echo gives its free range from the first scan.
+  BlindBeams off({.after_stopped_scans = 2, .no_free_space_before_first_echo = false});
+  off.observe(five_beams(), kRangeMin, kRangeMax, {}, kFreeRange);
+  EXPECT_EQ(off.never_echoed(), 0);
+  EXPECT_TRUE(off.extents(five_beams(), kRangeMin, kRangeMax, {}, kFreeRange).empty());
 }
 
 TEST(BlindBeams, RunsAreTheAdjacentBlindBeamsInBeamOrder) {

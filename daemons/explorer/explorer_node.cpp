@@ -228,7 +228,7 @@ void ExplorerNode::on_scan(const pex::laser_scan_t& msg, std::int64_t now_utime)
                                         mounting, options_.guard_scan);
   scan_utime_ = now_utime;
   last_scan_ = msg;
-  last_scan_blind_.assign(blind_.mask().begin(), blind_.mask().end());
+  last_scan_blind_.assign(blind_.no_free_space_mask().begin(), blind_.no_free_space_mask().end());
   mission_.on_scan(now_utime);
 }
 

@@ -201,6 +201,8 @@ ExplorerOptions load_options(runtime::ConfigReader& config) {
   o.live_view_when_stuck_only = config.get<bool>("live_view_when_stuck_only", o.live_view_when_stuck_only);
   o.blind_beams.after_stopped_scans =
       config.get<int>("blind_after_stopped_scans", o.blind_beams.after_stopped_scans, in_range(0, 1000));
+  o.blind_beams.no_free_space_before_first_echo =
+      config.get<bool>("no_free_space_before_first_echo", o.blind_beams.no_free_space_before_first_echo);
   return o;
 }
 

@@ -33,6 +33,8 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.publish_rate_hz = config.get<double>("publish_rate_hz", o.publish_rate_hz, runtime::in_range(0.01, 100.0));
   o.publish_free_space = config.get<bool>("publish_free_space", o.publish_free_space);
   o.input_timeout_s = config.get<double>("input_timeout_s", o.input_timeout_s, runtime::in_range(0.1, 3600.0));
+  o.blind_degraded_after_s =
+      config.get<double>("blind_degraded_after_s", o.blind_degraded_after_s, runtime::in_range(0.0, 3600.0));
   o.pose_buffer_s = config.get<double>("pose_buffer_s", o.pose_buffer_s, positive<double>());
   o.max_pose_gap_s = config.get<double>("max_pose_gap_s", o.max_pose_gap_s, positive<double>());
   o.max_pending_scans = config.get<int>("max_pending_scans", o.max_pending_scans, runtime::in_range(1, 1000));
@@ -61,6 +63,8 @@ MapperOptions load_options(runtime::ConfigReader& config) {
   o.scan.no_return_stops_at_walls = scan.get<bool>("no_return_stops_at_walls", o.scan.no_return_stops_at_walls);
   o.blind_beams.after_stopped_scans =
       scan.get<int>("blind_after_stopped_scans", o.blind_beams.after_stopped_scans, runtime::in_range(0, 1000));
+  o.blind_beams.no_free_space_before_first_echo =
+      scan.get<bool>("no_free_space_before_first_echo", o.blind_beams.no_free_space_before_first_echo);
   auto map = config.section("map");
   o.map.tile_size_m = map.get<double>("tile_size_m", o.map.tile_size_m, runtime::in_range(1.0, 1000.0));
   o.map.tile_origin_m = map.get<double>("tile_origin_m", o.map.tile_origin_m, runtime::in_range(-1e5, 1e5));
@@ -114,11 +118,20 @@ Mapper::Mapper(MapperOptions options)
 void Mapper::count_blind_beams(const pex::laser_scan_t& scan) {
   counters_.blind_beams = blind_.count();
   counters_.blind_onsets = blind_.onsets();
+  counters_.never_echoed_beams = blind_.never_echoed();
   blind_angle_min_rad_ = scan.angle_min;
   blind_angle_increment_rad_ = scan.angle_increment;
+  blind_seen_utime_ = scan.utime;
+  if (blind_.count() == 0)
+    blind_since_utime_ = -1;
+  else if (blind_since_utime_ < 0)
+    blind_since_utime_ = scan.utime;
 }
 
 std::string Mapper::blind_laser_reason() const {
+  if (blind_since_utime_ < 0 ||
+      static_cast<double>(blind_seen_utime_ - blind_since_utime_) < options_.blind_degraded_after_s * 1e6)
+    return {};
   const auto runs = mapping::blind_runs(blind_.mask());
   if (runs.empty()) return {};
   // A covered window is one or two sectors; glass and dark surfaces at a
@@ -133,11 +146,14 @@ std::string Mapper::blind_laser_reason() const {
     return blind_angle_min_rad_ + blind_angle_increment_rad_ * static_cast<double>(beam);
   };
   std::string sectors;
-  for (const auto& run : widest)
-    sectors += fmt::format("{}{:.2f}..{:.2f}", sectors.empty() ? "" : ", ", bearing(run.first), bearing(run.last));
-  if (runs.size() > shown) sectors += fmt::format(" and {} more", runs.size() - shown);
-  return fmt::format("laser blind on {} beams at {} rad (sensor frame): no echo where the map has walls", blind_.count(),
-                     sectors);
+  for (const auto& run : widest) {
+    sectors += sectors.empty() ? "" : ", ";
+    sectors += run.first == run.last ? fmt::format("{:.2f}", bearing(run.first))
+                                     : fmt::format("{:.2f}..{:.2f}", bearing(run.first), bearing(run.last));
+  }
+  const std::string more = runs.size() > shown ? fmt::format(" and {} more", runs.size() - shown) : "";
+  return fmt::format("laser blind on {} beams at {} rad{} (sensor frame): no echo where the map has walls",
+                     blind_.count(), sectors, more);
 }
 
 const mapping::PolygonMap& Mapper::map() const {
@@ -252,7 +268,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
                  scan_options.free_range_m);
   count_blind_beams(*scan);
   const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment, mounting,
-                                              blind_.mask()};
+                                              blind_.no_free_space_mask()};
   const auto result = particle_maps_.update(particles, sensor_scan, scan_options);
   if (!result.ok) throw std::invalid_argument("SLAM_UPDATE refused: " + result.error);
   restored_.reset();

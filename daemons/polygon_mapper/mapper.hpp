@@ -36,6 +36,11 @@ struct MapperOptions {
   double publish_rate_hz = 1.0;
   bool publish_free_space = true;         // MAP_FREE beside MAP, at the same rate
   double input_timeout_s = 3.0;           // no scan or no pose (with SLAM: SLAM_POSE) this long: DEGRADED (health)
+  // Some beams blind this long (scan time) with no scan between that had
+  // none: DEGRADED, saying where (blind_laser_reason). Glass and dark
+  // surfaces at a slant blind a beam or a few for a moment (the Intel log:
+  // 50 times 1-6 beams); a covered window stays.
+  double blind_degraded_after_s = 5.0;
   double pose_buffer_s = 5.0;             // poses kept for pairing with scans
   double max_pose_gap_s = 0.5;            // poses bracketing a scan may be this far apart
   int max_pending_scans = 20;             // scans waiting for a newer pose
@@ -110,6 +115,9 @@ struct MapperCounters {
   // laser went from none blind to some.
   std::int64_t blind_beams = 0;
   std::int64_t blind_onsets = 0;
+  // Beams that have not returned an echo since the mapper started, which
+  // give no free space (BlindBeamOptions::no_free_space_before_first_echo).
+  std::int64_t never_echoed_beams = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -129,6 +137,7 @@ struct MapperCounters {
     v.total("no_return_beams_stopped", no_return_beams_stopped);
     v.total("blind_beams", blind_beams);
     v.total("blind_onsets", blind_onsets);
+    v.total("never_echoed_beams", never_echoed_beams);
   }
 };
 
@@ -158,9 +167,11 @@ class Mapper {
   std::optional<pex::polygon_map_t> free_space_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
-  // Where the laser is blind now ("" when it sees on every beam): the blind
-  // beams' count and their bearings in the sensor frame, for the daemon's
-  // DEGRADED reason. The map is still built, but the laser sees less of it.
+  // Where the laser is blind ("" when it sees on every beam, or some beams
+  // have been blind for less than blind_degraded_after_s of scan time): the
+  // blind beams' count and their bearings in the sensor frame, for the
+  // daemon's DEGRADED reason. The map is still built, but the laser sees
+  // less of it.
   std::string blind_laser_reason() const;
   // The counters and the map's size, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -227,6 +238,8 @@ class Mapper {
   mapping::BlindBeams blind_;  // the laser's, from the scans inserted (both pose sources)
   double blind_angle_min_rad_ = 0.0;        // bearing of blind_'s beam 0 ...
   double blind_angle_increment_rad_ = 0.0;  // ... and between its beams (the scan it last observed)
+  std::int64_t blind_since_utime_ = -1;     // scan time since which some beam is blind (-1: none is)
+  std::int64_t blind_seen_utime_ = -1;      // the scan time blind_ last observed
   int best_ = -1;
   std::int64_t epoch_ = 0;       // SLAM lineage of the maps held (slam_update_t.epoch)
   std::int64_t generation_ = 0;  // of the last update applied

@@ -494,6 +494,59 @@ TEST(Faults, LaserBlindInASectorOnSlamTheMapKeepsItsWallsAndTheMissionEndsDone) 
   laser_blind_in_a_sector_then_done(true);
 }
 
+// The same sector blind before the mapper's first scan (the window covered
+// when the robot boots, or a mapper restarted while a sector stays blind):
+// no wall the map holds to find its beams blind against, and each would give
+// free space for 4 m through the walls about the start. A beam that has not
+// returned an echo since the mapper started gives no free space
+// ([scan] no_free_space_before_first_echo), so the map keeps its walls and
+// the mission ends DONE with the world mapped.
+void laser_blind_from_the_start_then_done(bool slam) {
+  ExplorationSet set("faults-sector-start", {.speed = 2.0, .slam = slam, .held_back = {"polygon_mapper", "explorer"}});
+  ASSERT_TRUE(set.bus().spin_until([&] { return set.bus().status().count("sim") && set.sim_seconds() > 0.0; }, 60s))
+      << set.report_with_logs();
+  pex::sim_fault_t msg{};
+  msg.utime = set.clock()->utime;
+  msg.fault = pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR;
+  msg.duration_s = 3600.0;
+  // Behind to the right, 74 degrees wide, on the outer wall 2-2.7 m from
+  // the start: each blind beam would give up to 2 m of free space beyond the
+  // world (from the start the robot turns that way before the mapper has a
+  // wall there).
+  msg.sector_from_rad = -2.3;
+  msg.sector_to_rad = -1.0;
+  msg.source = "faults_test";
+  set.bus().publish(std::string(ch::kSimFault), msg);
+  ASSERT_TRUE(set.bus().spin_until(
+      [&] { return counter_of(set.bus().status().at("sim"), "laser_faults") == 1; }, 60s))
+      << set.report_with_logs();
+  // Only now the mapper (and the explorer, which waits for a map): its every
+  // scan is blind in the sector.
+  set.start("polygon_mapper");
+  set.start("explorer");
+  expect_done_with_the_world_mapped(set);
+  // The sector's beams (1.3 rad of 0.5-degree beams: 148) never echoed; once
+  // other beams had mapped the walls there they were found blind, and said so.
+  const auto& mapper = set.bus().status().at("polygon_mapper");
+  EXPECT_GE(counter_of(mapper, "never_echoed_beams"), 140);
+  EXPECT_GE(counter_of(mapper, "blind_beams"), 74);
+  EXPECT_EQ(+mapper.state, +pex::daemon_status_t::STATE_DEGRADED);
+  EXPECT_NE(set.process("polygon_mapper")->output().find("state DEGRADED: laser blind on"), std::string::npos)
+      << set.process("polygon_mapper")->output();
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
+}
+
+TEST(Faults, LaserBlindInASectorFromTheStartTheMapKeepsItsWallsAndTheMissionEndsDone) {
+  laser_blind_from_the_start_then_done(false);
+}
+
+// On SLAM: the mapper joins a filter that has run since the start (as after a
+// restart of the mapper), every particle's map without the sector's space.
+TEST(Faults, LaserBlindInASectorFromTheStartOnSlamTheMapKeepsItsWallsAndTheMissionEndsDone) {
+  laser_blind_from_the_start_then_done(true);
+}
+
 // Any start order brings the mission up (systemd orders none of the daemons
 // after another, and restarts any of them alone): each daemon of the set
 // (with SLAM, as on the robot) started last, after the others have said they
