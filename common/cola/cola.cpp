@@ -85,6 +85,7 @@ std::string start_measurement_request() { return frame("sMN LMCstartmeas"); }
 std::string scan_output_request(bool enable) {
   return frame(std::string("sEN LMDscandata ") + (enable ? "1" : "0"));
 }
+std::string contamination_state_request() { return frame("sRN LCMstate"); }
 
 // ------------------------------------------------------------------ framing --
 
@@ -417,6 +418,13 @@ std::variant<ScanData, ParseError> parse_scan_data(const Telegram& telegram) {
   }
   if (s.channels16.empty() && s.channels8.empty()) return ParseError{"LMDscandata: no channels"};
   return s;
+}
+
+std::optional<ContaminationLevel> contamination_level(const Telegram& telegram) {
+  if (telegram.type != "sRA" || telegram.name != "LCMstate" || telegram.args.size() != 1) return std::nullopt;
+  const auto level = parse_uint(telegram.args[0], 3);
+  if (!level) return std::nullopt;
+  return static_cast<ContaminationLevel>(*level);
 }
 
 std::vector<float> distances_m(const Channel& channel) {

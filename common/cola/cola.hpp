@@ -63,6 +63,9 @@ std::string run_request();
 std::string start_measurement_request();
 // sEN LMDscandata 1|0: start/stop continuous scan output.
 std::string scan_output_request(bool enable);
+// sRN LCMstate: the lens contamination measurement; the
+// answer is "sRA LCMstate <level>" (contamination_level below).
+std::string contamination_state_request();
 
 // ------------------------------------------------------------------ framing --
 
@@ -176,6 +179,12 @@ struct ScanData {
 // numbers must be valid hex of their width, counts must match the data
 // present and stay below the limits, and nothing may be left over.
 std::variant<ScanData, ParseError> parse_scan_data(const Telegram& telegram);
+
+// The lens contamination level an "sRA LCMstate" answer carries (an enum8,
+// as SICK's telegram listing has it), or nullopt for any other telegram or
+// a value out of range.
+enum class ContaminationLevel : std::uint8_t { kNone = 0, kWarning = 1, kError = 2, kSeriousError = 3 };
+std::optional<ContaminationLevel> contamination_level(const Telegram& telegram);
 
 // DIST values below this are not distances (SICK: 0 = no echo, 1 = dazzled, 2..15 reserved).
 inline constexpr std::uint16_t kFirstValidDistance = 16;

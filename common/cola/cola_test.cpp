@@ -46,6 +46,23 @@ TEST(ColaRequests, MatchTheTelegramListing) {
   EXPECT_EQ(scan_output_request(true), "\x02sEN LMDscandata 1\x03");
   EXPECT_EQ(scan_output_request(false), "\x02sEN LMDscandata 0\x03");
   EXPECT_EQ(run_request(), "\x02sMN Run\x03");
+  // The LMS5xx operating instructions' example, "Read contamination level".
+  EXPECT_EQ(contamination_state_request(), "\x02sRN LCMstate\x03");
+}
+
+TEST(ColaContamination, TheLevelOfAnLcmStateAnswerAndNothingElse) {
+  auto level_of = [](std::string_view body) {
+    return contamination_level(std::get<Telegram>(split_telegram(body)));
+  };
+  EXPECT_EQ(level_of("sRA LCMstate 0"), ContaminationLevel::kNone);
+  EXPECT_EQ(level_of("sRA LCMstate 1"), ContaminationLevel::kWarning);
+  EXPECT_EQ(level_of("sRA LCMstate 2"), ContaminationLevel::kError);
+  EXPECT_EQ(level_of("sRA LCMstate 3"), ContaminationLevel::kSeriousError);
+  EXPECT_EQ(level_of("sRA LCMstate 4"), std::nullopt);
+  EXPECT_EQ(level_of("sRA LCMstate"), std::nullopt);
+  EXPECT_EQ(level_of("sRA LCMstate 1 1"), std::nullopt);
+  EXPECT_EQ(level_of("sRA STlms 1"), std::nullopt);
+  EXPECT_EQ(level_of("sAN LCMstate 1"), std::nullopt);
 }
 
 TEST(ColaNumbers, HexDecimalAndReals) {

@@ -45,6 +45,8 @@ ReaderOptions load_options(runtime::ConfigReader& config) {
   o.max_telegram_bytes = static_cast<std::size_t>(
       config.get<int>("max_telegram_bytes", static_cast<int>(o.max_telegram_bytes), in_range(1024, 1 << 24)));
   o.max_device_time_jump_ms = config.get<int>("max_device_time_jump_ms", o.max_device_time_jump_ms, in_range(10, 60'000));
+  o.contamination_poll_ms =
+      config.get<int>("contamination_poll_ms", o.contamination_poll_ms, in_range(0, 3'600'000));
   return o;
 }
 

@@ -83,6 +83,8 @@ void ReaderCore::poll(std::int64_t now_us) {
     case Phase::kStreaming:
       if (now_us - last_scan_us_ > 1000ll * options_.stale_timeout_ms) {
         disconnect("no scan for " + std::to_string(options_.stale_timeout_ms) + " ms", now_us);
+      } else {
+        poll_contamination(now_us);
       }
       break;
   }
@@ -107,6 +109,10 @@ void ReaderCore::connect(std::int64_t now_us) {
   parser_.reset();
   clock_.reset();
   have_device_us_ = false;  // a restarted device starts its clock again
+  // Another connection, maybe another device: its window is read afresh.
+  counters_.contamination_level = -1;
+  contamination_asked_us_ = -1;
+  contamination_refused_ = false;
   phase_ = Phase::kConfiguring;
   step_ = 0;
   const std::string address = options_.host + ":" + std::to_string(options_.port);
@@ -157,6 +163,11 @@ void ReaderCore::on_closed(const std::string& error, std::int64_t now_us) {
 }
 
 void ReaderCore::on_reply(const cola::Telegram& t, std::int64_t now_us) {
+  if (phase_ == Phase::kStreaming && contamination_asked_us_ >= 0 &&
+      ((t.type == "sRA" && t.name == "LCMstate") || t.type == "sFA")) {
+    on_contamination_reply(t);
+    return;
+  }
   if (phase_ != Phase::kConfiguring) {
     ++counters_.unexpected_replies;
     return;
@@ -185,6 +196,7 @@ void ReaderCore::on_reply(const cola::Telegram& t, std::int64_t now_us) {
   }
   phase_ = Phase::kStreaming;
   last_scan_us_ = now_us;
+  next_contamination_us_ = now_us;  // asked at the next poll
   backoff_ms_ = options_.reconnect_initial_ms;
   outputs_.note("streaming scans from " + options_.host + ":" + std::to_string(options_.port));
 }
@@ -230,7 +242,69 @@ void ReaderCore::on_scan(const cola::ScanData& scan, std::int64_t now_us, std::i
   counters_.device_clock_resets = static_cast<std::int64_t>(clock_.resets());
   outputs_.publish_scan(laser_scan(scan, *dist, mapped));
   ++counters_.scans_published;
-  report(pex::daemon_status_t::STATE_OK, "");
+  report_streaming();
+}
+
+void ReaderCore::poll_contamination(std::int64_t now_us) {
+  if (options_.contamination_poll_ms <= 0 || contamination_refused_) return;
+  if (contamination_asked_us_ >= 0) {
+    if (now_us - contamination_asked_us_ <= 1000ll * options_.reply_timeout_ms) return;
+    // Unanswered: the scans still come (a hung device ends in the stale
+    // timeout), so the connection stays; asked again at the next period.
+    ++counters_.contamination_unanswered;
+    outputs_.error("contamination", "no answer to LCMstate within " + std::to_string(options_.reply_timeout_ms) + " ms");
+    contamination_asked_us_ = -1;
+    return;
+  }
+  if (now_us < next_contamination_us_) return;
+  std::string error;
+  if (!outputs_.send(cola::contamination_state_request(), &error)) {
+    disconnect("sending LCMstate: " + error, now_us);
+    return;
+  }
+  contamination_asked_us_ = now_us;
+  next_contamination_us_ = now_us + 1000ll * options_.contamination_poll_ms;
+}
+
+void ReaderCore::on_contamination_reply(const cola::Telegram& t) {
+  contamination_asked_us_ = -1;
+  if (t.type == "sFA") {
+    contamination_refused_ = true;
+    outputs_.note("the sensor refused LCMstate (sFA " + (t.args.empty() ? std::string() : t.args[0]) +
+                  "): its window's contamination is not watched on this connection");
+    return;
+  }
+  const auto level = cola::contamination_level(t);
+  if (!level) {
+    outputs_.reject("contamination", "LCMstate answer with " + std::to_string(t.args.size()) +
+                                         " arguments, or a level not 0-3: the last level kept");
+    ++counters_.malformed_telegrams;
+    return;
+  }
+  const auto before = counters_.contamination_level;
+  counters_.contamination_level = static_cast<std::int64_t>(*level);
+  if (counters_.contamination_level != before && before >= 0)
+    outputs_.note("lens contamination level " + std::to_string(before) + " -> " +
+                  std::to_string(counters_.contamination_level));
+  report_streaming();
+}
+
+void ReaderCore::report_streaming() {
+  switch (counters_.contamination_level) {
+    case 1:
+      report(pex::daemon_status_t::STATE_DEGRADED, "lens contamination warning (LCMstate 1): clean the laser's window");
+      return;
+    case 2:
+      report(pex::daemon_status_t::STATE_DEGRADED,
+             "lens contamination error (LCMstate 2): the laser's window is dirty, echoes are lost; clean it");
+      return;
+    case 3:
+      report(pex::daemon_status_t::STATE_DEGRADED,
+             "serious lens contamination error (LCMstate 3): the laser's window is dirty, echoes are lost; clean it");
+      return;
+    default:
+      report(pex::daemon_status_t::STATE_OK, "");
+  }
 }
 
 pex::laser_scan_t ReaderCore::laser_scan(const cola::ScanData& scan, const cola::Channel& dist,

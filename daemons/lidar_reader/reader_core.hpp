@@ -44,6 +44,12 @@ struct ReaderOptions {
   // jumped); one whose device time is less than half a period after it, or
   // before it, too (a repeated or injected scan).
   int max_device_time_jump_ms = 500;
+  // While streaming, ask the device's lens contamination measurement ("sRN
+  // LCMstate") at once and then this often (0: never). A warning or an error
+  // makes the reader DEGRADED, saying so: a dirty window loses echoes, which
+  // the mapper and the explorer can only guess at. A device that refuses the
+  // request (sFA) is not asked again on that connection.
+  int contamination_poll_ms = 10000;
 
   cola::ScanConfig scan_config() const;
 };
@@ -73,6 +79,11 @@ struct ReaderCounters {
   // The device clock's (cola::DeviceClock), over every connection.
   std::int64_t device_clock_outliers = 0;  // scans received more than 0.5 s off its estimate (a backlog read at once)
   std::int64_t device_clock_resets = 0;    // new offsets taken (the host clock stepped)
+  // The lens contamination measurement's last answer (0 none, 1 warning,
+  // 2 error, 3 serious error; -1 not read on this connection), and the
+  // requests for it that went unanswered within reply_timeout_ms.
+  std::int64_t contamination_level = -1;
+  std::int64_t contamination_unanswered = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -89,6 +100,8 @@ struct ReaderCounters {
     v.total("oversize_telegrams", oversize_telegrams);
     v.total("device_clock_outliers", device_clock_outliers);
     v.total("device_clock_resets", device_clock_resets);
+    v.total("contamination_level", contamination_level);
+    v.event("contamination_unanswered", contamination_unanswered);
   }
 };
 
@@ -147,6 +160,12 @@ class ReaderCore {
                                const cola::DeviceClock::Mapped& mapped) const;
   void send_next_step(std::int64_t now_us);
   void report(std::int8_t state, std::string reason);
+  // Streaming: asks LCMstate when it is due; an answer overdue is counted.
+  void poll_contamination(std::int64_t now_us);
+  // Streaming: an answer to our LCMstate request, or a refusal of it.
+  void on_contamination_reply(const cola::Telegram& telegram);
+  // The health of a connection that streams: OK, or DEGRADED with the contamination.
+  void report_streaming();
 
   ReaderOptions options_;
   ReaderOutputs outputs_;
@@ -161,6 +180,9 @@ class ReaderCore {
   std::uint32_t last_device_us_ = 0;  // device time of the last scan published
   bool have_device_us_ = false;
   std::int64_t next_attempt_us_ = 0;
+  std::int64_t next_contamination_us_ = 0;       // when LCMstate is asked next
+  std::int64_t contamination_asked_us_ = -1;     // our request awaits its answer since (-1: none)
+  bool contamination_refused_ = false;           // this connection's device refused LCMstate
   int backoff_ms_ = 0;
   cola::Framer::Counters reported_framer_{};
 };

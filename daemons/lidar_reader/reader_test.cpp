@@ -3,6 +3,7 @@
 // process, no socket, no sleep.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -83,6 +84,7 @@ struct Device {
     answers["LMCstartmeas"] = cola::encode_reply("sAN", "LMCstartmeas", {"0"});
     answers["Run"] = cola::encode_reply("sAN", "Run", {"1"});
     answers["LMDscandata"] = cola::encode_reply("sEA", "LMDscandata", {"1"});
+    answers["LCMstate"] = cola::encode_reply("sRA", "LCMstate", {"0"});  // a clean window
   }
   void receive(std::string_view bytes) {
     for (auto& event : parser.push(bytes)) {
@@ -381,9 +383,91 @@ TEST(ReaderCore, StaleStreamIsDroppedAndTheSensorConfiguredAgain) {
   rig.device.stalled = false;
   rig.run(400);
   EXPECT_EQ(rig.core.counters().connect_attempts, 2);
-  EXPECT_EQ(rig.device.requests.size(), 2 * kConfigureSequence.size());
+  const auto configuring = std::count_if(rig.device.requests.begin(), rig.device.requests.end(),
+                                         [](const std::string& r) { return r != "sRN LCMstate"; });
+  EXPECT_EQ(configuring, static_cast<std::ptrdiff_t>(2 * kConfigureSequence.size()));
   EXPECT_GT(rig.scans.size(), scans);
   EXPECT_TRUE(rig.ok());
+}
+
+// The window's contamination (sRN LCMstate) is asked as soon as the scans
+// stream and every contamination_poll_ms after: a warning or an error makes
+// the reader DEGRADED, saying which, while the scans go on; a clean window
+// again makes it OK.
+TEST(ReaderCore, AsksTheWindowsContaminationAndSaysWhenItIsDirty) {
+  Rig rig;
+  auto asked = [&] { return std::count(rig.device.requests.begin(), rig.device.requests.end(), "sRN LCMstate"); };
+  rig.run(20);
+  ASSERT_TRUE(rig.streaming());
+  EXPECT_EQ(asked(), 0);
+  EXPECT_EQ(rig.core.counters().contamination_level, -1);
+  rig.run(20);
+  EXPECT_EQ(asked(), 1);
+  EXPECT_EQ(rig.core.counters().contamination_level, 0);
+  EXPECT_TRUE(rig.ok());
+  rig.device.answers["LCMstate"] = cola::encode_reply("sRA", "LCMstate", {"2"});
+  rig.run(9900);
+  EXPECT_EQ(asked(), 1) << "asked again before contamination_poll_ms";
+  EXPECT_TRUE(rig.ok());
+  rig.run(200);
+  EXPECT_EQ(asked(), 2);
+  EXPECT_EQ(rig.core.counters().contamination_level, 2);
+  EXPECT_EQ(rig.health.state, +pex::daemon_status_t::STATE_DEGRADED);
+  EXPECT_EQ(rig.health.reason,
+            "lens contamination error (LCMstate 2): the laser's window is dirty, echoes are lost; clean it");
+  const std::size_t scans = rig.scans.size();
+  rig.run(1000);
+  EXPECT_GT(rig.scans.size(), scans + 20) << "the scans go on";
+  EXPECT_EQ(rig.health.state, +pex::daemon_status_t::STATE_DEGRADED) << "each scan keeps the state";
+  rig.device.answers["LCMstate"] = cola::encode_reply("sRA", "LCMstate", {"1"});
+  rig.run(10000);
+  EXPECT_EQ(rig.health.reason, "lens contamination warning (LCMstate 1): clean the laser's window");
+  rig.device.answers["LCMstate"] = cola::encode_reply("sRA", "LCMstate", {"0"});
+  rig.run(10000);
+  EXPECT_TRUE(rig.ok());
+  EXPECT_EQ(rig.core.counters().contamination_level, 0);
+  EXPECT_EQ(rig.closes, 0);
+  EXPECT_TRUE(rig.errors.empty());
+}
+
+// A device without the measurement refuses it (sFA): not asked again on that
+// connection, and the scans are taken as ever. An answer out of range is
+// refused and the last level kept; an answer that does not come is counted,
+// and the connection stays (its scans flow).
+TEST(ReaderCore, ARefusedUnansweredOrMalformedContaminationAnswerLeavesTheStreamAlone) {
+  {
+    Rig rig;
+    rig.device.answers["LCMstate"] = cola::encode_reply("sFA", "", {"3"});
+    rig.run(30000);
+    EXPECT_EQ(std::count(rig.device.requests.begin(), rig.device.requests.end(), "sRN LCMstate"), 1);
+    EXPECT_TRUE(rig.streaming());
+    EXPECT_TRUE(rig.ok());
+    EXPECT_EQ(rig.core.counters().contamination_level, -1);
+    EXPECT_EQ(rig.core.counters().unexpected_replies, 0);
+    EXPECT_NE(rig.notes.back().find("refused LCMstate (sFA 3)"), std::string::npos) << rig.notes.back();
+  }
+  {
+    Rig rig;
+    rig.run(40);
+    ASSERT_EQ(rig.core.counters().contamination_level, 0);
+    rig.device.answers["LCMstate"] = cola::encode_reply("sRA", "LCMstate", {"7"});
+    rig.run(10000);
+    EXPECT_EQ(rig.core.counters().contamination_level, 0) << "the last good level kept";
+    ASSERT_EQ(rig.rejects.size(), 1u);
+    EXPECT_EQ(rig.rejects[0].first, "contamination");
+    EXPECT_TRUE(rig.ok());
+  }
+  {
+    Rig rig;
+    rig.device.answers["LCMstate"] = "";
+    rig.run(2100);  // reply_timeout_ms = 2000 after the first request
+    EXPECT_EQ(rig.core.counters().contamination_unanswered, 1);
+    EXPECT_TRUE(rig.streaming());
+    EXPECT_EQ(rig.closes, 0);
+    rig.run(10000);
+    EXPECT_EQ(std::count(rig.device.requests.begin(), rig.device.requests.end(), "sRN LCMstate"), 2);
+    EXPECT_TRUE(rig.ok());
+  }
 }
 
 TEST(ReaderCore, UnansweredRequestEndsTheConnectionAfterTheReplyTimeout) {

@@ -152,8 +152,12 @@ std::string Mapper::blind_laser_reason() const {
                                      : fmt::format("{:.2f}..{:.2f}", bearing(run.first), bearing(run.last));
   }
   const std::string more = runs.size() > shown ? fmt::format(" and {} more", runs.size() - shown) : "";
-  return fmt::format("laser blind on {} beams at {} rad{} (sensor frame): no echo where the map has walls",
-                     blind_.count(), sectors, more);
+  // Either the laser cannot see there, or the map is off the world (a SLAM
+  // that lost its frame draws walls where the laser looks into open space).
+  return fmt::format(
+      "laser blind on {} beams at {} rad{} (sensor frame): no echo where the map has walls (the window covered, or "
+      "the map off the world)",
+      blind_.count(), sectors, more);
 }
 
 const mapping::PolygonMap& Mapper::map() const {

@@ -167,7 +167,7 @@ class Mapper {
   std::optional<pex::polygon_map_t> free_space_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
-  // Where the laser is blind ("" when it sees on every beam, or some beams
+  // Where the laser is blind, or the map off the world ("" when it sees on every beam, or some beams
   // have been blind for less than blind_degraded_after_s of scan time): the
   // blind beams' count and their bearings in the sensor frame, for the
   // daemon's DEGRADED reason. The map is still built, but the laser sees

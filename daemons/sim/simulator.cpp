@@ -178,6 +178,10 @@ std::string Lms111Protocol::answer(ColaClient& client, const cola::Telegram& t) 
     client.streaming = a[0] == "1";
     return cola::encode_reply("sEA", t.name, {a[0]});
   }
+  if (key == "sRN LCMstate") {
+    // The lens contamination measurement: an enum8, 0 none, 1 warning, 2 error, 3 serious error.
+    return cola::encode_reply("sRA", t.name, {std::to_string(contamination_level_)});
+  }
   if (key == "sRN STlms") {
     // status 7 = measuring; temperature flag, time and date strings as the device sends them
     return cola::encode_reply("sRA", t.name, {"7", "0", "8", "00:00:00", "8", "01.01.2026", "0", "0", "0"});
@@ -297,7 +301,7 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
   node_.subscribe<pex::sim_fault_t>(runtime::channels::kSimFault, [this](const pex::sim_fault_t& msg) {
     if (msg.fault != pex::sim_fault_t::FAULT_LASER_STALL && msg.fault != pex::sim_fault_t::FAULT_LASER_REFUSE &&
         msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND && msg.fault != pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR &&
-        msg.fault != pex::sim_fault_t::FAULT_LASER_HELD)
+        msg.fault != pex::sim_fault_t::FAULT_LASER_HELD && msg.fault != pex::sim_fault_t::FAULT_LASER_CONTAMINATED)
       throw std::invalid_argument("unknown fault " + std::to_string(msg.fault));
     if (!std::isfinite(msg.duration_s) || msg.duration_s < 0.0 || msg.duration_s > 3600.0)
       throw std::invalid_argument("fault duration " + std::to_string(msg.duration_s) + " s not in [0, 3600]");
@@ -307,10 +311,14 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
                     msg.sector_to_rad <= std::numbers::pi))
       throw std::invalid_argument("blind sector [" + std::to_string(msg.sector_from_rad) + ", " +
                                   std::to_string(msg.sector_to_rad) + "] rad is not an interval within [-pi, pi]");
+    const bool contaminated = msg.fault == pex::sim_fault_t::FAULT_LASER_CONTAMINATED;
+    if (contaminated && (msg.contamination_level < 1 || msg.contamination_level > 3))
+      throw std::invalid_argument("contamination level " + std::to_string(msg.contamination_level) + " not in [1, 3]");
     spdlog::warn("fault from {}: laser {} for {} s", msg.source,
                  msg.fault == pex::sim_fault_t::FAULT_LASER_STALL    ? "stall"
                  : msg.fault == pex::sim_fault_t::FAULT_LASER_REFUSE ? "refuses connections"
                  : msg.fault == pex::sim_fault_t::FAULT_LASER_HELD   ? "telegrams held (delivered at once at the end)"
+                 : contaminated ? fmt::format("window dirty (LCMstate {})", msg.contamination_level)
                  : sector ? fmt::format("blind from {:.2f} to {:.2f} rad (no echo there)", msg.sector_from_rad,
                                         msg.sector_to_rad)
                           : std::string("blind (no echo on any beam)"),
@@ -318,6 +326,7 @@ Simulator::Simulator(runtime::Node& node, SimOptions options)
     blind_from_rad_ = sector ? msg.sector_from_rad : -std::numbers::pi;
     blind_to_rad_ = sector ? msg.sector_to_rad : std::numbers::pi;
     start_laser_fault(msg.fault, msg.duration_s);
+    if (contaminated && laser_fault_ == msg.fault) protocol_.set_contamination_level(msg.contamination_level);
   });
   // The sim is the clock source: its node runs on the system clock (run_daemon
   // refuses clock = "sim" for it), and it paces simulated time by the
@@ -382,6 +391,7 @@ void Simulator::start_laser_fault(std::int8_t fault, double duration_s) {
 void Simulator::end_laser_fault() {
   const bool refused = laser_fault_ == pex::sim_fault_t::FAULT_LASER_REFUSE;
   laser_fault_ = 0;
+  protocol_.set_contamination_level(0);
   // What waited reaches the clients now, in one go.
   for (auto& client : clients_) {
     if (client->held.empty() || client->closed) continue;

@@ -78,6 +78,8 @@ class Lms111Protocol {
   cola::ScanData make_scan(const std::vector<float>& ranges_m, std::uint32_t device_time_us,
                            bool remission, bool remission_16bit);
   std::uint16_t scan_counter() const { return scan_counter_; }
+  // What "sRN LCMstate" answers: 0 no contamination, 1 warning, 2 error, 3 serious error.
+  void set_contamination_level(int level) { contamination_level_ = level; }
   // From the start of a scan to its transmission: the mirror sweeps the
   // 270 deg field of view in 3/4 of a turn.
   std::uint32_t transmission_delay_us() const;
@@ -87,6 +89,7 @@ class Lms111Protocol {
   cola::ScanConfig device_config_;
   std::uint16_t scan_counter_ = 0;
   std::uint16_t telegram_counter_ = 0;
+  int contamination_level_ = 0;
 };
 
 }  // namespace pex::simd

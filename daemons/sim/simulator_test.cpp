@@ -64,6 +64,15 @@ TEST(Lms111Protocol, RefusesWhatADeviceRefuses) {
   EXPECT_EQ(body(protocol.answer(client, request(cola::frame("sXX Foo")))), "sFA C");
 }
 
+TEST(Lms111Protocol, AnswersTheContaminationLevelItIsSet) {
+  SimOptions options;
+  Lms111Protocol protocol(options);
+  ColaClient client;  // a read needs no login
+  EXPECT_EQ(body(protocol.answer(client, request(cola::contamination_state_request()))), "sRA LCMstate 0");
+  protocol.set_contamination_level(2);
+  EXPECT_EQ(body(protocol.answer(client, request(cola::contamination_state_request()))), "sRA LCMstate 2");
+}
+
 TEST(Lms111Protocol, ScanTelegramRoundTripsToMetres) {
   SimOptions options;
   Lms111Protocol protocol(options);

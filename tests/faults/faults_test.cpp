@@ -389,6 +389,51 @@ TEST(Faults, LaserBlind10sTheRobotStandsTheMapKeepsItsWallsAndTheMissionEndsDone
   laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_BLIND, 10.0, false);
 }
 
+// The laser's window dirty (pex-sim's FAULT_LASER_CONTAMINATED: the device's
+// contamination measurement, CoLa "sRN LCMstate", answers 2 = error): the
+// reader asks it every contamination_poll_ms (10 s) and says so, DEGRADED
+// with the level, while the scans go on; the window clean again, OK.
+TEST(Faults, ADirtyLaserWindowMakesTheReaderDegradedUntilItIsClean) {
+  ExplorationSet set("faults-dirty", {.speed = 2.0, .held_back = {"base_driver", "polygon_mapper", "explorer"}});
+  auto reader_in = [&](std::int8_t state) {
+    const auto it = set.bus().status().find("lidar_reader");
+    return it != set.bus().status().end() && it->second.state == state;
+  };
+  const std::string scans_channel(ch::kLidarScan);
+  ASSERT_TRUE(set.bus().spin_until(
+      [&] { return reader_in(pex::daemon_status_t::STATE_OK) && set.bus().count(scans_channel) > 0; }, 60s))
+      << set.report_with_logs();
+  ASSERT_TRUE(set.spin_sim(
+      [&] { return counter_of(set.bus().status().at("lidar_reader"), "contamination_level") == 0; }, 15.0))
+      << "the reader never read the window's contamination\n" << set.report_with_logs();
+  pex::sim_fault_t msg{};
+  msg.utime = set.clock()->utime;
+  msg.fault = pex::sim_fault_t::FAULT_LASER_CONTAMINATED;
+  msg.duration_s = 30.0;
+  msg.contamination_level = 2;
+  msg.source = "faults_test";
+  const double fault_s = set.sim_seconds();
+  set.bus().publish(std::string(ch::kSimFault), msg);
+  // Within one poll period (10 s) and a heartbeat.
+  EXPECT_TRUE(set.spin_sim([&] { return reader_in(pex::daemon_status_t::STATE_DEGRADED); }, 15.0))
+      << set.report_with_logs();
+  EXPECT_EQ(counter_of(set.bus().status().at("lidar_reader"), "contamination_level"), 2);
+  EXPECT_NE(set.process("lidar_reader")->output().find("lens contamination error (LCMstate 2)"), std::string::npos)
+      << set.process("lidar_reader")->output();
+  const int scans_degraded = set.bus().count(scans_channel);
+  set.spin_sim([] { return false; }, 2.0);
+  EXPECT_GT(set.bus().count(scans_channel), scans_degraded + 25) << "the scans stopped with the window dirty";
+  EXPECT_TRUE(reader_in(pex::daemon_status_t::STATE_DEGRADED));
+  // The fault over (30 s), the next poll reads a clean window.
+  EXPECT_TRUE(set.spin_sim([&] { return reader_in(pex::daemon_status_t::STATE_OK); }, 45.0))
+      << set.report_with_logs();
+  EXPECT_GT(set.sim_seconds(), fault_s + 30.0) << "OK again while the window was still dirty";
+  EXPECT_EQ(counter_of(set.bus().status().at("lidar_reader"), "contamination_level"), 0);
+  EXPECT_LT(counter_of(set.bus().status().at("lidar_reader"), "disconnects"), 1);  // -1: never counted
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
+}
+
 // The same on SLAM, as on the robot: SLAM gets the blind scans too (it
 // takes no-echo beams as nothing), and the mapper, which refuses them,
 // still follows SLAM's updates after the fault.
