@@ -389,6 +389,43 @@ TEST(Faults, LaserBlind10sTheRobotStandsTheMapKeepsItsWallsAndTheMissionEndsDone
   laser_fault_then_done(pex::sim_fault_t::FAULT_LASER_BLIND, 10.0, false);
 }
 
+// The mapper killed while a sector of the laser is blind, and restarted: the
+// blind beams are not in its checkpoint. The restored map's walls stop them
+// (no_return_stops_at_walls), and none gives free space before it has
+// returned an echo (no_free_space_before_first_echo), so the map keeps its
+// walls; the mapper finds the sector blind again against them and says so,
+// and the mission ends DONE with the world mapped. (With the first-echo rule
+// off it passed too, 2 runs of 2: the walls about the robot were mapped.)
+TEST(Faults, KilledMapperWithASectorBlindCarvesNothingAfterItsRestart) {
+  const std::string checkpoint = make_temp_dir("faults-mapper-blind-state") + "/map.bin";
+  ExplorationSet set("faults-mapper-blind",
+                     {.speed = 2.0,
+                      .mapper_keys = {{"checkpoint_file", "\"" + checkpoint + "\""}, {"checkpoint_period_s", "0.5"}}});
+  ASSERT_TRUE(set.spin_sim([&] { return set.map() && set.map()->free_area_m2 > 60.0; }, 300.0))
+      << set.report_with_logs();
+  pex::sim_fault_t msg{};
+  msg.utime = set.clock()->utime;
+  msg.fault = pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR;
+  msg.duration_s = 3600.0;
+  msg.sector_from_rad = 0.4;
+  msg.sector_to_rad = 1.2;
+  msg.source = "faults_test";
+  set.bus().publish(std::string(ch::kSimFault), msg);
+  auto blind_beams = [&] { return counter_of(set.bus().status().at("polygon_mapper"), "blind_beams"); };
+  ASSERT_TRUE(set.spin_sim([&] { return blind_beams() >= 46; }, 60.0)) << set.report_with_logs();
+  set.spin_sim([] { return false; }, 1.5);  // a checkpoint with the sector blind
+  set.process("polygon_mapper")->kill_hard();
+  set.restart("polygon_mapper");
+  expect_done_with_the_world_mapped(set);
+  const auto& mapper = set.bus().status().at("polygon_mapper");
+  EXPECT_GE(counter_of(mapper, "blind_onsets"), 1) << "the restarted mapper never found the sector blind";
+  EXPECT_GE(counter_of(mapper, "blind_beams"), 46);
+  EXPECT_EQ(+mapper.state, +pex::daemon_status_t::STATE_DEGRADED);
+  set.stop_all();
+  set.clean_up(::testing::Test::HasFailure());
+  if (!::testing::Test::HasFailure()) std::filesystem::remove_all(std::filesystem::path(checkpoint).parent_path());
+}
+
 // The laser's window dirty (pex-sim's FAULT_LASER_CONTAMINATED: the device's
 // contamination measurement, CoLa "sRN LCMstate", answers 2 = error): the
 // reader asks it every contamination_poll_ms (10 s) and says so, DEGRADED
