@@ -167,11 +167,11 @@ class Mapper {
   std::optional<pex::polygon_map_t> free_space_message(std::int64_t now_utime);
 
   const MapperCounters& counters() const { return counters_; }
-  // Where the laser is blind, or the map off the world ("" when it sees on every beam, or some beams
-  // have been blind for less than blind_degraded_after_s of scan time): the
-  // blind beams' count and their bearings in the sensor frame, for the
-  // daemon's DEGRADED reason. The map is still built, but the laser sees
-  // less of it.
+  // Where the laser is blind, or the map off the world: the blind beams'
+  // count and their bearings in the sensor frame, for the daemon's DEGRADED
+  // reason; "" when every beam sees, or some have been blind for less than
+  // blind_degraded_after_s of scan time. The map is still built, but the
+  // laser sees less of it.
   std::string blind_laser_reason() const;
   // The counters and the map's size, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
