@@ -591,10 +591,9 @@ void laser_blind_from_the_start_then_done(bool slam) {
   msg.utime = set.clock()->utime;
   msg.fault = pex::sim_fault_t::FAULT_LASER_BLIND_SECTOR;
   msg.duration_s = 3600.0;
-  // Behind to the right, 74 degrees wide, on the outer wall 2-2.7 m from
-  // the start: each blind beam would give up to 2 m of free space beyond the
-  // world (from the start the robot turns that way before the mapper has a
-  // wall there).
+  // Behind to the right, 74 degrees wide: from the first scan on it points
+  // at the outer wall 2-2.7 m from the start, and each blind beam would give
+  // up to 2 m of free space beyond the world before any wall is mapped there.
   msg.sector_from_rad = -2.3;
   msg.sector_to_rad = -1.0;
   msg.source = "faults_test";
