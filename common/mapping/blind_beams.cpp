@@ -27,11 +27,13 @@ void BlindBeams::observe(std::span<const float> ranges, double range_min_m, doub
     stopped_runs_.assign(ranges.size(), 0);
     blind_.assign(ranges.size(), 0);
     echoed_.assign(ranges.size(), 0);
+    no_free_space_.assign(ranges.size(), 0);
     count_ = 0;
   }
   const int count_before = count_;
   const auto needed = static_cast<std::uint16_t>(
       std::clamp<int>(options_.after_stopped_scans, 0, std::numeric_limits<std::uint16_t>::max()));
+  never_echoed_ = 0;
   for (std::size_t i = 0; i < ranges.size(); ++i) {
     if (is_return(ranges[i], range_min_m, range_max_m)) {
       echoed_[i] = 1;
@@ -47,15 +49,11 @@ void BlindBeams::observe(std::span<const float> ranges, double range_min_m, doub
         ++count_;
       }
     }
-  }
-  if (count_before == 0 && count_ > 0) ++onsets_;
-  no_free_space_.assign(ranges.size(), 0);
-  never_echoed_ = 0;
-  for (std::size_t i = 0; i < ranges.size(); ++i) {
     const bool unproven = options_.no_free_space_before_first_echo && !echoed_[i];
     never_echoed_ += unproven ? 1 : 0;
     no_free_space_[i] = blind_[i] || unproven;
   }
+  if (count_before == 0 && count_ > 0) ++onsets_;
 }
 
 std::vector<float> BlindBeams::extents(std::span<const float> ranges, double range_min_m, double range_max_m,

@@ -115,10 +115,7 @@ Mapper::Mapper(MapperOptions options)
       particle_maps_(particle_maps::ParticleMapsOptions{options_.map, 1000, options_.threads}),
       blind_(options_.blind_beams) {}
 
-void Mapper::count_blind_beams(const pex::laser_scan_t& scan) {
-  counters_.blind_beams = blind_.count();
-  counters_.blind_onsets = blind_.onsets();
-  counters_.never_echoed_beams = blind_.never_echoed();
+void Mapper::note_blind_scan(const pex::laser_scan_t& scan) {
   blind_angle_min_rad_ = scan.angle_min;
   blind_angle_increment_rad_ = scan.angle_increment;
   blind_seen_utime_ = scan.utime;
@@ -270,7 +267,7 @@ bool Mapper::apply_slam_update(const pex::slam_update_t& update) {
         scan->angle_increment, geometry::compose(best_particle.pose, mounting), scan_options);
   blind_.observe(scan->ranges, scan_options.range_min_m, scan_options.range_max_m, against_best.extent_m,
                  scan_options.free_range_m);
-  count_blind_beams(*scan);
+  note_blind_scan(*scan);
   const particle_maps::SensorScan sensor_scan{scan->ranges, scan->angle_min, scan->angle_increment, mounting,
                                               blind_.no_free_space_mask()};
   const auto result = particle_maps_.update(particles, sensor_scan, scan_options);
@@ -365,7 +362,7 @@ bool Mapper::try_insert(const pex::laser_scan_t& scan) {
   const auto polygon = mapping::scan_to_polygon_in(map_, scan.ranges, scan.angle_min, scan.angle_increment, sensor,
                                                    scan_options, &stopped, &blind_);
   counters_.no_return_beams_stopped += stopped;
-  count_blind_beams(scan);
+  note_blind_scan(scan);
   if (!polygon.ok) {
     ++counters_.scan_polygon_errors;
     return true;

@@ -110,14 +110,6 @@ struct MapperCounters {
   // particle's, on SLAM). A steady climb while the robot drives is a laser
   // blind in some sector; a few a scan are glass or dark surfaces.
   std::int64_t no_return_beams_stopped = 0;
-  // Beams of the laser blind now (mapping::BlindBeams: no echo at a wall the
-  // map holds, scan after scan), which give no free space; and how often the
-  // laser went from none blind to some.
-  std::int64_t blind_beams = 0;
-  std::int64_t blind_onsets = 0;
-  // Beams that have not returned an echo since the mapper started, which
-  // give no free space (BlindBeamOptions::no_free_space_before_first_echo).
-  std::int64_t never_echoed_beams = 0;
 
   // By name, for DAEMON_STATUS (runtime::Node::collect_counters).
   template <class Visitor>
@@ -135,9 +127,6 @@ struct MapperCounters {
     v.total("slam_resyncs", slam_resyncs);
     v.total("slam_epoch_changes", slam_epoch_changes);
     v.total("no_return_beams_stopped", no_return_beams_stopped);
-    v.total("blind_beams", blind_beams);
-    v.total("blind_onsets", blind_onsets);
-    v.total("never_echoed_beams", never_echoed_beams);
   }
 };
 
@@ -178,7 +167,15 @@ class Mapper {
   void visit_counters(Visitor& v) const {
     counters_.visit_counters(v);
     v.total("map_vertices", static_cast<std::int64_t>(map().planning_vertex_count()));
+    // The laser's blind beams now (no echo at a wall the map holds, scan
+    // after scan), how often it went from none blind to some, and the beams
+    // without an echo since the start: none of them gives free space.
+    v.total("blind_beams", blind_.count());
+    v.total("blind_onsets", blind_.onsets());
+    v.total("never_echoed_beams", blind_.never_echoed());
   }
+  // Which beams of the laser are blind (mapping/blind_beams.hpp), from the scans inserted.
+  const mapping::BlindBeams& blind_beams() const { return blind_; }
   // The map that is published: the single map, or the best particle's.
   const mapping::PolygonMap& map() const;
   // slam: the per-particle maps (empty before the first update).
@@ -208,8 +205,8 @@ class Mapper {
   void drain_waiting_updates();
   // slam: applies the update if its scan is here; false if the scan is not.
   bool apply_slam_update(const pex::slam_update_t& update);
-  // The blind-beam counters, and the bearings of the beams, after blind_ observed `scan`.
-  void count_blind_beams(const pex::laser_scan_t& scan);
+  // The bearings of the beams and the time of `scan`, after blind_ observed it.
+  void note_blind_scan(const pex::laser_scan_t& scan);
   // The scan-polygon options with the sensor's own range limits applied.
   mapping::ScanPolygonOptions scan_options_for(const pex::laser_scan_t& scan) const;
   // The map changed: both messages are merged anew when next asked for.

@@ -229,11 +229,11 @@ TEST(Mapper, ASectorBlindScanAfterScanIsCountedBlindUntilItSeesAgain) {
   scan_at(1'010'000, false);
   // Standing still, a scan goes in every insert_max_interval_s (1 s).
   scan_at(2'510'000, true);
-  EXPECT_EQ(mapper.counters().blind_beams, 0);
+  EXPECT_EQ(mapper.blind_beams().count(), 0);
   scan_at(4'010'000, true);
   ASSERT_EQ(mapper.counters().scans_inserted, 3);
-  EXPECT_GT(mapper.counters().blind_beams, 100);  // 1.2 rad of 0.5-degree beams: 137
-  EXPECT_EQ(mapper.counters().blind_onsets, 1);
+  EXPECT_GT(mapper.blind_beams().count(), 100);  // 1.2 rad of 0.5-degree beams: 137
+  EXPECT_EQ(mapper.blind_beams().onsets(), 1);
   // Said (DEGRADED) once blind for blind_degraded_after_s (5 s) of scan time:
   // glass blinds a beam or two for a moment.
   EXPECT_EQ(mapper.blind_laser_reason(), "");
@@ -248,14 +248,14 @@ TEST(Mapper, ASectorBlindScanAfterScanIsCountedBlindUntilItSeesAgain) {
   ASSERT_EQ(std::sscanf(reason.c_str(), "laser blind on %d beams at %lf..%lf rad%c", &beams, &from_rad, &to_rad, &after),
             4)
       << reason;
-  EXPECT_EQ(beams, mapper.counters().blind_beams);
+  EXPECT_EQ(beams, mapper.blind_beams().count());
   EXPECT_NEAR(from_rad, -0.6, 0.015) << reason;  // the first beam above -0.6, to 2 decimals
   EXPECT_NEAR(to_rad, 0.6, 0.015) << reason;
   EXPECT_EQ(after, ' ') << "one sector only: " << reason;
   scan_at(10'510'000, false);
-  EXPECT_EQ(mapper.counters().blind_beams, 0);
+  EXPECT_EQ(mapper.blind_beams().count(), 0);
   EXPECT_EQ(mapper.blind_laser_reason(), "");
-  EXPECT_EQ(mapper.counters().blind_onsets, 1);
+  EXPECT_EQ(mapper.blind_beams().onsets(), 1);
   EXPECT_LE(mapper.free_space_message(11'000'000)->free_area_m2, 12.0 + 1e-6);
 }
 
